@@ -1,0 +1,167 @@
+//! Surface oracles for restricted Delaunay meshing (Boissonnat & Oudot, sections 6.4.2 and 6.6).
+//!
+//! A surface S is the zero set of a value function (negative inside the solid, positive outside).
+//! The mesher reaches S only through the [`Surface`] trait:
+//! - the **bipolar oracle** ([`Surface::crossing`]): a segment whose end values have opposite
+//!   signs crosses S an odd number of times; return one crossing;
+//! - the **intersection oracle** ([`Surface::crossings`]): all points of a segment on S;
+//! - P1 ([`Surface::seed_points`]): points on every component;
+//! - a bounding sphere outside which the value is positive.
+
+use glam::DVec3;
+
+pub mod catalog;
+pub mod expr;
+pub mod image;
+pub mod implicit;
+pub mod pointset;
+pub mod polyhedron;
+pub mod roots;
+
+/// A sphere holding the whole surface; the value is positive on and outside it.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BoundingSphere {
+    pub center: DVec3,
+    pub radius: f64,
+}
+
+impl BoundingSphere {
+    pub fn contains(&self, p: DVec3) -> bool {
+        (p - self.center).length_squared() <= self.radius * self.radius
+    }
+    /// Clip the segment `[a, b]` to the ball; `None` if it misses the ball.
+    pub fn clip_segment(&self, a: DVec3, b: DVec3) -> Option<(DVec3, DVec3)> {
+        let d = b - a;
+        let (t0, t1) = self.line_params(a, d)?;
+        let (t0, t1) = (t0.max(0.0), t1.min(1.0));
+        (t0 <= t1).then(|| (a + d * t0, a + d * t1))
+    }
+    /// Clip the ray from `origin` along `dir` to the ball; `None` if it misses the ball.
+    pub fn clip_ray(&self, origin: DVec3, dir: DVec3) -> Option<(DVec3, DVec3)> {
+        let (t0, t1) = self.line_params(origin, dir)?;
+        let t0 = t0.max(0.0);
+        (t0 <= t1).then(|| (origin + dir * t0, origin + dir * t1))
+    }
+    fn line_params(&self, a: DVec3, d: DVec3) -> Option<(f64, f64)> {
+        let dd = d.length_squared();
+        if !(dd > 0.0) {
+            return self.contains(a).then_some((0.0, 1.0));
+        }
+        let m = a - self.center;
+        let b = m.dot(d) / dd;
+        let c = (m.length_squared() - self.radius * self.radius) / dd;
+        let disc = b * b - c;
+        if disc < 0.0 {
+            return None;
+        }
+        let s = disc.sqrt();
+        Some((-b - s, -b + s))
+    }
+}
+
+/// Errors raised by oracles at query time.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum OracleError {
+    #[error("the surface function returned NaN at ({0}, {1}, {2}); fix the function or its domain")]
+    NaN(f64, f64, f64),
+}
+
+/// A surface known through an oracle. Implementations are `Send + Sync` so that bulk
+/// evaluations (seeding, verification) can run in parallel.
+pub trait Surface: Send + Sync {
+    /// Bounding sphere: the value is positive on it and outside it.
+    fn bounding_sphere(&self) -> BoundingSphere;
+
+    /// Signed value: negative inside the solid, positive outside, zero on S.
+    /// Only the sign is required to be meaningful (sign-only functions must work).
+    /// May return NaN; callers turn NaN into [`OracleError::NaN`].
+    fn value(&self, p: DVec3) -> f64;
+
+    /// Precision of crossing points (absolute length). Default: 1e-7 of the bounding radius.
+    fn tolerance(&self) -> f64 {
+        1e-7 * self.bounding_sphere().radius
+    }
+
+    /// Bipolar oracle: `fa = value(a)` and `fb = value(b)` have opposite signs; return a point
+    /// of S on `[a, b]` within [`Surface::tolerance`]. Default: safeguarded bisection.
+    fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
+        roots::bisect(|p| self.value(p), a, fa, b, fb, self.tolerance())
+    }
+
+    /// Intersection oracle: push every point of `[a, b]` on S into `out` (sorted from `a`).
+    /// Default: sample the segment at steps of at most [`Surface::crossing_step`] and bisect every
+    /// sign change (so crossings closer than the step may be missed, as the paper's Θ(1/Δ) oracle).
+    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+        roots::all_crossings(|p| self.value(p), a, b, self.crossing_step(), self.tolerance(), out)
+    }
+
+    /// Subdivision step of the default intersection oracle. Default: 1e-3 of the bounding radius.
+    fn crossing_step(&self) -> f64 {
+        1e-3 * self.bounding_sphere().radius
+    }
+
+    /// P1: points on S, at least one on every component the backend can find.
+    /// Deterministic for a given seed. Default: crossings of random lines through the
+    /// bounding sphere.
+    fn seed_points(&self, seed: u64) -> Vec<DVec3> {
+        roots::random_line_seeds(self, 64, seed)
+    }
+
+    /// Gradient of the value (outward normal direction on S), if available.
+    /// Default: central differences.
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        let h = 1e-6 * self.bounding_sphere().radius;
+        let dx = DVec3::X * h;
+        let dy = DVec3::Y * h;
+        let dz = DVec3::Z * h;
+        DVec3::new(
+            self.value(p + dx) - self.value(p - dx),
+            self.value(p + dy) - self.value(p - dy),
+            self.value(p + dz) - self.value(p - dz),
+        ) / (2.0 * h)
+    }
+
+    /// Closest point of S to `p`, if the backend can compute it (used by `verify`).
+    fn project(&self, p: DVec3) -> Option<DVec3> {
+        roots::project_newton(self, p)
+    }
+
+    /// P2: a positive lower bound (or estimate) of the smallest distance from S to its medial
+    /// axis, d_M^inf, if the backend knows one.
+    fn dm_inf_hint(&self) -> Option<f64> {
+        None
+    }
+}
+
+impl<S: Surface + ?Sized> Surface for &S {
+    fn bounding_sphere(&self) -> BoundingSphere {
+        (**self).bounding_sphere()
+    }
+    fn value(&self, p: DVec3) -> f64 {
+        (**self).value(p)
+    }
+    fn tolerance(&self) -> f64 {
+        (**self).tolerance()
+    }
+    fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
+        (**self).crossing(a, fa, b, fb)
+    }
+    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+        (**self).crossings(a, b, out)
+    }
+    fn crossing_step(&self) -> f64 {
+        (**self).crossing_step()
+    }
+    fn seed_points(&self, seed: u64) -> Vec<DVec3> {
+        (**self).seed_points(seed)
+    }
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        (**self).gradient(p)
+    }
+    fn project(&self, p: DVec3) -> Option<DVec3> {
+        (**self).project(p)
+    }
+    fn dm_inf_hint(&self) -> Option<f64> {
+        (**self).dm_inf_hint()
+    }
+}

@@ -1,0 +1,1 @@
+//! Restricted Delaunay refinement (in progress).

@@ -1,0 +1,1 @@
+//! Certificates for triangle meshes (in progress).
