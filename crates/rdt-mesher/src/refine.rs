@@ -1,0 +1,887 @@
+//! The refinement loop of section 6.1, with the control-point initialization of section 6.4.3
+//! and the manifold patch of section 6.6.1.
+//!
+//! # Invariants kept by [`Refiner`]
+//! - `cells[c]` holds the circumcenter of every live finite cell `c` and the surface value
+//!   there (or "outside the bounding ball"); it is recomputed for every created cell.
+//! - `restricted` holds exactly the facets of Del(E) whose (clipped) dual Voronoi edge meets S
+//!   according to the oracle, keyed by their sorted vertex triple. After an insertion, every
+//!   facet of a destroyed cell is removed, and every facet of a created cell (new facets and the
+//!   boundary facets of the cavity, whose duals changed) is re-tested: nothing else changed.
+//! - A queue entry is fresh iff its `version` equals the version of the map entry for its key;
+//!   stale entries are skipped when popped.
+//! - `vertex_facets[v]` counts the restricted facets incident to `v`.
+
+use crate::criteria::Criteria;
+use delaunay3::{CellId, Changes, Facet, INFINITE_VERTEX, Insertion, Triangulation, VertexId};
+use glam::DVec3;
+use meshio::TriMesh;
+use oracle::{BoundingSphere, OracleError, Surface, roots::SplitMix64};
+use rustc_hash::FxHashMap;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::time::{Duration, Instant};
+
+/// Which oracle answers "does this Voronoi edge meet S" (section 6.4.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OracleKind {
+    /// Sign change + one crossing point: the bipolar Delaunay triangulation Del_S^b(E).
+    Bipolar,
+    /// All crossing points of the segment: the restricted Delaunay triangulation Del_S(E).
+    Intersection,
+}
+
+/// Options of one meshing run.
+#[derive(Clone, Debug)]
+pub struct MeshOptions {
+    /// When a surface Delaunay ball is bad.
+    pub criteria: Criteria,
+    /// Bipolar (default) or intersection oracle.
+    pub oracle: OracleKind,
+    /// Keep refining until Del_S(E) is a closed 2-manifold (section 6.6.1's patch). Default on.
+    pub manifold: bool,
+    /// Seed for every random choice (seed points, rays of section 6.4.3).
+    pub seed: u64,
+    /// Stop (with the mesh so far, criteria reported unmet) at this many vertices of E.
+    pub max_vertices: Option<usize>,
+    /// Stop (likewise) after this much time.
+    pub time_limit: Option<Duration>,
+    /// A given sample E_0 inserted before refinement (section 6.4.1, skinny-facet removal).
+    pub initial_points: Vec<DVec3>,
+    /// Control points E'_i (section 6.4.3). `None`: the oracle's `seed_points`.
+    pub control_points: Option<Vec<DVec3>>,
+    /// At most this many control points are kept (farthest-point selection).
+    pub max_control_points: usize,
+}
+
+impl Default for MeshOptions {
+    fn default() -> Self {
+        MeshOptions {
+            criteria: Criteria::default(),
+            oracle: OracleKind::Bipolar,
+            manifold: true,
+            seed: 0,
+            max_vertices: None,
+            time_limit: None,
+            initial_points: Vec::new(),
+            control_points: None,
+            max_control_points: 64,
+        }
+    }
+}
+
+/// Errors of a meshing run.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    #[error("invalid size bound sigma = {0}: it must be a positive finite number (e.g. --size 0.05)")]
+    InvalidSize(f64),
+    #[error("the size function returned {value} at ({}, {}, {}): sigma must be positive and finite on S", .at.x, .at.y, .at.z)]
+    InvalidSizeField { value: f64, at: DVec3 },
+    #[error("invalid angle bound {0} degrees: use a value in [0, 35) (30 has a termination proof; 0 disables it)")]
+    InvalidAngle(f64),
+    #[error("invalid distance bound {0}: it must be positive and finite")]
+    InvalidDistance(f64),
+    #[error("no criterion given: set a size (--size), an angle or a distance bound")]
+    NoCriterion,
+    #[error(
+        "no point of the surface was found inside the bounding sphere (center {center:?}, radius {radius}); check the bounding sphere or pass seed points"
+    )]
+    NoSeeds { center: DVec3, radius: f64 },
+    #[error(
+        "the initial sample is degenerate (all {0} seed points are coplanar); pass more seed points"
+    )]
+    DegenerateSeeds(usize),
+    #[error(transparent)]
+    Oracle(#[from] OracleError),
+    #[error("Delaunay triangulation: {0}")]
+    Delaunay(#[from] delaunay3::Error),
+}
+
+/// A surface Delaunay ball B(c, r) circumscribing a restricted facet.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct SurfaceBall {
+    pub center: DVec3,
+    pub radius: f64,
+}
+
+/// Figures of a run, for the report.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Stats {
+    /// Vertices of the output mesh.
+    pub vertices: usize,
+    /// Facets of the output mesh.
+    pub facets: usize,
+    /// Points of the sample E (vertices of Del(E)).
+    pub sample_points: usize,
+    /// Control points E'_i used for initialization.
+    pub control_points: usize,
+    /// Control points that are not vertices of Del_S(E) at the end.
+    pub control_points_missing: usize,
+    /// Refinement insertions (centers of bad balls).
+    pub refinement_insertions: usize,
+    /// Points inserted by the rays of section 6.4.3.
+    pub ray_insertions: usize,
+    /// Insertions forced by the manifold patch.
+    pub manifold_insertions: usize,
+    /// Manifold checks performed.
+    pub manifold_passes: usize,
+    /// Oracle value evaluations made by the mesher (circumcenters).
+    pub oracle_value_calls: u64,
+    /// Oracle crossing (bipolar or intersection) queries.
+    pub oracle_crossing_calls: u64,
+    pub time_total_s: f64,
+    pub time_delaunay_s: f64,
+    pub time_oracle_s: f64,
+    pub time_queue_s: f64,
+    /// max over the output facets of r / sigma(c) (<= 1 when the size criterion holds).
+    pub max_r_over_sigma: Option<f64>,
+    /// Smallest facet angle of the output, degrees.
+    pub min_angle_deg: f64,
+    /// max over facets of distance(circumcenter, c) / distance bound.
+    pub max_distance_ratio: Option<f64>,
+    /// Every criterion holds on every output facet.
+    pub criteria_met: bool,
+    /// The budget that stopped the run early, if any.
+    pub stopped_by: Option<String>,
+    /// Criteria that do not hold at the end (empty when the run completed).
+    pub unmet: Vec<String>,
+    /// Edges of the output with other than two facets, and vertices with other than one
+    /// umbrella (0 and 0 for a closed 2-manifold).
+    pub nonmanifold_edges: usize,
+    pub nonmanifold_vertices: usize,
+}
+
+/// The result of a run: the mesh of Del_S(E), one surface Delaunay ball per triangle, stats.
+#[derive(Clone, Debug)]
+pub struct MeshResult {
+    /// Oriented triangles (counter-clockwise seen from outside, i.e. normals toward value > 0).
+    pub mesh: TriMesh,
+    /// `balls[i]` circumscribes `mesh.triangles[i]`.
+    pub balls: Vec<SurfaceBall>,
+    /// The sample E (all vertices of Del(E)), for two-pass sizing and reports.
+    pub sample: Vec<DVec3>,
+    pub stats: Stats,
+}
+
+/// Progress of a run, passed to the callback of [`mesh_with_progress`].
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    pub sample_points: usize,
+    pub restricted_facets: usize,
+    pub queue: usize,
+}
+
+#[derive(Clone, Copy, Default)]
+struct CellInfo {
+    cc: DVec3,
+    /// Surface value at `cc`, or +inf when `cc` is outside the bounding ball.
+    f: f64,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct RFacet {
+    facet: Facet,
+    /// Vertex ids oriented counter-clockwise seen from outside (normal toward value > 0).
+    oriented: [VertexId; 3],
+    center: DVec3,
+    radius: f64,
+    bad: f64,
+    version: u32,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+struct QEntry {
+    bad: f64,
+    key: [VertexId; 3],
+    version: u32,
+    forced: bool,
+}
+impl Eq for QEntry {}
+impl Ord for QEntry {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.bad
+            .total_cmp(&o.bad)
+            .then_with(|| o.key.cmp(&self.key))
+            .then_with(|| o.version.cmp(&self.version))
+    }
+}
+impl PartialOrd for QEntry {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+#[inline]
+fn inside(f: f64) -> bool {
+    f < 0.0
+}
+
+#[inline]
+fn sorted3(mut v: [VertexId; 3]) -> [VertexId; 3] {
+    if v[0] > v[1] {
+        v.swap(0, 1);
+    }
+    if v[1] > v[2] {
+        v.swap(1, 2);
+    }
+    if v[0] > v[1] {
+        v.swap(0, 1);
+    }
+    v
+}
+
+/// Mesh `surface` with `opts`. See [`mesh_with_progress`].
+pub fn mesh(surface: &dyn Surface, opts: &MeshOptions) -> Result<MeshResult, MeshError> {
+    mesh_with_progress(surface, opts, &mut |_| {})
+}
+
+/// Mesh `surface` with `opts`, calling `progress` every few hundred insertions.
+pub fn mesh_with_progress(
+    surface: &dyn Surface,
+    opts: &MeshOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<MeshResult, MeshError> {
+    validate(opts)?;
+    let mut r = Refiner::new(surface, opts);
+    r.run(progress)?;
+    Ok(r.finish())
+}
+
+fn validate(opts: &MeshOptions) -> Result<(), MeshError> {
+    let c = &opts.criteria;
+    if let Some(crate::Sizing::Constant(s)) = &c.size {
+        if !(*s > 0.0 && s.is_finite()) {
+            return Err(MeshError::InvalidSize(*s));
+        }
+    }
+    if !(c.min_angle_deg >= 0.0 && c.min_angle_deg < 35.0) {
+        return Err(MeshError::InvalidAngle(c.min_angle_deg));
+    }
+    if let Some(d) = c.max_distance {
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(MeshError::InvalidDistance(d));
+        }
+    }
+    if c.size.is_none() && c.min_angle_deg == 0.0 && c.max_distance.is_none() && !opts.manifold {
+        return Err(MeshError::NoCriterion);
+    }
+    Ok(())
+}
+
+pub(crate) struct Refiner<'a> {
+    s: &'a dyn Surface,
+    opts: &'a MeshOptions,
+    ball: BoundingSphere,
+    tri: Triangulation,
+    cells: Vec<CellInfo>,
+    restricted: FxHashMap<[VertexId; 3], RFacet>,
+    vertex_facets: Vec<u32>,
+    queue: BinaryHeap<QEntry>,
+    version: u32,
+    changes: Changes,
+    created_stamp: Vec<u32>,
+    round: u32,
+    crossings_buf: Vec<DVec3>,
+    control: Vec<VertexId>,
+    rng: SplitMix64,
+    stats: Stats,
+    t_delaunay: Duration,
+    t_oracle: Duration,
+    t_queue: Duration,
+    start: Instant,
+    values: u64,
+    crossing_calls: u64,
+}
+
+impl<'a> Refiner<'a> {
+    fn new(s: &'a dyn Surface, opts: &'a MeshOptions) -> Self {
+        Refiner {
+            s,
+            opts,
+            ball: s.bounding_sphere(),
+            tri: Triangulation::new(),
+            cells: Vec::new(),
+            restricted: FxHashMap::default(),
+            vertex_facets: Vec::new(),
+            queue: BinaryHeap::new(),
+            version: 0,
+            changes: Changes::default(),
+            created_stamp: Vec::new(),
+            round: 0,
+            crossings_buf: Vec::new(),
+            control: Vec::new(),
+            rng: SplitMix64(opts.seed ^ 0xA076_1D64_78BD_642F),
+            stats: Stats::default(),
+            t_delaunay: Duration::ZERO,
+            t_oracle: Duration::ZERO,
+            t_queue: Duration::ZERO,
+            start: Instant::now(),
+            values: 0,
+            crossing_calls: 0,
+        }
+    }
+
+    fn eval(&mut self, p: DVec3) -> Result<f64, MeshError> {
+        self.values += 1;
+        let v = self.s.value(p);
+        if v.is_nan() {
+            return Err(OracleError::NaN(p.x, p.y, p.z).into());
+        }
+        Ok(v)
+    }
+
+    /// Control points: the oracle's seeds (or the user's), thinned by farthest-point selection.
+    fn control_points(&self) -> Vec<DVec3> {
+        let mut pts = match &self.opts.control_points {
+            Some(p) => p.clone(),
+            None => self.s.seed_points(self.opts.seed),
+        };
+        pts.retain(|p| p.is_finite());
+        let k = self.opts.max_control_points.max(4);
+        if pts.len() <= k {
+            return pts;
+        }
+        // Farthest-point selection, deterministic (starts from the first point).
+        let mut chosen = vec![pts[0]];
+        let mut dist: Vec<f64> = pts.iter().map(|p| p.distance_squared(pts[0])).collect();
+        while chosen.len() < k {
+            let (i, _) = dist
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
+                .unwrap();
+            let p = pts[i];
+            chosen.push(p);
+            for (d, q) in dist.iter_mut().zip(&pts) {
+                *d = d.min(q.distance_squared(p));
+            }
+        }
+        chosen
+    }
+
+    fn initialize(&mut self) -> Result<(), MeshError> {
+        let control = self.control_points();
+        let mut pts: Vec<DVec3> = control.clone();
+        pts.extend(self.opts.initial_points.iter().copied());
+        if pts.is_empty() {
+            return Err(MeshError::NoSeeds {
+                center: self.ball.center,
+                radius: self.ball.radius,
+            });
+        }
+        // Too few points for a 3D triangulation: add crossings of more random lines.
+        let mut extra_seed = self.opts.seed;
+        let mut tries = 0;
+        while pts.len() < 8 && tries < 8 {
+            extra_seed = extra_seed.wrapping_add(0x9E37);
+            pts.extend(oracle::roots::random_line_seeds(self.s, 64, extra_seed));
+            tries += 1;
+        }
+        let t = Instant::now();
+        let mut ids = Vec::with_capacity(pts.len());
+        for p in &pts {
+            ids.push(match self.tri.insert(*p)? {
+                Insertion::New(v) | Insertion::Duplicate(v) => v,
+            });
+        }
+        self.t_delaunay += t.elapsed();
+        if self.tri.dimension() < 3 {
+            return Err(MeshError::DegenerateSeeds(pts.len()));
+        }
+        self.control = ids[..control.len()].to_vec();
+        self.control.sort_unstable();
+        self.control.dedup();
+        self.stats.control_points = self.control.len();
+        self.ensure_vertex_slots();
+        // Full scan of Del(E).
+        let cells: Vec<CellId> = self.tri.finite_cells().collect();
+        for &c in &cells {
+            self.update_cell(c)?;
+        }
+        for &c in &cells {
+            for i in 0..4u8 {
+                let f = Facet { cell: c, index: i };
+                let m = self.tri.mirror_facet(f);
+                if self.tri.is_infinite(m.cell) || c < m.cell {
+                    self.test_facet(f)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn update_cell(&mut self, c: CellId) -> Result<(), MeshError> {
+        let idx = c as usize;
+        if idx >= self.cells.len() {
+            self.cells.resize(idx + 1 + idx / 2, CellInfo::default());
+        }
+        if self.tri.is_infinite(c) {
+            self.cells[idx] = CellInfo {
+                cc: DVec3::ZERO,
+                f: f64::INFINITY,
+            };
+            return Ok(());
+        }
+        let cc = self.tri.circumcenter(c);
+        let f = if cc.is_finite() && self.ball.contains(cc) {
+            let t = Instant::now();
+            let v = self.eval(cc)?;
+            self.t_oracle += t.elapsed();
+            v
+        } else {
+            f64::INFINITY
+        };
+        self.cells[idx] = CellInfo { cc, f };
+        Ok(())
+    }
+
+    /// The dual of facet `f` as a segment oriented from `f.cell`'s side to the mirror side,
+    /// clipped to the bounding ball, with the values at its ends (+inf = on the ball's
+    /// boundary or beyond, where the value is positive by the oracle's contract).
+    fn clipped_dual(&self, f: Facet, m: Facet, verts: [VertexId; 3]) -> Option<(DVec3, f64, DVec3, f64)> {
+        let ci = self.tri.is_infinite(f.cell);
+        let mi = self.tri.is_infinite(m.cell);
+        let (p, fp, q, fq) = match (ci, mi) {
+            (false, false) => {
+                let a = self.cells[f.cell as usize];
+                let b = self.cells[m.cell as usize];
+                (a.cc, a.f, b.cc, b.f)
+            }
+            (false, true) | (true, false) => {
+                let [a, b, c] = verts.map(|v| self.tri.point(v));
+                // Normal out of f.cell.
+                let n = (b - a).cross(c - a);
+                let nl = n.length();
+                if !(nl > 0.0) {
+                    return None;
+                }
+                let n = n / nl;
+                let fin = if ci { m.cell } else { f.cell };
+                let info = self.cells[fin as usize];
+                let far_len = 2.0 * ((info.cc - self.ball.center).length() + self.ball.radius);
+                if ci {
+                    // Outward of the hull is out of the finite mirror cell, i.e. -n.
+                    (info.cc - n * far_len, f64::INFINITY, info.cc, info.f)
+                } else {
+                    (info.cc, info.f, info.cc + n * far_len, f64::INFINITY)
+                }
+            }
+            (true, true) => return None,
+        };
+        if !(p.is_finite() && q.is_finite()) {
+            return None;
+        }
+        let (pc, qc) = self.ball.clip_segment(p, q)?;
+        let fp = if pc == p { fp } else { f64::INFINITY };
+        let fq = if qc == q { fq } else { f64::INFINITY };
+        Some((pc, fp, qc, fq))
+    }
+
+    /// (Re)test the facet `f`: remove its old entry, insert the new one if restricted.
+    fn test_facet(&mut self, f: Facet) -> Result<(), MeshError> {
+        let verts = self.tri.facet_vertices(f);
+        if verts.contains(&INFINITE_VERTEX) {
+            return Ok(());
+        }
+        let key = sorted3(verts);
+        self.remove_key(key);
+        let m = self.tri.mirror_facet(f);
+        let Some((p, fp, q, fq)) = self.clipped_dual(f, m, verts) else {
+            return Ok(());
+        };
+        let t = Instant::now();
+        let hit = match self.opts.oracle {
+            OracleKind::Bipolar => {
+                if inside(fp) == inside(fq) {
+                    None
+                } else {
+                    self.crossing_calls += 1;
+                    // Values on the ball boundary are positive by contract; pass a finite one.
+                    let fpv = if fp.is_finite() { fp } else { 1.0 };
+                    let fqv = if fq.is_finite() { fq } else { 1.0 };
+                    let c = self.s.crossing(p, fpv, q, fqv);
+                    Some((c, inside(fp)))
+                }
+            }
+            OracleKind::Intersection => {
+                self.crossing_calls += 1;
+                let mut buf = std::mem::take(&mut self.crossings_buf);
+                buf.clear();
+                self.s.crossings(p, q, &mut buf);
+                let pts = verts.map(|v| self.tri.point(v));
+                let mut best: Option<(DVec3, bool, f64)> = None;
+                for (k, c) in buf.iter().enumerate() {
+                    let r = pts.iter().map(|v| v.distance(*c)).fold(0.0, f64::max);
+                    // Inside before crossing k: parity of the crossings before it.
+                    let before_inside = inside(fp) != (k % 2 == 1);
+                    if best.is_none_or(|b| r > b.2) {
+                        best = Some((*c, before_inside, r));
+                    }
+                }
+                self.crossings_buf = buf;
+                best.map(|(c, o, _)| (c, o))
+            }
+        };
+        self.t_oracle += t.elapsed();
+        let Some((center, outward_from_cell)) = hit else {
+            return Ok(());
+        };
+        if !center.is_finite() {
+            return Err(OracleError::NaN(center.x, center.y, center.z).into());
+        }
+        let pts = verts.map(|v| self.tri.point(v));
+        let radius = pts.iter().map(|v| v.distance(center)).fold(0.0, f64::max);
+        if let Some(crate::Sizing::Field(_)) = &self.opts.criteria.size {
+            let s = self.opts.criteria.size.as_ref().unwrap().at(center);
+            if !(s > 0.0 && s.is_finite()) {
+                return Err(MeshError::InvalidSizeField { value: s, at: center });
+            }
+        }
+        let bad = self.opts.criteria.badness(pts, center, radius);
+        let oriented = if outward_from_cell {
+            verts
+        } else {
+            [verts[0], verts[2], verts[1]]
+        };
+        self.version = self.version.wrapping_add(1);
+        let rf = RFacet {
+            facet: f,
+            oriented,
+            center,
+            radius,
+            bad,
+            version: self.version,
+        };
+        self.restricted.insert(key, rf);
+        for v in key {
+            self.vertex_facets[v as usize] += 1;
+        }
+        if bad > 1.0 {
+            self.queue.push(QEntry {
+                bad,
+                key,
+                version: rf.version,
+                forced: false,
+            });
+        }
+        Ok(())
+    }
+
+    fn remove_key(&mut self, key: [VertexId; 3]) {
+        if self.restricted.remove(&key).is_some() {
+            for v in key {
+                self.vertex_facets[v as usize] -= 1;
+            }
+        }
+    }
+
+    fn ensure_vertex_slots(&mut self) {
+        let n = self.tri.num_vertices();
+        if self.vertex_facets.len() < n {
+            self.vertex_facets.resize(n, 0);
+        }
+    }
+
+    /// Insert `p` and update Del_S(E). Returns false if `p` was already a vertex.
+    fn insert(&mut self, p: DVec3, hint: Option<CellId>) -> Result<bool, MeshError> {
+        let t = Instant::now();
+        let mut changes = std::mem::take(&mut self.changes);
+        changes.removed.clear();
+        changes.created.clear();
+        let res = self.tri.insert_with(p, hint, Some(&mut changes));
+        self.t_delaunay += t.elapsed();
+        let res = match res {
+            Ok(r) => r,
+            Err(e) => {
+                self.changes = changes;
+                return Err(e.into());
+            }
+        };
+        if let Insertion::Duplicate(_) = res {
+            self.changes = changes;
+            return Ok(false);
+        }
+        self.ensure_vertex_slots();
+        for cell in &changes.removed {
+            for i in 0..4 {
+                let mut f = [0; 3];
+                let mut k = 0;
+                for (j, &v) in cell.iter().enumerate() {
+                    if j != i {
+                        f[k] = v;
+                        k += 1;
+                    }
+                }
+                if !f.contains(&INFINITE_VERTEX) {
+                    self.remove_key(sorted3(f));
+                }
+            }
+        }
+        self.round = self.round.wrapping_add(1);
+        for &c in &changes.created {
+            self.update_cell(c)?;
+            let idx = c as usize;
+            if idx >= self.created_stamp.len() {
+                self.created_stamp.resize(idx + 1 + idx / 2, 0);
+            }
+            self.created_stamp[idx] = self.round;
+        }
+        for &c in &changes.created {
+            for i in 0..4u8 {
+                let f = Facet { cell: c, index: i };
+                let m = self.tri.mirror_facet(f);
+                let m_created = (m.cell as usize) < self.created_stamp.len()
+                    && self.created_stamp[m.cell as usize] == self.round;
+                if !m_created || c < m.cell {
+                    self.test_facet(f)?;
+                }
+            }
+        }
+        self.changes = changes;
+        Ok(true)
+    }
+
+    fn budget_exceeded(&mut self) -> bool {
+        if let Some(m) = self.opts.max_vertices {
+            if self.tri.num_vertices() >= m {
+                self.stats.stopped_by = Some(format!("max_vertices ({m})"));
+                return true;
+            }
+        }
+        if let Some(t) = self.opts.time_limit {
+            if self.start.elapsed() >= t {
+                self.stats.stopped_by = Some(format!("time_limit ({:.3} s)", t.as_secs_f64()));
+                return true;
+            }
+        }
+        false
+    }
+
+    fn run(&mut self, progress: &mut dyn FnMut(Progress)) -> Result<(), MeshError> {
+        self.initialize()?;
+        self.ensure_vertex_slots();
+        let mut since_progress = 0usize;
+        loop {
+            // Main loop: refine bad balls, worst first.
+            while let Some(e) = {
+                let t = Instant::now();
+                let e = self.queue.pop();
+                self.t_queue += t.elapsed();
+                e
+            } {
+                let Some(rf) = self.restricted.get(&e.key).copied() else {
+                    continue;
+                };
+                if rf.version != e.version {
+                    continue;
+                }
+                if self.budget_exceeded() {
+                    return Ok(());
+                }
+                if e.forced && rf.radius < 100.0 * self.s.tolerance() {
+                    continue;
+                }
+                if self.insert(rf.center, Some(rf.facet.cell))? {
+                    if e.forced {
+                        self.stats.manifold_insertions += 1;
+                    } else {
+                        self.stats.refinement_insertions += 1;
+                    }
+                }
+                since_progress += 1;
+                if since_progress >= 500 {
+                    since_progress = 0;
+                    progress(Progress {
+                        sample_points: self.tri.num_vertices(),
+                        restricted_facets: self.restricted.len(),
+                        queue: self.queue.len(),
+                    });
+                }
+            }
+            // Section 6.4.3: every control point must be a vertex of Del_S(E).
+            if self.shoot_control_rays()? {
+                continue;
+            }
+            // Section 6.6.1: the manifold patch.
+            if self.opts.manifold && self.push_nonmanifold() > 0 {
+                continue;
+            }
+            return Ok(());
+        }
+    }
+
+    /// For each control point not on Del_S(E), insert the first crossings of a random ray and
+    /// of its opposite. Returns whether anything was inserted.
+    fn shoot_control_rays(&mut self) -> Result<bool, MeshError> {
+        let mut any = false;
+        let control = self.control.clone();
+        for v in control {
+            if self.vertex_facets.get(v as usize).copied().unwrap_or(0) > 0 {
+                continue;
+            }
+            if self.budget_exceeded() {
+                return Ok(false);
+            }
+            let x = self.tri.point(v);
+            let dir = self.rng.unit_vector();
+            for d in [dir, -dir] {
+                let start = x + d * (100.0 * self.s.tolerance());
+                let Some((a, b)) = self.ball.clip_ray(start, d) else {
+                    continue;
+                };
+                let mut buf = Vec::new();
+                let t = Instant::now();
+                self.crossing_calls += 1;
+                self.s.crossings(a, b, &mut buf);
+                self.t_oracle += t.elapsed();
+                if let Some(&c) = buf.first() {
+                    if self.insert(c, None)? {
+                        self.stats.ray_insertions += 1;
+                        any = true;
+                    }
+                }
+            }
+        }
+        Ok(any)
+    }
+
+    /// Queue (forced) every restricted facet at a non-manifold edge or vertex, or at a
+    /// boundary edge. Returns how many facets were queued.
+    fn push_nonmanifold(&mut self) -> usize {
+        self.stats.manifold_passes += 1;
+        let (bad_edges, bad_vertices) = self.nonmanifold_elements();
+        if bad_edges.is_empty() && bad_vertices.is_empty() {
+            return 0;
+        }
+        let mut keys: Vec<[VertexId; 3]> = Vec::new();
+        for (k, _) in self.sorted_facets() {
+            let e = [[k[0], k[1]], [k[1], k[2]], [k[0], k[2]]];
+            if e.iter().any(|e| bad_edges.binary_search(e).is_ok())
+                || k.iter().any(|v| bad_vertices.binary_search(v).is_ok())
+            {
+                keys.push(k);
+            }
+        }
+        let n = keys.len();
+        for key in keys {
+            let rf = self.restricted[&key];
+            self.queue.push(QEntry {
+                bad: 1.0 + rf.radius,
+                key,
+                version: rf.version,
+                forced: true,
+            });
+        }
+        n
+    }
+
+    fn sorted_facets(&self) -> Vec<([VertexId; 3], RFacet)> {
+        let mut v: Vec<_> = self.restricted.iter().map(|(k, f)| (*k, *f)).collect();
+        v.sort_unstable_by_key(|(k, _)| *k);
+        v
+    }
+
+    /// Edges (sorted pairs) with other than two restricted facets, and vertices whose link is
+    /// not a single cycle. Both lists sorted.
+    fn nonmanifold_elements(&self) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
+        let tris: Vec<[VertexId; 3]> = self.sorted_facets().into_iter().map(|(k, _)| k).collect();
+        crate::topology::nonmanifold_elements(&tris)
+    }
+
+    fn finish(mut self) -> MeshResult {
+        let facets = self.sorted_facets();
+        let mut used: Vec<VertexId> = facets.iter().flat_map(|(k, _)| *k).collect();
+        used.sort_unstable();
+        used.dedup();
+        let mut remap = FxHashMap::default();
+        for (i, v) in used.iter().enumerate() {
+            remap.insert(*v, i as u32);
+        }
+        let vertices: Vec<DVec3> = used.iter().map(|&v| self.tri.point(v)).collect();
+        let mut triangles = Vec::with_capacity(facets.len());
+        let mut balls = Vec::with_capacity(facets.len());
+        let mut max_rs: Option<f64> = None;
+        let mut max_dist: Option<f64> = None;
+        let mut min_angle = f64::INFINITY;
+        let mut all_good = true;
+        for (_, rf) in &facets {
+            triangles.push(rf.oriented.map(|v| remap[&v]));
+            balls.push(SurfaceBall {
+                center: rf.center,
+                radius: rf.radius,
+            });
+            let pts = rf.oriented.map(|v| self.tri.point(v));
+            min_angle = min_angle.min(crate::criteria::min_angle_deg(pts));
+            if let Some(s) = &self.opts.criteria.size {
+                let r = rf.radius / s.at(rf.center);
+                max_rs = Some(max_rs.map_or(r, |m: f64| m.max(r)));
+            }
+            if let Some(d) = self.opts.criteria.max_distance {
+                let (cc, _) = crate::criteria::triangle_circumcircle(pts);
+                let r = (cc - rf.center).length() / d;
+                max_dist = Some(max_dist.map_or(r, |m: f64| m.max(r)));
+            }
+            if rf.bad > 1.0 {
+                all_good = false;
+            }
+        }
+        let (bad_edges, bad_vertices) = self.nonmanifold_elements();
+        let missing = self
+            .control
+            .iter()
+            .filter(|&&v| self.vertex_facets.get(v as usize).copied().unwrap_or(0) == 0)
+            .count();
+        let st = &mut self.stats;
+        st.vertices = vertices.len();
+        st.facets = triangles.len();
+        st.sample_points = self.tri.num_vertices();
+        st.control_points_missing = missing;
+        st.oracle_value_calls = self.values;
+        st.oracle_crossing_calls = self.crossing_calls;
+        st.time_total_s = self.start.elapsed().as_secs_f64();
+        st.time_delaunay_s = self.t_delaunay.as_secs_f64();
+        st.time_oracle_s = self.t_oracle.as_secs_f64();
+        st.time_queue_s = self.t_queue.as_secs_f64();
+        st.max_r_over_sigma = max_rs;
+        st.max_distance_ratio = max_dist;
+        st.min_angle_deg = if min_angle.is_finite() { min_angle } else { 0.0 };
+        st.nonmanifold_edges = bad_edges.len();
+        st.nonmanifold_vertices = bad_vertices.len();
+        let mut unmet = Vec::new();
+        if max_rs.is_some_and(|m| m > 1.0) {
+            unmet.push(format!("size: max r/sigma = {:.4} > 1", max_rs.unwrap()));
+        }
+        let a = self.opts.criteria.min_angle_deg;
+        if a > 0.0 && !all_good && st.min_angle_deg < a {
+            unmet.push(format!("angle: min angle {:.2} < {a}", st.min_angle_deg));
+        }
+        if max_dist.is_some_and(|m| m > 1.0) {
+            unmet.push(format!("distance: max ratio {:.4} > 1", max_dist.unwrap()));
+        }
+        if self.opts.manifold && (!bad_edges.is_empty() || !bad_vertices.is_empty()) {
+            unmet.push(format!(
+                "manifold: {} non-manifold or boundary edges, {} non-manifold vertices",
+                bad_edges.len(),
+                bad_vertices.len()
+            ));
+        }
+        if missing > 0 {
+            unmet.push(format!("control points: {missing} not on the mesh"));
+        }
+        st.criteria_met = all_good && unmet.is_empty();
+        st.unmet = unmet;
+        let sample = (0..self.tri.num_vertices() as u32)
+            .map(|v| self.tri.point(v))
+            .collect();
+        MeshResult {
+            mesh: TriMesh {
+                vertices,
+                triangles,
+            },
+            balls,
+            sample,
+            stats: self.stats,
+        }
+    }
+}

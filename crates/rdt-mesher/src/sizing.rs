@@ -1,0 +1,185 @@
+//! Choice of sigma (section 6.5): a d_M estimate from the lambda-medial axis of a uniform sample
+//! (Chazal & Lieutier), and the two-pass mesher built on it.
+
+use crate::refine::{MeshError, MeshOptions, MeshResult, mesh_with_progress};
+use crate::{Criteria, Progress, Sizing};
+use delaunay3::{Insertion, Triangulation};
+use glam::DVec3;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use oracle::{BoundingSphere, Surface};
+use std::sync::Arc;
+
+/// Radius of the smallest enclosing ball of up to four points.
+pub fn smallest_enclosing_radius(p: &[DVec3]) -> f64 {
+    // Try every subset's circumscribed ball (diametral for 2, circumcircle for 3, circumsphere
+    // for 4); the smallest one containing all points is the answer.
+    let n = p.len();
+    let contains = |c: DVec3, r: f64| p.iter().all(|q| q.distance(c) <= r * (1.0 + 1e-9) + 1e-300);
+    let mut best = f64::INFINITY;
+    if n == 1 {
+        return 0.0;
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            let c = 0.5 * (p[i] + p[j]);
+            let r = 0.5 * p[i].distance(p[j]);
+            if r < best && contains(c, r) {
+                best = r;
+            }
+            for k in j + 1..n {
+                let (c, r) = crate::criteria::triangle_circumcircle([p[i], p[j], p[k]]);
+                if r < best && contains(c, r) {
+                    best = r;
+                }
+            }
+        }
+    }
+    if best.is_finite() {
+        return best;
+    }
+    if n == 4 {
+        if let Some(c) = tet_circumcenter(p[0], p[1], p[2], p[3]) {
+            return c.distance(p[0]);
+        }
+    }
+    best
+}
+
+fn tet_circumcenter(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Option<DVec3> {
+    let (u, v, w) = (b - a, c - a, d - a);
+    let det = 2.0 * u.dot(v.cross(w));
+    if det.abs() < 1e-300 {
+        return None;
+    }
+    let x = (v.cross(w) * u.length_squared()
+        + w.cross(u) * v.length_squared()
+        + u.cross(v) * w.length_squared())
+        / det;
+    Some(a + x)
+}
+
+/// The lambda-medial axis M_lambda(E) of a sample E, approximated by the Voronoi vertices of E
+/// whose nearest sample points (the vertices of their Delaunay cell) have a smallest enclosing
+/// ball of radius >= lambda. The distance to it estimates d_M (section 6.5).
+pub struct MedialAxisEstimate {
+    vertices: Vec<DVec3>,
+    tree: ImmutableKdTree<f64, 3>,
+    /// Lambda used.
+    pub lambda: f64,
+}
+
+impl MedialAxisEstimate {
+    /// Build from a sample of S (points on S), keeping Voronoi vertices within `keep` (the
+    /// bounding sphere enlarged three times: the outer medial axis matters too).
+    pub fn new(sample: &[DVec3], lambda: f64, keep: BoundingSphere) -> Result<Self, MeshError> {
+        let mut tri = Triangulation::new();
+        for p in sample {
+            match tri.insert(*p)? {
+                Insertion::New(_) | Insertion::Duplicate(_) => {}
+            }
+        }
+        let far = BoundingSphere {
+            center: keep.center,
+            radius: keep.radius * 3.0,
+        };
+        let mut vertices = Vec::new();
+        let cells: Vec<_> = tri.finite_cells().collect();
+        for c in cells {
+            let vs = tri.cell_vertices(c).map(|v| tri.point(v));
+            let cc = tri.circumcenter(c);
+            if !cc.is_finite() || !far.contains(cc) {
+                continue;
+            }
+            if smallest_enclosing_radius(&vs) >= lambda {
+                vertices.push(cc);
+            }
+        }
+        if vertices.is_empty() {
+            // No medial vertex kept: fall back to the bounding-sphere center so that the
+            // estimate is finite (it is then an over-estimate; the caller bounds sigma below).
+            vertices.push(keep.center);
+        }
+        let arr: Vec<[f64; 3]> = vertices.iter().map(|v| v.to_array()).collect();
+        let tree = ImmutableKdTree::new_from_slice(&arr).expect("finite points");
+        Ok(MedialAxisEstimate {
+            vertices,
+            tree,
+            lambda,
+        })
+    }
+
+    /// Estimated distance from `p` to the medial axis.
+    pub fn distance(&self, p: DVec3) -> f64 {
+        let r = self
+            .tree
+            .query(&p.to_array())
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute();
+        r.distance.sqrt()
+    }
+
+    /// Number of Voronoi vertices kept.
+    pub fn len(&self) -> usize {
+        self.vertices.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.vertices.is_empty()
+    }
+}
+
+/// Result of [`two_pass`]: both passes and the d_M estimate used by the second.
+pub struct TwoPass {
+    pub first: MeshResult,
+    pub second: MeshResult,
+    pub sigma0: f64,
+    pub medial: Arc<MedialAxisEstimate>,
+}
+
+/// Two-pass sizing of section 6.5: a uniform pass with sigma_0 = eps * dm_inf, then the
+/// lambda-medial axis of its sample, then a pass with sigma = max(sigma_0, eps' * d_{M_lambda}),
+/// eps' = 0.9 eps (1-Lipschitz since a distance function is), with control points taken from
+/// the first pass's mesh (spread vertices of every component).
+pub fn two_pass(
+    surface: &dyn Surface,
+    eps: f64,
+    dm_inf: f64,
+    base: &MeshOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<TwoPass, MeshError> {
+    if !(eps > 0.0 && eps.is_finite()) {
+        return Err(MeshError::InvalidSize(eps));
+    }
+    if !(dm_inf > 0.0 && dm_inf.is_finite()) {
+        return Err(MeshError::InvalidSize(dm_inf));
+    }
+    let sigma0 = eps * dm_inf;
+    let mut o1 = base.clone();
+    o1.criteria = Criteria {
+        size: Some(Sizing::Constant(sigma0)),
+        ..base.criteria.clone()
+    };
+    let first = mesh_with_progress(surface, &o1, progress)?;
+    let lambda = 2.5 * sigma0;
+    let medial = Arc::new(MedialAxisEstimate::new(
+        &first.mesh.vertices,
+        lambda,
+        surface.bounding_sphere(),
+    )?);
+    let m2 = medial.clone();
+    let eps2 = 0.9 * eps;
+    let field = move |p: DVec3| (eps2 * m2.distance(p)).max(sigma0);
+    let mut o2 = base.clone();
+    o2.criteria = Criteria {
+        size: Some(Sizing::Field(Arc::new(field))),
+        ..base.criteria.clone()
+    };
+    o2.control_points = Some(crate::topology::component_representatives(&first.mesh, 8));
+    let second = mesh_with_progress(surface, &o2, progress)?;
+    Ok(TwoPass {
+        first,
+        second,
+        sigma0,
+        medial,
+    })
+}

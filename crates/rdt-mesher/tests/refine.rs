@@ -1,0 +1,221 @@
+//! End-to-end properties of the refinement on analytic surfaces defined in the test (so these
+//! tests depend only on `oracle`'s trait, not on a backend).
+
+use glam::DVec3;
+use oracle::{BoundingSphere, Surface};
+use rdt_mesher::{Criteria, MeshOptions, OracleKind, Sizing, mesh, topology};
+
+struct Analytic<F: Fn(DVec3) -> f64 + Send + Sync> {
+    f: F,
+    center: DVec3,
+    radius: f64,
+}
+
+impl<F: Fn(DVec3) -> f64 + Send + Sync> Surface for Analytic<F> {
+    fn bounding_sphere(&self) -> BoundingSphere {
+        BoundingSphere {
+            center: self.center,
+            radius: self.radius,
+        }
+    }
+    fn value(&self, p: DVec3) -> f64 {
+        (self.f)(p)
+    }
+}
+
+fn sphere() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
+    Analytic {
+        f: |p: DVec3| p.length_squared() - 1.0,
+        center: DVec3::ZERO,
+        radius: 2.0,
+    }
+}
+
+fn torus() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
+    Analytic {
+        f: |p: DVec3| {
+            let q = p.length_squared() + 1.0 - 0.09;
+            q * q - 4.0 * (p.x * p.x + p.y * p.y)
+        },
+        center: DVec3::ZERO,
+        radius: 2.0,
+    }
+}
+
+/// Euler characteristic V - E + F of a triangle mesh.
+fn euler(m: &meshio::TriMesh) -> i64 {
+    let mut e: Vec<[u32; 2]> = m
+        .triangles
+        .iter()
+        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+        .map(|[a, b]| if a < b { [a, b] } else { [b, a] })
+        .collect();
+    e.sort_unstable();
+    e.dedup();
+    m.vertices.len() as i64 - e.len() as i64 + m.triangles.len() as i64
+}
+
+/// Every directed edge appears once: consistent orientation.
+fn consistently_oriented(m: &meshio::TriMesh) -> bool {
+    let mut d: Vec<[u32; 2]> = m
+        .triangles
+        .iter()
+        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+        .collect();
+    d.sort_unstable();
+    d.windows(2).all(|w| w[0] != w[1])
+}
+
+/// Signed volume enclosed (positive when oriented outward).
+fn volume(m: &meshio::TriMesh) -> f64 {
+    m.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum()
+}
+
+fn check_closed_manifold(out: &rdt_mesher::MeshResult, genus: i64) {
+    let (e, v) = topology::nonmanifold_elements(&out.mesh.triangles);
+    assert!(e.is_empty(), "non-manifold/boundary edges: {e:?}");
+    assert!(v.is_empty(), "non-manifold vertices: {v:?}");
+    assert!(consistently_oriented(&out.mesh));
+    assert_eq!(euler(&out.mesh), 2 - 2 * genus);
+    assert!(volume(&out.mesh) > 0.0, "mesh is inside out");
+}
+
+#[test]
+fn sphere_bipolar_meets_all_criteria() {
+    let opts = MeshOptions {
+        criteria: Criteria::uniform(0.1),
+        ..Default::default()
+    };
+    let s = sphere();
+    let out = mesh(&s, &opts).unwrap();
+    assert!(out.stats.criteria_met, "{:?}", out.stats.unmet);
+    check_closed_manifold(&out, 0);
+    assert!(out.stats.min_angle_deg >= 30.0 - 1e-9);
+    for b in &out.balls {
+        assert!(b.radius <= 0.1 + 1e-12);
+        assert!((b.center.length() - 1.0).abs() < 1e-6);
+    }
+    for v in &out.mesh.vertices {
+        assert!((v.length() - 1.0).abs() < 1e-6, "vertex off the sphere");
+    }
+}
+
+#[test]
+fn torus_both_oracles_same_topology() {
+    for oracle in [OracleKind::Bipolar, OracleKind::Intersection] {
+        let opts = MeshOptions {
+            criteria: Criteria::uniform(0.08),
+            oracle,
+            ..Default::default()
+        };
+        let t = torus();
+        let out = mesh(&t, &opts).unwrap();
+        assert!(out.stats.criteria_met, "{oracle:?}: {:?}", out.stats.unmet);
+        check_closed_manifold(&out, 1);
+    }
+}
+
+#[test]
+fn two_disjoint_spheres_are_both_found() {
+    let s = Analytic {
+        f: |p: DVec3| {
+            let a = (p - DVec3::X * 1.5).length() - 1.0;
+            let b = (p + DVec3::X * 1.5).length() - 0.5;
+            a.min(b)
+        },
+        center: DVec3::ZERO,
+        radius: 3.5,
+    };
+    let opts = MeshOptions {
+        criteria: Criteria::uniform(0.1),
+        ..Default::default()
+    };
+    let out = mesh(&s, &opts).unwrap();
+    assert!(out.stats.criteria_met, "{:?}", out.stats.unmet);
+    // Two spheres: Euler characteristic 4, and vertices on both.
+    assert_eq!(euler(&out.mesh), 4);
+    assert!(out.mesh.vertices.iter().any(|v| v.x > 0.0));
+    assert!(out.mesh.vertices.iter().any(|v| v.x < 0.0));
+}
+
+#[test]
+fn deterministic_bit_for_bit() {
+    let opts = MeshOptions {
+        criteria: Criteria::uniform(0.12),
+        seed: 7,
+        ..Default::default()
+    };
+    let t = torus();
+    let a = mesh(&t, &opts).unwrap();
+    let b = mesh(&t, &opts).unwrap();
+    assert_eq!(a.mesh, b.mesh);
+}
+
+#[test]
+fn sign_only_function_meshes_with_bipolar() {
+    let s = Analytic {
+        f: |p: DVec3| {
+            let v = p.length_squared() - 1.0;
+            if v < 0.0 { -1.0 } else { 1.0 }
+        },
+        center: DVec3::ZERO,
+        radius: 2.0,
+    };
+    let opts = MeshOptions {
+        criteria: Criteria::uniform(0.15),
+        ..Default::default()
+    };
+    let out = mesh(&s, &opts).unwrap();
+    check_closed_manifold(&out, 0);
+}
+
+#[test]
+fn budget_stops_cleanly_and_reports() {
+    let opts = MeshOptions {
+        criteria: Criteria::uniform(0.01),
+        max_vertices: Some(500),
+        ..Default::default()
+    };
+    let s = sphere();
+    let out = mesh(&s, &opts).unwrap();
+    assert!(out.stats.stopped_by.is_some());
+    assert!(!out.stats.criteria_met);
+    assert!(!out.stats.unmet.is_empty());
+    assert!(out.stats.sample_points <= 501);
+}
+
+#[test]
+fn nan_function_is_an_error() {
+    let s = Analytic {
+        f: |p: DVec3| if p.x > 0.3 { f64::NAN } else { p.length_squared() - 1.0 },
+        center: DVec3::ZERO,
+        radius: 2.0,
+    };
+    let opts = MeshOptions {
+        criteria: Criteria::uniform(0.1),
+        control_points: Some(vec![-DVec3::X, -DVec3::Y, -DVec3::Z, DVec3::new(-0.6, 0.0, 0.8)]),
+        ..Default::default()
+    };
+    let err = mesh(&s, &opts).unwrap_err();
+    assert!(err.to_string().contains("NaN"), "{err}");
+}
+
+#[test]
+fn invalid_size_is_an_error() {
+    for bad in [0.0, -1.0, f64::NAN] {
+        let opts = MeshOptions {
+            criteria: Criteria {
+                size: Some(Sizing::Constant(bad)),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        assert!(mesh(&sphere(), &opts).is_err());
+    }
+}
