@@ -1,0 +1,54 @@
+#![allow(dead_code)]
+use glam::DVec3;
+use meshio::TriMesh;
+use std::path::PathBuf;
+
+/// A unique temporary path for one test file.
+pub fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("meshio-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+pub fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/meshes")
+        .join(name)
+}
+
+/// An octahedron with irrational-looking coordinates (not exactly representable as f32).
+pub fn octahedron() -> TriMesh {
+    let s = 1.0 / 3.0_f64;
+    TriMesh {
+        vertices: vec![
+            DVec3::new(1.0 + s, 0.1, -0.2),
+            DVec3::new(-1.0, 0.0, 1e-7),
+            DVec3::new(0.0, 1.0 / 7.0, 0.0),
+            DVec3::new(0.0, -1.0, 0.0),
+            DVec3::new(0.0, 0.0, 1.234_567_890_123),
+            DVec3::new(-0.0, 0.0, -1.0),
+        ],
+        triangles: vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ],
+    }
+}
+
+/// Coordinates of each triangle corner, in order (compares meshes up to vertex renumbering).
+pub fn soup(m: &TriMesh) -> Vec<[DVec3; 3]> {
+    m.triangles
+        .iter()
+        .map(|t| t.map(|i| m.vertices[i as usize]))
+        .collect()
+}
+
+pub fn close_f32(a: DVec3, b: DVec3) -> bool {
+    (0..3).all(|k| (a[k] - b[k]).abs() <= f32::EPSILON as f64 * a[k].abs().max(1e-30) * 1.0001)
+}
