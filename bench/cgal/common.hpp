@@ -96,7 +96,7 @@ class Timer {
   }
 };
 
-// Minimal command line: --key value pairs and --flag switches.
+// Minimal command line: --key value (or --key=value) pairs and --flag switches.
 class Args {
   std::map<std::string, std::string> kv_;
   std::map<std::string, bool> used_;
@@ -106,6 +106,11 @@ class Args {
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       if (a.rfind("--", 0) != 0) fail("unexpected argument '" + a + "' (options start with --)");
+      std::size_t eq = a.find('=');
+      if (eq != std::string::npos) {  // --key=value
+        kv_[a.substr(0, eq)] = a.substr(eq + 1);
+        continue;
+      }
       bool is_flag = false;
       for (const auto& f : flags) is_flag |= (f == a);
       if (is_flag || a == "--help") {
