@@ -1,0 +1,191 @@
+//! Exact geometric predicates: the only module that calls `robust`.
+//!
+//! Every function returns a [`Sign`]; nothing here reads a predicate through `f64::signum`.
+//!
+//! Conventions (those of Shewchuk's predicates, which `robust` transcribes):
+//! - [`orient3d`]`(a, b, c, d)` is [`Sign::Positive`] when `d` lies on the side of the plane
+//!   `abc` *opposite* to the normal `(b - a) x (c - a)` (i.e. "below" `abc` when `abc` is seen
+//!   counter-clockwise from above).
+//! - [`insphere`]`(a, b, c, d, e)` requires `orient3d(a, b, c, d)` positive and is
+//!   [`Sign::Positive`] when `e` is strictly inside the sphere through `a, b, c, d`.
+//!
+//! The symbolic perturbation used to break ties follows Devillers & Teillaud ("Perturbations
+//! for Delaunay and weighted Delaunay 3D triangulations", as implemented in CGAL's
+//! `Delaunay_triangulation_3::side_of_oriented_sphere(..., perturb = true)`): points are
+//! ordered lexicographically by `(x, y, z)` and a tie is resolved by the orientation of a
+//! tetrahedron in which the lexicographically largest point is replaced by the query.
+
+use glam::DVec3;
+use robust::{Coord, Coord3D};
+
+/// The sign of a predicate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Sign {
+    Negative,
+    Zero,
+    Positive,
+}
+
+impl Sign {
+    /// The sign of `x` (`0.0` and `-0.0` are [`Sign::Zero`]).
+    #[inline]
+    pub fn of(x: f64) -> Sign {
+        if x > 0.0 {
+            Sign::Positive
+        } else if x < 0.0 {
+            Sign::Negative
+        } else {
+            Sign::Zero
+        }
+    }
+}
+
+#[inline(always)]
+fn c3(p: DVec3) -> Coord3D<f64> {
+    Coord3D {
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    }
+}
+
+/// Exact orientation of `d` with respect to the plane `abc` (see module docs for the sign).
+#[inline]
+pub fn orient3d(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Sign {
+    Sign::of(robust::orient3d(c3(a), c3(b), c3(c), c3(d)))
+}
+
+/// Exact in-sphere test; requires `orient3d(a, b, c, d) == Positive`. Positive: `e` inside.
+#[inline]
+pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
+    Sign::of(robust::insphere(c3(a), c3(b), c3(c), c3(d), c3(e)))
+}
+
+/// Exact test: are the three points collinear (all three coordinate projections collinear)?
+pub fn collinear(a: DVec3, b: DVec3, c: DVec3) -> bool {
+    let proj = |p: DVec3, i: usize| -> Coord<f64> {
+        match i {
+            0 => Coord { x: p.x, y: p.y },
+            1 => Coord { x: p.y, y: p.z },
+            _ => Coord { x: p.z, y: p.x },
+        }
+    };
+    (0..3).all(|i| Sign::of(robust::orient2d(proj(a, i), proj(b, i), proj(c, i))) == Sign::Zero)
+}
+
+/// Strict lexicographic order on `(x, y, z)`: the fixed total order of the perturbation.
+#[inline]
+pub fn lex_less(a: DVec3, b: DVec3) -> bool {
+    (a.x, a.y, a.z) < (b.x, b.y, b.z)
+}
+
+/// Perturbed in-sphere test for a positively oriented tetrahedron `q` (no two points equal):
+/// `true` when `p` is inside the perturbed circumsphere. Never undecided.
+pub fn insphere_perturbed(q: &[DVec3; 4], p: DVec3) -> bool {
+    match insphere(q[0], q[1], q[2], q[3], p) {
+        Sign::Positive => true,
+        Sign::Negative => false,
+        Sign::Zero => {
+            let all = [q[0], q[1], q[2], q[3], p];
+            let mut idx = [0usize, 1, 2, 3, 4];
+            idx.sort_unstable_by(|&i, &j| {
+                let (a, b) = (all[i], all[j]);
+                (a.x, a.y, a.z).partial_cmp(&(b.x, b.y, b.z)).unwrap()
+            });
+            // Two iterations suffice (Devillers & Teillaud) since q is not flat.
+            for &k in idx[3..].iter().rev() {
+                if k == 4 {
+                    return false;
+                }
+                let mut r = *q;
+                r[k] = p;
+                match orient3d(r[0], r[1], r[2], r[3]) {
+                    Sign::Positive => return true,
+                    Sign::Negative => return false,
+                    Sign::Zero => {}
+                }
+            }
+            debug_assert!(false, "insphere perturbation undecided");
+            false
+        }
+    }
+}
+
+/// Perturbed "inside the circumcircle of a facet" test for a point `p` lying exactly on the
+/// plane of the facet of the positively oriented tetrahedron `m` opposite its vertex `j`.
+/// `true` when `p` is inside the perturbed circumcircle. The circle test is exact: any sphere
+/// through the facet meets its plane in the facet's circumcircle.
+pub fn incircle_facet_perturbed(m: &[DVec3; 4], j: usize, p: DVec3) -> bool {
+    match insphere(m[0], m[1], m[2], m[3], p) {
+        Sign::Positive => true,
+        Sign::Negative => false,
+        Sign::Zero => {
+            let mut idx = [0usize; 4];
+            let mut n = 0;
+            for k in 0..4 {
+                if k != j {
+                    idx[n] = k;
+                    n += 1;
+                }
+            }
+            idx[3] = 4;
+            let pt = |k: usize| if k == 4 { p } else { m[k] };
+            idx.sort_unstable_by(|&a, &b| {
+                let (a, b) = (pt(a), pt(b));
+                (a.x, a.y, a.z).partial_cmp(&(b.x, b.y, b.z)).unwrap()
+            });
+            for &k in idx[1..].iter().rev() {
+                if k == 4 {
+                    return false;
+                }
+                let mut r = *m;
+                r[k] = p;
+                match orient3d(r[0], r[1], r[2], r[3]) {
+                    Sign::Positive => return true,
+                    Sign::Negative => return false,
+                    Sign::Zero => {}
+                }
+            }
+            debug_assert!(false, "incircle perturbation undecided");
+            false
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn orientation_convention() {
+        let o = DVec3::ZERO;
+        let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+        // z is above the plane (o, x, y) whose normal x * y = +z: robust says Negative.
+        assert_eq!(orient3d(o, x, y, z), Sign::Negative);
+        assert_eq!(orient3d(o, x, y, -z), Sign::Positive);
+        assert_eq!(orient3d(o, x, y, x + y), Sign::Zero);
+        // (o, y, x, z) is positive; the centroid is inside, far points are outside.
+        assert_eq!(insphere(o, y, x, z, DVec3::splat(0.25)), Sign::Positive);
+        assert_eq!(insphere(o, y, x, z, DVec3::splat(5.0)), Sign::Negative);
+        assert_eq!(insphere(o, y, x, z, x + y), Sign::Zero);
+        assert!(collinear(o, x, 2.0 * x));
+        assert!(!collinear(o, x, y));
+        assert_eq!(Sign::of(-0.0), Sign::Zero);
+    }
+
+    #[test]
+    fn perturbation_is_consistent_across_a_facet() {
+        // o, x, y, z, w = (1,1,1) are cospherical and o, w lie on both sides of xyz: the
+        // perturbation must choose either {oxyz, wxyz} (both tests false) or the three
+        // tetrahedra around edge ow (both tests true).
+        let o = DVec3::ZERO;
+        let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+        let w = DVec3::ONE;
+        let q = [o, y, x, z];
+        assert_eq!(orient3d(q[0], q[1], q[2], q[3]), Sign::Positive);
+        let q2 = [w, x, y, z];
+        assert_eq!(orient3d(q2[0], q2[1], q2[2], q2[3]), Sign::Positive);
+        assert_eq!(insphere(q[0], q[1], q[2], q[3], w), Sign::Zero);
+        assert_eq!(insphere_perturbed(&q, w), insphere_perturbed(&q2, o));
+    }
+}
