@@ -63,6 +63,7 @@
 //! assert!(t.insert(DVec3::new(f64::NAN, 0.0, 0.0)).is_err());
 //! ```
 
+mod dd_arith;
 pub mod predicates;
 mod sort;
 
@@ -1158,54 +1159,10 @@ pub fn circumcenter(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3) -> DVec3 {
     })
 }
 
-/// Minimal double-double arithmetic for the circumcenter fallback.
 mod dd {
+    use crate::dd_arith::{D, two_sum};
     use glam::DVec3;
 
-    #[derive(Clone, Copy, Debug)]
-    pub struct D(f64, f64);
-
-    fn two_sum(a: f64, b: f64) -> D {
-        let s = a + b;
-        let bb = s - a;
-        D(s, (a - (s - bb)) + (b - bb))
-    }
-    fn quick(a: f64, b: f64) -> D {
-        let s = a + b;
-        D(s, b - (s - a))
-    }
-    fn two_prod(a: f64, b: f64) -> D {
-        let p = a * b;
-        D(p, a.mul_add(b, -p))
-    }
-    impl std::ops::Add for D {
-        type Output = D;
-        fn add(self, o: D) -> D {
-            let s = two_sum(self.0, o.0);
-            let t = two_sum(self.1, o.1);
-            let s = quick(s.0, s.1 + t.0);
-            quick(s.0, s.1 + t.1)
-        }
-    }
-    impl std::ops::Neg for D {
-        type Output = D;
-        fn neg(self) -> D {
-            D(-self.0, -self.1)
-        }
-    }
-    impl std::ops::Sub for D {
-        type Output = D;
-        fn sub(self, o: D) -> D {
-            self + (-o)
-        }
-    }
-    impl std::ops::Mul for D {
-        type Output = D;
-        fn mul(self, o: D) -> D {
-            let p = two_prod(self.0, o.0);
-            quick(p.0, p.1 + (self.0 * o.1 + self.1 * o.0))
-        }
-    }
     type V = [D; 3];
     fn cross(a: V, b: V) -> V {
         [
