@@ -60,7 +60,7 @@ pub fn orient3d(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Sign {
 /// Three stages: Shewchuk's static f64 filter, a double-double evaluation with a rigorous
 /// error bound (decides nearly-cospherical inputs, e.g. rounded sphere samples, ~20x faster
 /// than the adaptive expansions), then `robust::insphere` (exact).
-#[inline]
+#[inline(always)]
 pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
     let (ae, be, ce, de) = (a - e, b - e, c - e, d - e);
     let ab = ae.x * be.y - be.x * ae.y;
@@ -99,6 +99,14 @@ pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
     if det > errbound || -det > errbound {
         return Sign::of(det);
     }
+    insphere_slow(a, b, c, d, e, permanent)
+}
+
+#[inline(never)]
+fn insphere_slow(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3, permanent: f64) -> Sign {
+    if let Some(s) = insphere_int(a, b, c, d, e) {
+        return s;
+    }
     // Double-double stage: every difference is exact; each DD operation has relative error
     // below 8 u^2 (u = 2^-53), the evaluation tree has depth 8, so the absolute error is
     // below ~64 u^2 * permanent. We require 2^-96 = 1024 u^2. Skipped near underflow.
@@ -110,6 +118,62 @@ pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
         }
     }
     Sign::of(robust::insphere(c3(a), c3(b), c3(c), c3(d), c3(e)))
+}
+
+/// Exact evaluation in `i128` when the twelve differences `p - e` are exact and, scaled by
+/// one power of two, integers of magnitude at most 2^20 (grids, integer inputs). Then the
+/// minors are below 2^63 and the determinant below 2^108.
+fn insphere_int(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Option<Sign> {
+    use crate::dd_arith::two_sum;
+    let mut diffs = [0.0f64; 12];
+    let mut max = 0.0f64;
+    for (k, p) in [a, b, c, d].into_iter().enumerate() {
+        for (i, (x, y)) in [(p.x, e.x), (p.y, e.y), (p.z, e.z)].into_iter().enumerate() {
+            let t = two_sum(x, -y);
+            if t.1 != 0.0 {
+                return None;
+            }
+            diffs[3 * k + i] = t.0;
+            max = max.max(t.0.abs());
+        }
+    }
+    if max == 0.0 {
+        return None;
+    }
+    // Power of two s with max * s in (2^19, 2^20]; scaling by s is exact (coordinates are
+    // within 2^-140..2^201, so no overflow or underflow).
+    let exp = max.log2().ceil() as i32;
+    let s = 2f64.powi(20 - exp);
+    let mut v = [0i128; 12];
+    for (k, &x) in diffs.iter().enumerate() {
+        let y = x * s;
+        if y != y.trunc() || y.abs() > (1u64 << 20) as f64 {
+            return None;
+        }
+        v[k] = y as i128;
+    }
+    let p = |k: usize| (v[3 * k], v[3 * k + 1], v[3 * k + 2]);
+    let (ae, be, ce, de) = (p(0), p(1), p(2), p(3));
+    let m = |p: (i128, i128, i128), q: (i128, i128, i128)| p.0 * q.1 - q.0 * p.1;
+    let (ab, bc, cd, da, ac, bd) = (
+        m(ae, be),
+        m(be, ce),
+        m(ce, de),
+        m(de, ae),
+        m(ae, ce),
+        m(be, de),
+    );
+    let abc = ae.2 * bc - be.2 * ac + ce.2 * ab;
+    let bcd = be.2 * cd - ce.2 * bd + de.2 * bc;
+    let cda = ce.2 * da + de.2 * ac + ae.2 * cd;
+    let dab = de.2 * ab + ae.2 * bd + be.2 * da;
+    let l = |p: (i128, i128, i128)| p.0 * p.0 + p.1 * p.1 + p.2 * p.2;
+    let det = (l(de) * abc - l(ce) * dab) + (l(be) * cda - l(ae) * bcd);
+    Some(match det.cmp(&0) {
+        std::cmp::Ordering::Greater => Sign::Positive,
+        std::cmp::Ordering::Less => Sign::Negative,
+        std::cmp::Ordering::Equal => Sign::Zero,
+    })
 }
 
 #[inline(never)]
@@ -155,11 +219,20 @@ pub fn lex_less(a: DVec3, b: DVec3) -> bool {
 
 /// Perturbed in-sphere test for a positively oriented tetrahedron `q` (no two points equal):
 /// `true` when `p` is inside the perturbed circumsphere. Never undecided.
+#[inline(always)]
 pub fn insphere_perturbed(q: &[DVec3; 4], p: DVec3) -> bool {
     match insphere(q[0], q[1], q[2], q[3], p) {
         Sign::Positive => true,
         Sign::Negative => false,
-        Sign::Zero => {
+        Sign::Zero => insphere_tie(q, p),
+    }
+}
+
+/// The perturbed decision when `p` is exactly on the circumsphere of `q`.
+#[inline(never)]
+fn insphere_tie(q: &[DVec3; 4], p: DVec3) -> bool {
+    {
+        {
             let all = [q[0], q[1], q[2], q[3], p];
             let mut idx = [0usize, 1, 2, 3, 4];
             idx.sort_unstable_by(|&i, &j| {
@@ -318,5 +391,46 @@ mod tests {
             }
         }
         assert!(decided_by_dd > 19000);
+    }
+
+    #[test]
+    fn integer_path_matches_robust() {
+        let mut st = 99u64;
+        let mut next = |m: u64| {
+            st = st
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((st >> 33) % m) as f64
+        };
+        let mut zeros = 0;
+        for k in 0..20000 {
+            let s = [1.0, 0.25, 1024.0, 3.0][k % 4];
+            let mut q: Vec<DVec3> = (0..5)
+                .map(|_| DVec3::new(next(5), next(5), next(5)) * s)
+                .collect();
+            if k % 7 == 0 {
+                q[4] = DVec3::new(next(1 << 20), next(1 << 20), next(1 << 20));
+            }
+            if orient3d(q[0], q[1], q[2], q[3]) != Sign::Positive {
+                q.swap(0, 1);
+                if orient3d(q[0], q[1], q[2], q[3]) != Sign::Positive {
+                    continue;
+                }
+            }
+            let exact = Sign::of(robust::insphere(
+                c3(q[0]),
+                c3(q[1]),
+                c3(q[2]),
+                c3(q[3]),
+                c3(q[4]),
+            ));
+            let fast = insphere_int(q[0], q[1], q[2], q[3], q[4]);
+            if let Some(f) = fast {
+                assert_eq!(f, exact, "{q:?}");
+            }
+            assert_eq!(insphere(q[0], q[1], q[2], q[3], q[4]), exact);
+            zeros += (exact == Sign::Zero) as usize;
+        }
+        assert!(zeros > 100);
     }
 }
