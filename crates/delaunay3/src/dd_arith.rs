@@ -1,0 +1,65 @@
+//! Minimal double-double arithmetic (error-free transformations), shared by the circumcenter
+//! fallback and the in-sphere filter.
+
+#[derive(Clone, Copy, Debug)]
+pub struct D(pub f64, pub f64);
+
+#[inline]
+pub fn two_sum(a: f64, b: f64) -> D {
+    let s = a + b;
+    let bb = s - a;
+    D(s, (a - (s - bb)) + (b - bb))
+}
+#[inline]
+fn quick(a: f64, b: f64) -> D {
+    let s = a + b;
+    D(s, b - (s - a))
+}
+/// Exact product `a * b = hi + lo` (no overflow: |a|, |b| < 2^995).
+#[inline]
+pub fn two_prod(a: f64, b: f64) -> D {
+    let p = a * b;
+    if cfg!(target_feature = "fma") {
+        D(p, a.mul_add(b, -p))
+    } else {
+        let (ah, al) = split(a);
+        let (bh, bl) = split(b);
+        D(p, ((ah * bh - p) + ah * bl + al * bh) + al * bl)
+    }
+}
+#[inline]
+fn split(a: f64) -> (f64, f64) {
+    let c = 134_217_729.0 * a; // 2^27 + 1
+    let hi = c - (c - a);
+    (hi, a - hi)
+}
+impl std::ops::Add for D {
+    type Output = D;
+    #[inline]
+    fn add(self, o: D) -> D {
+        let s = two_sum(self.0, o.0);
+        let t = two_sum(self.1, o.1);
+        let s = quick(s.0, s.1 + t.0);
+        quick(s.0, s.1 + t.1)
+    }
+}
+impl std::ops::Neg for D {
+    type Output = D;
+    fn neg(self) -> D {
+        D(-self.0, -self.1)
+    }
+}
+impl std::ops::Sub for D {
+    type Output = D;
+    fn sub(self, o: D) -> D {
+        self + (-o)
+    }
+}
+impl std::ops::Mul for D {
+    type Output = D;
+    #[inline]
+    fn mul(self, o: D) -> D {
+        let p = two_prod(self.0, o.0);
+        quick(p.0, p.1 + (self.0 * o.1 + self.1 * o.0))
+    }
+}

@@ -1,0 +1,133 @@
+//! Deterministic spatial sorting: Hilbert median sort (Delage & Devillers, as in CGAL's
+//! `Hilbert_sort_median_3`) wrapped in BRIO (Amenta, Choi & Rote) rounds.
+
+use glam::DVec3;
+
+/// A small deterministic PRNG (64-bit LCG with output mixing). Works from any state.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Rng(pub u64);
+
+impl Rng {
+    #[inline]
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let mut z = self.0;
+        z = (z ^ (z >> 31)).wrapping_mul(0xbf58476d1ce4e5b9);
+        z ^ (z >> 29)
+    }
+    /// Uniform in `0..n` (n > 0), by multiply-shift.
+    #[inline]
+    pub fn below(&mut self, n: usize) -> usize {
+        (((self.next_u64() >> 32) * n as u64) >> 32) as usize
+    }
+}
+
+fn coord(p: DVec3, axis: usize) -> f64 {
+    match axis {
+        0 => p.x,
+        1 => p.y,
+        _ => p.z,
+    }
+}
+
+/// Splits `idx` at its median along `axis` (ascending if `up`), returns the median position.
+fn split(pts: &[DVec3], idx: &mut [u32], axis: usize, up: bool) -> usize {
+    let mid = idx.len() / 2;
+    if idx.is_empty() {
+        return 0;
+    }
+    idx.select_nth_unstable_by(mid, |&a, &b| {
+        let (ca, cb) = (coord(pts[a as usize], axis), coord(pts[b as usize], axis));
+        let o = ca.partial_cmp(&cb).unwrap_or(std::cmp::Ordering::Equal);
+        if up { o } else { o.reverse() }
+    });
+    mid
+}
+
+/// Hilbert median sort of `idx` (indices into `pts`). `x` is the current first axis and
+/// `up[k]` the direction of local axis `k` (x, y, z = x, x+1, x+2 mod 3).
+fn hilbert(pts: &[DVec3], idx: &mut [u32], x: usize, up: [bool; 3]) {
+    if idx.len() <= 1 {
+        return;
+    }
+    let (y, z) = ((x + 1) % 3, (x + 2) % 3);
+    let [ux, uy, uz] = up;
+    let n = idx.len();
+    let m4 = split(pts, idx, x, ux);
+    let m2 = split(pts, &mut idx[..m4], y, uy);
+    let m1 = split(pts, &mut idx[..m2], z, uz);
+    let m3 = m2 + split(pts, &mut idx[m2..m4], z, !uz);
+    let m6 = m4 + split(pts, &mut idx[m4..n], y, !uy);
+    let m5 = m4 + split(pts, &mut idx[m4..m6], z, uz);
+    let m7 = m6 + split(pts, &mut idx[m6..n], z, !uz);
+    hilbert(pts, &mut idx[..m1], z, [uz, ux, uy]);
+    hilbert(pts, &mut idx[m1..m2], y, [uy, uz, ux]);
+    hilbert(pts, &mut idx[m2..m3], y, [uy, uz, ux]);
+    hilbert(pts, &mut idx[m3..m4], x, [ux, !uy, !uz]);
+    hilbert(pts, &mut idx[m4..m5], x, [ux, !uy, !uz]);
+    hilbert(pts, &mut idx[m5..m6], y, [!uy, uz, !ux]);
+    hilbert(pts, &mut idx[m6..m7], y, [!uy, uz, !ux]);
+    hilbert(pts, &mut idx[m7..n], z, [!uz, !ux, uy]);
+}
+
+/// Hilbert-sorts `idx` in place (no randomization).
+pub(crate) fn hilbert_sort(pts: &[DVec3], idx: &mut [u32]) {
+    hilbert(pts, idx, 0, [true, true, true]);
+}
+
+/// BRIO order of `0..pts.len()`: a seeded shuffle, then rounds of geometrically growing size
+/// (ratio 1/4, first round at most 1024 points), each round Hilbert-sorted. Deterministic.
+pub(crate) fn brio_order(pts: &[DVec3], seed: u64) -> Vec<u32> {
+    let mut idx: Vec<u32> = (0..pts.len() as u32).collect();
+    let mut rng = Rng(seed);
+    for i in (1..idx.len()).rev() {
+        let j = rng.below(i + 1);
+        idx.swap(i, j);
+    }
+    multiscale(pts, &mut idx);
+    idx
+}
+
+fn multiscale(pts: &[DVec3], idx: &mut [u32]) {
+    let mut middle = 0;
+    if idx.len() > 1024 {
+        middle = idx.len() / 4;
+        multiscale(pts, &mut idx[..middle]);
+    }
+    hilbert_sort(pts, &mut idx[middle..]);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn brio_is_a_permutation_and_local() {
+        let mut rng = Rng(7);
+        let pts: Vec<DVec3> = (0..5000)
+            .map(|_| {
+                DVec3::new(
+                    rng.below(1000) as f64,
+                    rng.below(1000) as f64,
+                    rng.below(1000) as f64,
+                )
+            })
+            .collect();
+        let ord = brio_order(&pts, 1);
+        let mut s = ord.clone();
+        s.sort_unstable();
+        assert_eq!(s, (0..5000).collect::<Vec<u32>>());
+        assert_eq!(ord, brio_order(&pts, 1));
+        // The last round (3750 points) is Hilbert-ordered: consecutive points are close.
+        let tail = &ord[1250..];
+        let mean: f64 = tail
+            .windows(2)
+            .map(|w| pts[w[0] as usize].distance(pts[w[1] as usize]))
+            .sum::<f64>()
+            / (tail.len() - 1) as f64;
+        assert!(mean < 150.0, "mean step {mean}");
+    }
+}

@@ -1,0 +1,109 @@
+#![allow(dead_code)]
+use delaunay3::{DVec3, Triangulation};
+use std::collections::BTreeSet;
+
+/// SplitMix64: a tiny deterministic generator for test data.
+pub struct Rng(pub u64);
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub fn point(&mut self) -> DVec3 {
+        DVec3::new(self.unit(), self.unit(), self.unit())
+    }
+}
+
+/// Distinct points (bitwise after -0 normalization) of `pts`.
+pub fn distinct(pts: &[DVec3]) -> usize {
+    let s: BTreeSet<[u64; 3]> = pts
+        .iter()
+        .map(|p| (*p + DVec3::ZERO).to_array().map(f64::to_bits))
+        .collect();
+    s.len()
+}
+
+/// The finite tetrahedra as sorted tuples of point coordinates (bits): comparable across
+/// triangulations with different vertex numbering.
+pub fn tets_by_points(t: &Triangulation) -> BTreeSet<[[u64; 3]; 4]> {
+    t.finite_cells()
+        .map(|c| {
+            let mut q = t
+                .cell_vertices(c)
+                .map(|v| (t.point(v) + DVec3::ZERO).to_array().map(f64::to_bits));
+            q.sort_unstable();
+            q
+        })
+        .collect()
+}
+
+/// Builds with `insert` one by one and checks validity and vertex coverage.
+pub fn build_checked(pts: &[DVec3]) -> Triangulation {
+    let mut t = Triangulation::new();
+    for &p in pts {
+        let r = t.insert(p).expect("valid point");
+        let v = match r {
+            delaunay3::Insertion::New(v) | delaunay3::Insertion::Duplicate(v) => v,
+        };
+        assert_eq!(t.point(v), p);
+    }
+    if let Err(e) = t.is_valid() {
+        panic!("invalid triangulation of {} points: {e}", pts.len());
+    }
+    assert_eq!(t.num_vertices(), distinct(pts));
+    t
+}
+
+/// Exact-enough brute force (for general position only): all 4-subsets whose circumsphere
+/// contains no other point, using the crate's exact predicates.
+pub fn brute_force(pts: &[DVec3]) -> BTreeSet<[[u64; 3]; 4]> {
+    use delaunay3::predicates::{Sign, insphere, orient3d};
+    let n = pts.len();
+    let mut out = BTreeSet::new();
+    for a in 0..n {
+        for b in a + 1..n {
+            for c in b + 1..n {
+                for d in c + 1..n {
+                    let mut q = [pts[a], pts[b], pts[c], pts[d]];
+                    match orient3d(q[0], q[1], q[2], q[3]) {
+                        Sign::Zero => continue,
+                        Sign::Negative => q.swap(0, 1),
+                        Sign::Positive => {}
+                    }
+                    let empty = (0..n)
+                        .filter(|&e| ![a, b, c, d].contains(&e))
+                        .all(|e| insphere(q[0], q[1], q[2], q[3], pts[e]) == Sign::Negative);
+                    if empty {
+                        let mut k = q.map(|p| p.to_array().map(f64::to_bits));
+                        k.sort_unstable();
+                        out.insert(k);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// All integer points with x^2 + y^2 + z^2 = r2, scaled by `s` and shifted by `o` (both
+/// chosen so that the arithmetic is exact): exactly cospherical points.
+pub fn sphere_points(r2: i64, s: f64, o: DVec3) -> Vec<DVec3> {
+    let r = (r2 as f64).sqrt() as i64 + 1;
+    let mut v = Vec::new();
+    for x in -r..=r {
+        for y in -r..=r {
+            for z in -r..=r {
+                if x * x + y * y + z * z == r2 {
+                    v.push(DVec3::new(x as f64, y as f64, z as f64) * s + o);
+                }
+            }
+        }
+    }
+    v
+}

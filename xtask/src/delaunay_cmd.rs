@@ -1,0 +1,234 @@
+//! `cargo xtask delaunay`: drive the `delaunay3` crate from outside Rust.
+//!
+//! - `--input points.xyz --output tets.txt`: input is one `x y z` per line (blank lines and
+//!   `#` comments ignored); output is one finite tetrahedron per line as four 0-based input
+//!   indices (a duplicated point maps to its first occurrence). A JSON summary goes to stdout.
+//! - `--random N --seed S --distribution cube|sphere|grid`: prints one JSON object with
+//!   `points`, `finite_cells`, `seconds` (insertion time) and `valid` (`is_valid()` result,
+//!   run when N <= 200000 or with `--validate`, else `null`).
+
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use delaunay3::{DVec3, Triangulation};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Distribution {
+    /// Uniform in the unit cube.
+    Cube,
+    /// Uniform on the unit sphere (rounded to f64: not exactly cospherical).
+    Sphere,
+    /// N distinct points of the smallest integer grid k^3 >= N, chosen by the seed.
+    Grid,
+}
+
+/// Build a 3D Delaunay triangulation of a point file or of random points.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DelaunayArgs {
+    /// Input points, one `x y z` per line (`#` comments and blank lines ignored).
+    #[arg(long, conflicts_with = "random", requires = "output")]
+    pub input: Option<PathBuf>,
+    /// Output tetrahedra, one per line as four 0-based input indices.
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+    /// Number of random points to triangulate.
+    #[arg(long)]
+    pub random: Option<usize>,
+    /// Seed of the random points.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Distribution of the random points.
+    #[arg(long, value_enum, default_value_t = Distribution::Cube)]
+    pub distribution: Distribution,
+    /// Run `is_valid()` even for more than 200000 points.
+    #[arg(long)]
+    pub validate: bool,
+}
+
+struct SplitMix(u64);
+impl SplitMix {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Random points of the given distribution (deterministic in `seed`).
+pub fn random_points(n: usize, seed: u64, dist: Distribution) -> Vec<DVec3> {
+    let mut r = SplitMix(seed);
+    match dist {
+        Distribution::Cube => (0..n)
+            .map(|_| DVec3::new(r.unit(), r.unit(), r.unit()))
+            .collect(),
+        Distribution::Sphere => (0..n)
+            .map(|_| loop {
+                let p = DVec3::new(r.unit(), r.unit(), r.unit()) * 2.0 - DVec3::ONE;
+                let l = p.length_squared();
+                if l > 1e-6 && l <= 1.0 {
+                    break p / l.sqrt();
+                }
+            })
+            .collect(),
+        Distribution::Grid => {
+            let mut k = (n as f64).cbrt().round() as usize;
+            while k * k * k < n {
+                k += 1;
+            }
+            let mut all: Vec<DVec3> = (0..k * k * k)
+                .map(|i| DVec3::new((i % k) as f64, (i / k % k) as f64, (i / (k * k)) as f64))
+                .collect();
+            for i in (1..all.len()).rev() {
+                let j = (r.next_u64() % (i as u64 + 1)) as usize;
+                all.swap(i, j);
+            }
+            all.truncate(n);
+            all
+        }
+    }
+}
+
+/// Parses an `.xyz` text: one `x y z` per line; errors name the file and line.
+pub fn parse_xyz(text: &str, name: &str) -> Result<Vec<DVec3>> {
+    let mut pts = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        if fields.len() != 3 {
+            bail!(
+                "{name}:{}: expected 3 numbers `x y z`, found {} fields in {line:?}",
+                i + 1,
+                fields.len()
+            );
+        }
+        let mut c = [0.0; 3];
+        for (k, f) in fields.iter().enumerate() {
+            c[k] = f.parse::<f64>().map_err(|e| {
+                anyhow::anyhow!("{name}:{}: field {} {f:?} is not a number: {e}", i + 1, k + 1)
+            })?;
+        }
+        pts.push(DVec3::from_array(c));
+    }
+    Ok(pts)
+}
+
+pub fn run(args: &DelaunayArgs) -> Result<()> {
+    if let Some(input) = &args.input {
+        let output = args.output.as_ref().context("--input requires --output")?;
+        let name = input.display().to_string();
+        let text = std::fs::read_to_string(input)
+            .with_context(|| format!("cannot read {name} (a UTF-8 text file of `x y z` lines)"))?;
+        let pts = parse_xyz(&text, &name)?;
+        let t0 = Instant::now();
+        let mut t = Triangulation::new();
+        let ids = t
+            .insert_bulk(&pts)
+            .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        let seconds = t0.elapsed().as_secs_f64();
+        let mut first = vec![u32::MAX; t.num_vertices()];
+        for (i, &v) in ids.iter().enumerate() {
+            let f = &mut first[v as usize];
+            if *f == u32::MAX {
+                *f = i as u32;
+            }
+        }
+        let out = std::fs::File::create(output)
+            .with_context(|| format!("cannot create {}", output.display()))?;
+        let mut w = BufWriter::new(out);
+        for c in t.finite_cells() {
+            let [a, b, c, d] = t.cell_vertices(c).map(|v| first[v as usize]);
+            writeln!(w, "{a} {b} {c} {d}")?;
+        }
+        w.flush()
+            .with_context(|| format!("cannot write {}", output.display()))?;
+        let valid = if pts.len() <= 200_000 || args.validate {
+            Some(t.is_valid().is_ok())
+        } else {
+            None
+        };
+        println!(
+            "{}",
+            serde_json::json!({
+                "points": pts.len(),
+                "vertices": t.num_vertices(),
+                "finite_cells": t.num_finite_cells(),
+                "seconds": seconds,
+                "valid": valid,
+            })
+        );
+        return Ok(());
+    }
+    let Some(n) = args.random else {
+        bail!("give either --input FILE --output FILE or --random N");
+    };
+    let pts = random_points(n, args.seed, args.distribution);
+    let t0 = Instant::now();
+    let mut t = Triangulation::new();
+    t.insert_bulk(&pts)
+        .map_err(|e| anyhow::anyhow!("random points: {e}"))?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let valid = if n <= 200_000 || args.validate {
+        Some(match t.is_valid() {
+            Ok(()) => true,
+            Err(e) => {
+                eprintln!("invalid triangulation: {e}");
+                false
+            }
+        })
+    } else {
+        None
+    };
+    println!(
+        "{}",
+        serde_json::json!({
+            "points": n,
+            "vertices": t.num_vertices(),
+            "finite_cells": t.num_finite_cells(),
+            "seconds": seconds,
+            "points_per_second": n as f64 / seconds.max(1e-12),
+            "bytes_per_point": t.memory_bytes() as f64 / n.max(1) as f64,
+            "distribution": format!("{:?}", args.distribution).to_lowercase(),
+            "seed": args.seed,
+            "valid": valid,
+        })
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parse_errors_name_the_line() {
+        let e = parse_xyz("0 0 0\n# c\n\n1 2\n", "f.xyz").unwrap_err();
+        assert!(e.to_string().contains("f.xyz:4"), "{e}");
+        let e = parse_xyz("0 0 0\n1 x 2\n", "f.xyz").unwrap_err();
+        assert!(e.to_string().contains("f.xyz:2: field 2"), "{e}");
+        let p = parse_xyz("1 2 3 # a point\n\n4 5 6\n", "f").unwrap();
+        assert_eq!(p, vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(4.0, 5.0, 6.0)]);
+    }
+
+    #[test]
+    fn random_distributions() {
+        for d in [Distribution::Cube, Distribution::Sphere, Distribution::Grid] {
+            let p = random_points(100, 3, d);
+            assert_eq!(p.len(), 100);
+            assert_eq!(p, random_points(100, 3, d));
+        }
+        let g = random_points(27, 1, Distribution::Grid);
+        let mut t = Triangulation::new();
+        t.insert_bulk(&g).unwrap();
+        assert_eq!(t.num_vertices(), 27);
+    }
+}
