@@ -89,7 +89,9 @@ impl ExprError {
     }
 }
 
-const MAX_DEPTH: usize = 200;
+/// Nesting limit (parentheses, unary operators, function calls): deeper input is an error, not
+/// a stack overflow.
+const MAX_DEPTH: usize = 256;
 
 #[derive(Clone, Debug, PartialEq)]
 enum Tok {
@@ -254,7 +256,6 @@ impl Parser<'_> {
     }
 
     fn expr(&mut self) -> Result<Ast, ExprError> {
-        self.enter()?;
         let mut lhs = self.term()?;
         loop {
             let op = match self.peek() {
@@ -265,7 +266,6 @@ impl Parser<'_> {
             let rhs = self.term()?;
             lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs));
         }
-        self.depth -= 1;
         Ok(lhs)
     }
     fn term(&mut self) -> Result<Ast, ExprError> {

@@ -63,7 +63,7 @@ pub enum ImplicitError {
         radius: f64,
     },
     #[error(
-        "the surface function returned NaN at ({}, {}, {}) inside the bounding sphere; fix the function or its domain",
+        "the surface function returned NaN at ({}, {}, {}) (in the bounding ball); fix the function or its domain",
         point[0], point[1], point[2]
     )]
     NaN { point: [f64; 3] },
@@ -211,6 +211,9 @@ impl ImplicitBuilder {
             .collect();
         let mut all_sign = true;
         for &(p, v) in &on_sphere {
+            if v.is_nan() {
+                return Err(ImplicitError::NaN { point: p.to_array() });
+            }
             if !(v > 0.0) {
                 return Err(ImplicitError::CrossesBoundary {
                     point: p.to_array(),

@@ -80,8 +80,8 @@ fn check_ends(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Result<(), OracleError> {
 /// Uses the Illinois variant of regula falsi, which converges superlinearly on smooth functions,
 /// with three safeguards: bisection when the values are sign-only (-1, 0, 1) or an end value is
 /// exactly 0; a bisection step whenever the bracket has not halved within three steps (so the
-/// cost is at most about four times that of bisection); and interpolated probes kept at least
-/// `tol / 2` inside the bracket, so the bracket closes on the root from both sides.
+/// cost is at most about four times that of bisection); and interpolated probes kept about
+/// `tol` inside the bracket, so the bracket closes on the root from both sides.
 pub fn try_find_root(
     f: impl Fn(DVec3) -> f64,
     a: DVec3,
@@ -126,11 +126,10 @@ pub fn try_find_root(
             mid
         } else {
             let s = t0 - g0 * (t1 - t0) / (g1 - g0);
-            if s.is_finite() {
-                s.clamp(t0 + 0.5 * tt, t1 - 0.5 * tt)
-            } else {
-                mid
-            }
+            // Keep probes about `tol` inside the bracket: when the estimate is within `tol` of
+            // an end, the probe lands just past the root and closes the bracket.
+            let (lo, hi) = (t0 + 0.99 * tt, t1 - 0.99 * tt);
+            if s.is_finite() && lo < hi { s.clamp(lo, hi) } else { mid }
         };
         if t <= t0 || t >= t1 {
             break; // adjacent floats
