@@ -72,7 +72,7 @@ pub enum CatalogError {
     Implicit {
         name: String,
         #[source]
-        source: ImplicitError,
+        source: Box<ImplicitError>,
     },
 }
 
@@ -309,7 +309,7 @@ pub fn surface(name: &str) -> Result<ImplicitSurface, CatalogError> {
     let f = native_fn(name).ok_or_else(unknown)?;
     let wrap = |source: ImplicitError| CatalogError::Implicit {
         name: name.to_string(),
-        source,
+        source: Box::new(source),
     };
     let expr = Arc::new(Expr::parse(&e.expression).map_err(|err| wrap(err.into()))?);
     let mut b =
@@ -329,7 +329,7 @@ pub fn surface_from_expression(name: &str) -> Result<ImplicitSurface, CatalogErr
     })?;
     let wrap = |source: ImplicitError| CatalogError::Implicit {
         name: name.to_string(),
-        source,
+        source: Box::new(source),
     };
     let mut b =
         ImplicitSurface::builder_from_expr(&e.expression, e.bounding_sphere).map_err(wrap)?;

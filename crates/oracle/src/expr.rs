@@ -257,11 +257,8 @@ impl Parser<'_> {
 
     fn expr(&mut self) -> Result<Ast, ExprError> {
         let mut lhs = self.term()?;
-        loop {
-            let op = match self.peek() {
-                Tok::Sym(c @ ('+' | '-')) => *c,
-                _ => break,
-            };
+        while let Tok::Sym(c @ ('+' | '-')) = self.peek() {
+            let op = *c;
             self.pos += 1;
             let rhs = self.term()?;
             lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs));
@@ -270,11 +267,8 @@ impl Parser<'_> {
     }
     fn term(&mut self) -> Result<Ast, ExprError> {
         let mut lhs = self.unary()?;
-        loop {
-            let op = match self.peek() {
-                Tok::Sym(c @ ('*' | '/')) => *c,
-                _ => break,
-            };
+        while let Tok::Sym(c @ ('*' | '/')) = self.peek() {
+            let op = *c;
             self.pos += 1;
             let rhs = self.unary()?;
             lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs));
@@ -730,16 +724,31 @@ impl Expr {
     /// Value and exact gradient at `p` (forward-mode differentiation of the program). At kinks
     /// (`abs`, `min`, `max`, `sign`) one one-sided derivative is returned.
     pub fn eval_grad(&self, p: DVec3) -> (f64, DVec3) {
+        let n = self.nregs();
+        if n <= 64 {
+            let mut regs = [[0.0; 4]; 64];
+            self.run_dual(&mut regs[..n], p)
+        } else if n <= 256 {
+            let mut regs = [[0.0; 4]; 256];
+            self.run_dual(&mut regs[..n], p)
+        } else {
+            let mut regs = vec![[0.0; 4]; n];
+            self.run_dual(&mut regs, p)
+        }
+    }
+
+    fn run_dual(&self, regs: &mut [[f64; 4]], p: DVec3) -> (f64, DVec3) {
         let n0 = self.init.len();
-        let mut regs: Vec<[f64; 4]> = Vec::with_capacity(self.nregs());
-        regs.push([p.x, 1.0, 0.0, 0.0]);
-        regs.push([p.y, 0.0, 1.0, 0.0]);
-        regs.push([p.z, 0.0, 0.0, 1.0]);
-        regs.extend(self.init[3..n0].iter().map(|&c| [c, 0.0, 0.0, 0.0]));
-        for ins in &self.code {
+        regs[0] = [p.x, 1.0, 0.0, 0.0];
+        regs[1] = [p.y, 0.0, 1.0, 0.0];
+        regs[2] = [p.z, 0.0, 0.0, 1.0];
+        for (r, &c) in regs[3..n0].iter_mut().zip(&self.init[3..]) {
+            *r = [c, 0.0, 0.0, 0.0];
+        }
+        for (k, ins) in self.code.iter().enumerate() {
             let a = regs[ins.a as usize];
             let b = regs[ins.b as usize];
-            regs.push(dual(ins.op, a, b));
+            regs[n0 + k] = dual(ins.op, a, b);
         }
         let r = regs[self.result as usize];
         (r[0], DVec3::new(r[1], r[2], r[3]))

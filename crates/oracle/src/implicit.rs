@@ -177,7 +177,7 @@ impl ImplicitBuilder {
     /// Check everything (see the module doc) and precompute the seed grid.
     pub fn build(self) -> Result<ImplicitSurface, ImplicitError> {
         let bs = self.bs;
-        if !bs.center.is_finite() || !(bs.radius.is_finite() && bs.radius > 0.0) {
+        if !(bs.center.is_finite() && bs.radius.is_finite() && bs.radius > 0.0) {
             return Err(ImplicitError::BadBoundingSphere {
                 center: bs.center.to_array(),
                 radius: bs.radius,
@@ -212,9 +212,11 @@ impl ImplicitBuilder {
         let mut all_sign = true;
         for &(p, v) in &on_sphere {
             if v.is_nan() {
-                return Err(ImplicitError::NaN { point: p.to_array() });
+                return Err(ImplicitError::NaN {
+                    point: p.to_array(),
+                });
             }
-            if !(v > 0.0) {
+            if v <= 0.0 {
                 return Err(ImplicitError::CrossesBoundary {
                     point: p.to_array(),
                     value: v,
@@ -464,7 +466,7 @@ fn farthest_points(fixed: &[DVec3], pool: &[DVec3], k: usize, min_sep: f64) -> V
                 best = i;
             }
         }
-        if !(d2[best] > sep2) {
+        if d2[best] <= sep2 {
             break;
         }
         let q = pool[best];

@@ -97,7 +97,7 @@ pub fn try_find_root(
     }
     let d = b - a;
     let len = d.length();
-    if !(len > tol) {
+    if len.is_nan() || len <= tol {
         return Ok(0.5 * (a + b));
     }
     if is_sign_value(fa) && is_sign_value(fb) {
@@ -129,7 +129,11 @@ pub fn try_find_root(
             // Keep probes about `tol` inside the bracket: when the estimate is within `tol` of
             // an end, the probe lands just past the root and closes the bracket.
             let (lo, hi) = (t0 + 0.99 * tt, t1 - 0.99 * tt);
-            if s.is_finite() && lo < hi { s.clamp(lo, hi) } else { mid }
+            if s.is_finite() && lo < hi {
+                s.clamp(lo, hi)
+            } else {
+                mid
+            }
         };
         if t <= t0 || t >= t1 {
             break; // adjacent floats
@@ -269,7 +273,7 @@ pub fn project_newton<S: Surface + ?Sized>(s: &S, p: DVec3) -> Option<DVec3> {
         let f = s.value(x);
         let g = s.gradient(x);
         let g2 = g.length_squared();
-        if !f.is_finite() || !(g2 > 0.0) {
+        if !f.is_finite() || g2.is_nan() || g2 <= 0.0 {
             return None;
         }
         let step = g * (f / g2);

@@ -62,18 +62,28 @@ fn numbers_constants_functions() {
     assert_eq!(ev("max(x, y)", p), 0.5);
     assert_eq!(ev("pow(2, 10)", p), 1024.0);
     assert_eq!(ev("pow(z, 0.5)", p), 2.0);
-    assert_eq!(ev("sin(x)^2+cos(x)^2", p), 0.5f64.sin().powi(2) + 0.5f64.cos().powi(2));
+    assert_eq!(
+        ev("sin(x)^2+cos(x)^2", p),
+        0.5f64.sin().powi(2) + 0.5f64.cos().powi(2)
+    );
     assert_eq!(ev("tan(x)", p), 0.5f64.tan());
     assert_eq!(ev("atan(x)", p), 0.5f64.atan());
     assert!(ev("sqrt(y)", p).is_nan());
-    assert!(ev("y^0.3", p).is_nan(), "non-integer power of a negative number is NaN");
+    assert!(
+        ev("y^0.3", p).is_nan(),
+        "non-integer power of a negative number is NaN"
+    );
 }
 
 #[test]
 fn compilation_folds_and_shares() {
     // x^2 appears three times, y^2 twice: shared; constants folded.
     let e = Expr::parse("(x^2+y^2+z^2+1-0.09)^2-4*(x^2+y^2) + 0*(2+3)").unwrap();
-    assert!(e.instruction_count() <= 12, "{} instructions", e.instruction_count());
+    assert!(
+        e.instruction_count() <= 12,
+        "{} instructions",
+        e.instruction_count()
+    );
     let c = Expr::parse("2*pi*(3+4)^2").unwrap();
     assert_eq!(c.instruction_count(), 0);
     assert_eq!(c.eval(DVec3::ZERO), 2.0 * std::f64::consts::PI * 49.0);
@@ -88,7 +98,10 @@ fn parse_error_columns_and_caret() {
     assert_eq!(e.column, 11);
     assert!(matches!(&e.kind, ExprErrorKind::Expected { expected, .. } if expected == "')'"));
     let msg = e.to_string();
-    assert!(msg.starts_with("expected ')', found end of input at column 11: x^2+(y^2-1"), "{msg}");
+    assert!(
+        msg.starts_with("expected ')', found end of input at column 11: x^2+(y^2-1"),
+        "{msg}"
+    );
     // The caret is under the column.
     let lines: Vec<&str> = msg.lines().collect();
     assert_eq!(lines.len(), 2);
@@ -133,9 +146,23 @@ fn unknown_names_are_named() {
     let e = Expr::parse("x(2)").unwrap_err();
     assert_eq!(e.kind, ExprErrorKind::NotAFunction("x".into()));
     let e = Expr::parse("min(x)").unwrap_err();
-    assert!(matches!(e.kind, ExprErrorKind::Arity { expected: 2, found: 1, .. }));
+    assert!(matches!(
+        e.kind,
+        ExprErrorKind::Arity {
+            expected: 2,
+            found: 1,
+            ..
+        }
+    ));
     let e = Expr::parse("sin(x, y)").unwrap_err();
-    assert!(matches!(e.kind, ExprErrorKind::Arity { expected: 1, found: 2, .. }));
+    assert!(matches!(
+        e.kind,
+        ExprErrorKind::Arity {
+            expected: 1,
+            found: 2,
+            ..
+        }
+    ));
 }
 
 #[test]
@@ -244,13 +271,27 @@ fn tree() -> impl Strategy<Value = T> {
     leaf.prop_recursive(5, 48, 2, |inner| {
         prop_oneof![
             inner.clone().prop_map(|a| T::Neg(Box::new(a))),
-            (prop::sample::select(vec!['+', '-', '*', '/']), inner.clone(), inner.clone())
+            (
+                prop::sample::select(vec!['+', '-', '*', '/']),
+                inner.clone(),
+                inner.clone()
+            )
                 .prop_map(|(o, a, b)| T::Bin(o, Box::new(a), Box::new(b))),
-            (inner.clone(), prop::sample::select(vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, -1.0, -2.0, 0.5, 1.5]))
+            (
+                inner.clone(),
+                prop::sample::select(vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, -1.0, -2.0, 0.5, 1.5])
+            )
                 .prop_map(|(a, n)| T::PowC(Box::new(a), n)),
-            (prop::sample::select(vec!["sqrt", "exp", "ln", "sin", "cos", "abs"]), inner.clone())
+            (
+                prop::sample::select(vec!["sqrt", "exp", "ln", "sin", "cos", "abs"]),
+                inner.clone()
+            )
                 .prop_map(|(f, a)| T::F1(f, Box::new(a))),
-            (prop::sample::select(vec!["min", "max"]), inner.clone(), inner)
+            (
+                prop::sample::select(vec!["min", "max"]),
+                inner.clone(),
+                inner
+            )
                 .prop_map(|(f, a, b)| T::F2(f, Box::new(a), Box::new(b))),
         ]
     })
@@ -314,7 +355,8 @@ fn gradient_is_exact() {
     for e in catalog::entries() {
         let x = Expr::parse(&e.expression).unwrap();
         for _ in 0..50 {
-            let p = e.bounding_sphere.center + rng.unit_vector() * e.bounding_sphere.radius * rng.next_f64();
+            let p = e.bounding_sphere.center
+                + rng.unit_vector() * e.bounding_sphere.radius * rng.next_f64();
             let (v, g) = x.eval_grad(p);
             assert_eq!(v, x.eval(p));
             let h = 1e-6;
@@ -324,7 +366,11 @@ fn gradient_is_exact() {
                 x.eval(p + DVec3::Z * h) - x.eval(p - DVec3::Z * h),
             ) / (2.0 * h);
             let err = (g - fd).length();
-            assert!(err <= 1e-5 * (1.0 + g.length()) + 1e-6 * v.abs(), "{} at {p}: {g} vs {fd}", e.name);
+            assert!(
+                err <= 1e-5 * (1.0 + g.length()) + 1e-6 * v.abs(),
+                "{} at {p}: {g} vs {fd}",
+                e.name
+            );
         }
     }
 }
@@ -366,7 +412,13 @@ fn root_with_zero_at_an_end() {
 
 #[test]
 fn nan_is_reported_with_its_point() {
-    let f = |p: DVec3| if p.x > 0.2 && p.x < 0.3 { f64::NAN } else { p.x - 0.5 };
+    let f = |p: DVec3| {
+        if p.x > 0.2 && p.x < 0.3 {
+            f64::NAN
+        } else {
+            p.x - 0.5
+        }
+    };
     let (a, b) = (DVec3::ZERO, DVec3::X);
     // Bisection probes 0.5 then 0.25: NaN.
     let e = roots::try_bisect(f, a, f(a), b, f(b), 1e-9).unwrap_err();
@@ -410,7 +462,10 @@ fn safeguarded_method_is_faster_than_bisection_on_smooth_functions() {
     assert!(n_bisect > 1000, "{n_bisect}");
     // Measured: about 11 evaluations per root against 22 (the function is far from linear at
     // the scale of the segment, so the first steps are slow).
-    assert!(n_illinois * 10 < n_bisect * 6, "illinois {n_illinois} evaluations, bisection {n_bisect}");
+    assert!(
+        n_illinois * 10 < n_bisect * 6,
+        "illinois {n_illinois} evaluations, bisection {n_bisect}"
+    );
 }
 
 #[test]
@@ -431,9 +486,16 @@ fn sign_only_values_use_bisection() {
 
 #[test]
 fn crossings_along_the_torus_axis() {
-    for s in [catalog::surface("torus").unwrap(), catalog::surface_from_expression("torus").unwrap()] {
+    for s in [
+        catalog::surface("torus").unwrap(),
+        catalog::surface_from_expression("torus").unwrap(),
+    ] {
         let mut out = Vec::new();
-        s.crossings(DVec3::new(-2.0, 0.0, 0.0), DVec3::new(2.0, 0.0, 0.0), &mut out);
+        s.crossings(
+            DVec3::new(-2.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            &mut out,
+        );
         assert_eq!(out.len(), 4, "{out:?}");
         for (p, want) in out.iter().zip([-1.3, -0.7, 0.7, 1.3]) {
             assert!((p.x - want).abs() <= s.tolerance(), "{p} vs {want}");
@@ -449,7 +511,11 @@ fn bipolar_oracle_precision_on_the_sphere() {
         let a = rng.unit_vector() * rng.next_f64() * 0.99;
         let b = rng.unit_vector() * (1.01 + rng.next_f64());
         let p = s.crossing(a, s.value(a), b, s.value(b));
-        assert!((p.length() - 1.0).abs() <= s.tolerance(), "{}", p.length() - 1.0);
+        assert!(
+            (p.length() - 1.0).abs() <= s.tolerance(),
+            "{}",
+            p.length() - 1.0
+        );
         // and the point is on the segment
         assert!((p - a).cross(b - a).length() <= 1e-9 * (b - a).length());
     }
@@ -482,9 +548,17 @@ fn sign_only_sphere() {
         }
         let seeds = s.seed_points(4);
         assert!(seeds.len() >= 20);
-        assert!(seeds.iter().all(|p| (p.length() - 1.0).abs() <= s.tolerance()));
+        assert!(
+            seeds
+                .iter()
+                .all(|p| (p.length() - 1.0).abs() <= s.tolerance())
+        );
         let mut out = Vec::new();
-        s.crossings(DVec3::new(-1.9, 0.1, 0.0), DVec3::new(1.9, 0.1, 0.0), &mut out);
+        s.crossings(
+            DVec3::new(-1.9, 0.1, 0.0),
+            DVec3::new(1.9, 0.1, 0.0),
+            &mut out,
+        );
         assert_eq!(out.len(), 2);
     }
     assert!(!catalog::surface("sphere").unwrap().is_sign_only());
@@ -518,18 +592,33 @@ fn bounding_sphere_errors() {
         radius: 1.0,
     };
     let e = ImplicitSurface::from_fn(|p: DVec3| p.length_squared() - 1.0, off).unwrap_err();
-    assert!(e.to_string().contains("enlarge the radius or move the center"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("enlarge the radius or move the center"),
+        "{e}"
+    );
     // Touching the sphere (f = 0 there) is also rejected.
-    let e = ImplicitSurface::from_fn(|p: DVec3| (p.length_squared() - 4.0).min(p.length_squared() - 1.0), ball(2.0));
+    let e = ImplicitSurface::from_fn(
+        |p: DVec3| (p.length_squared() - 4.0).min(p.length_squared() - 1.0),
+        ball(2.0),
+    );
     assert!(matches!(e, Err(ImplicitError::CrossesBoundary { .. })));
 }
 
 #[test]
 fn nan_and_empty_inputs_are_errors() {
     // NaN inside a small interior ball: found on the grid.
-    let f = |p: DVec3| if p.length() < 0.3 { f64::NAN } else { p.length_squared() - 1.0 };
+    let f = |p: DVec3| {
+        if p.length() < 0.3 {
+            f64::NAN
+        } else {
+            p.length_squared() - 1.0
+        }
+    };
     let e = ImplicitSurface::from_fn(f, ball(2.0)).unwrap_err();
-    let ImplicitError::NaN { point } = e else { panic!("{e}") };
+    let ImplicitError::NaN { point } = e else {
+        panic!("{e}")
+    };
     assert!(DVec3::from_array(point).length() < 0.3);
     assert!(e.to_string().contains("NaN"));
     // NaN on the bounding sphere.
@@ -537,20 +626,45 @@ fn nan_and_empty_inputs_are_errors() {
     assert!(matches!(e, ImplicitError::NaN { .. }), "{e}");
     // Nothing inside.
     let e = ImplicitSurface::from_expr("x^2+y^2+z^2+1", ball(2.0)).unwrap_err();
-    assert!(matches!(e, ImplicitError::NoSurfaceInside { n: 32, .. }), "{e}");
+    assert!(
+        matches!(e, ImplicitError::NoSurfaceInside { n: 32, .. }),
+        "{e}"
+    );
     assert!(e.to_string().contains("no surface inside"));
     // Parse errors come through with their column.
     let e = ImplicitSurface::from_expr("x^2+(y^2-1", ball(2.0)).unwrap_err();
-    assert!(matches!(&e, ImplicitError::Expr(x) if x.column == 11), "{e}");
+    assert!(
+        matches!(&e, ImplicitError::Expr(x) if x.column == 11),
+        "{e}"
+    );
     // Bad parameters.
-    let b = |s| ImplicitSurface::builder_from_expr("x^2+y^2+z^2-1", ball(2.0)).unwrap().dm_inf_hint(s);
-    assert!(matches!(b(0.0).build(), Err(ImplicitError::BadParameter { name: "dm_inf_hint", .. })));
-    assert!(matches!(b(f64::NAN).build(), Err(ImplicitError::BadParameter { .. })));
+    let b = |s| {
+        ImplicitSurface::builder_from_expr("x^2+y^2+z^2-1", ball(2.0))
+            .unwrap()
+            .dm_inf_hint(s)
+    };
+    assert!(matches!(
+        b(0.0).build(),
+        Err(ImplicitError::BadParameter {
+            name: "dm_inf_hint",
+            ..
+        })
+    ));
+    assert!(matches!(
+        b(f64::NAN).build(),
+        Err(ImplicitError::BadParameter { .. })
+    ));
     assert_eq!(b(0.5).build().unwrap().dm_inf_hint(), Some(0.5));
     let e = ImplicitSurface::builder(|p: DVec3| p.length_squared() - 1.0, ball(2.0))
         .tolerance(-1.0)
         .build();
-    assert!(matches!(e, Err(ImplicitError::BadParameter { name: "tolerance", .. })));
+    assert!(matches!(
+        e,
+        Err(ImplicitError::BadParameter {
+            name: "tolerance",
+            ..
+        })
+    ));
     let e = ImplicitSurface::builder(|p: DVec3| p.length_squared() - 1.0, ball(2.0))
         .seed_points(vec![DVec3::splat(5.0)])
         .build();
@@ -561,7 +675,10 @@ fn nan_and_empty_inputs_are_errors() {
 fn tiny_component_needs_user_seeds() {
     // A sphere of radius 0.01: no grid vertex falls inside.
     let f = |p: DVec3| (p - DVec3::splat(0.33)).length_squared() - 1e-4;
-    assert!(matches!(ImplicitSurface::from_fn(f, ball(2.0)), Err(ImplicitError::NoSurfaceInside { .. })));
+    assert!(matches!(
+        ImplicitSurface::from_fn(f, ball(2.0)),
+        Err(ImplicitError::NoSurfaceInside { .. })
+    ));
     let s = ImplicitSurface::builder(f, ball(2.0))
         .seed_points(vec![DVec3::splat(0.33) + DVec3::X * 0.01])
         .build()
@@ -578,8 +695,14 @@ fn seeds_find_every_component_and_are_deterministic() {
     let s = ImplicitSurface::from_fn(f, ball(2.0)).unwrap();
     let seeds = s.seed_points(1);
     assert!(seeds.len() <= 200 && seeds.len() >= 50, "{}", seeds.len());
-    let on1 = seeds.iter().filter(|p| ((**p - c1).length() - 0.5).abs() <= 1e-6).count();
-    let on2 = seeds.iter().filter(|p| ((**p - c2).length() - 0.2).abs() <= 1e-6).count();
+    let on1 = seeds
+        .iter()
+        .filter(|p| ((**p - c1).length() - 0.5).abs() <= 1e-6)
+        .count();
+    let on2 = seeds
+        .iter()
+        .filter(|p| ((**p - c2).length() - 0.2).abs() <= 1e-6)
+        .count();
     assert_eq!(on1 + on2, seeds.len());
     assert!(on1 >= 10 && on2 >= 3, "{on1} {on2}");
     // Distinct points.
@@ -589,13 +712,31 @@ fn seeds_find_every_component_and_are_deterministic() {
         }
     }
     // Deterministic: same seed, same points, whatever the thread count.
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
-    let s1 = one.install(|| ImplicitSurface::from_fn(f, ball(2.0)).unwrap().seed_points(1));
-    let s3 = three.install(|| ImplicitSurface::from_fn(f, ball(2.0)).unwrap().seed_points(1));
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let three = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap();
+    let s1 = one.install(|| {
+        ImplicitSurface::from_fn(f, ball(2.0))
+            .unwrap()
+            .seed_points(1)
+    });
+    let s3 = three.install(|| {
+        ImplicitSurface::from_fn(f, ball(2.0))
+            .unwrap()
+            .seed_points(1)
+    });
     assert_eq!(s1, seeds);
     assert_eq!(s3, seeds);
-    assert_ne!(s.seed_points(2), seeds, "the random lines depend on the seed");
+    assert_ne!(
+        s.seed_points(2),
+        seeds,
+        "the random lines depend on the seed"
+    );
 }
 
 #[test]
@@ -630,7 +771,10 @@ fn catalog_names_and_entries() {
             "klein_bottle"
         ]
     );
-    let genus: Vec<Option<u32>> = names[..8].iter().map(|n| catalog::entry(n).unwrap().genus).collect();
+    let genus: Vec<Option<u32>> = names[..8]
+        .iter()
+        .map(|n| catalog::entry(n).unwrap().genus)
+        .collect();
     assert_eq!(genus, [0, 0, 1, 2, 5, 3, 0, 0].map(Some));
     assert_eq!(catalog::entry("sphere").unwrap().dm_inf, Some(1.0));
     assert_eq!(catalog::entry("torus").unwrap().dm_inf, Some(0.3));
@@ -640,9 +784,18 @@ fn catalog_names_and_entries() {
     assert!(!catalog::entry("barth_octic").unwrap().smooth);
     assert!(!catalog::entry("klein_bottle").unwrap().smooth);
     assert_eq!(catalog::entry("trefoil").unwrap().genus, Some(1));
-    assert_eq!(catalog::entry("double_torus").unwrap().bounding_sphere.center, DVec3::X);
+    assert_eq!(
+        catalog::entry("double_torus")
+            .unwrap()
+            .bounding_sphere
+            .center,
+        DVec3::X
+    );
     let e = catalog::surface("teapot").unwrap_err();
-    assert!(e.to_string().contains("unknown catalog surface 'teapot'") && e.to_string().contains("tanglecube"));
+    assert!(
+        e.to_string().contains("unknown catalog surface 'teapot'")
+            && e.to_string().contains("tanglecube")
+    );
     assert!(catalog::entry("teapot").is_none());
 }
 
@@ -659,7 +812,11 @@ fn native_closures_equal_compiled_expressions() {
         let scale = pts.iter().map(|p| x.eval(*p).abs()).fold(1.0, f64::max);
         for p in pts {
             let (a, b) = (native(p), x.eval(p));
-            assert!((a - b).abs() <= 1e-12 * scale, "{} at {p}: native {a}, compiled {b}", e.name);
+            assert!(
+                (a - b).abs() <= 1e-12 * scale,
+                "{} at {p}: native {a}, compiled {b}",
+                e.name
+            );
         }
     }
 }
@@ -683,7 +840,10 @@ fn catalog_seeds_are_on_the_surfaces() {
         assert!(seeds.len() >= 50, "{name}: {} seeds", seeds.len());
         for p in &seeds {
             let (v, g) = (s.value(*p), s.gradient(*p).length());
-            assert!(v.abs() <= s.tolerance() * g + 1e-12, "{name}: f({p}) = {v}, |grad| = {g}");
+            assert!(
+                v.abs() <= s.tolerance() * g + 1e-12,
+                "{name}: f({p}) = {v}, |grad| = {g}"
+            );
             assert!(s.bounding_sphere().contains(*p));
         }
         // The expression path builds too and agrees on the grid seeds.
