@@ -387,29 +387,38 @@ impl Surface for ImplicitSurface {
         line_pts.retain(|p| p.is_finite());
         let g = &*self.grid;
         // Mandatory points.
-        let mut must: Vec<DVec3> = self.user_seeds.clone();
+        // One point per cluster of sign-change cells, and one per cell holding a random-line
+        // crossing that the grid missed (a component thinner than the grid step).
+        let mut reps: Vec<DVec3> = Vec::new();
         let mut seen_cluster = vec![false; cluster.iter().map(|c| c + 1).max().unwrap_or(0)];
         for (p, &c) in grid_pts.iter().zip(&cluster) {
             if !seen_cluster[c] {
                 seen_cluster[c] = true;
-                must.push(*p);
+                reps.push(*p);
             }
         }
         let mut orphan_cells = std::collections::BTreeSet::new();
         for p in &line_pts {
             let c = g.cell_of(*p);
             if !g.is_sign_change_cell(c) && orphan_cells.insert(c) {
-                must.push(*p);
+                reps.push(*p);
             }
         }
         let min_sep = 1e-6 * self.bs.radius;
-        if must.len() > self.max_seeds {
-            return farthest_points(&[], &must, self.max_seeds, min_sep);
+        let mut out: Vec<DVec3> = self.user_seeds.clone();
+        let room = self.max_seeds.saturating_sub(out.len());
+        if reps.len() >= room {
+            let chosen = farthest_points(&out, &reps, room, min_sep);
+            out.extend(chosen);
+            return out;
         }
+        let chosen = farthest_points(&out, &reps, reps.len(), min_sep);
+        out.extend(chosen);
         let pool: Vec<DVec3> = grid_pts.into_iter().chain(line_pts).collect();
-        let extra = farthest_points(&must, &pool, self.max_seeds - must.len(), min_sep);
-        must.extend(extra);
-        must
+        let room = self.max_seeds.saturating_sub(out.len());
+        let extra = farthest_points(&out, &pool, room, min_sep);
+        out.extend(extra);
+        out
     }
     fn gradient(&self, p: DVec3) -> DVec3 {
         match &self.grad {

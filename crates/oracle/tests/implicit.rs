@@ -851,3 +851,51 @@ fn catalog_seeds_are_on_the_surfaces() {
         assert_eq!(x.is_sign_only(), s.is_sign_only());
     }
 }
+
+#[test]
+fn user_seeds_are_kept_under_the_cap() {
+    let user = vec![DVec3::X, DVec3::Y, DVec3::Z];
+    let s = ImplicitSurface::builder(|p: DVec3| p.length_squared() - 1.0, ball(2.0))
+        .seed_points(user.clone())
+        .max_seeds(5)
+        .build()
+        .unwrap();
+    let seeds = s.seed_points(0);
+    assert_eq!(seeds.len(), 5);
+    assert_eq!(&seeds[..3], &user[..]);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Random spheres in random bounding spheres: accepted when inside (seeds and crossings on
+    /// them), rejected with `CrossesBoundary` when they stick out.
+    #[test]
+    fn random_spheres(c in prop::array::uniform3(-1.0f64..1.0), r in 0.2f64..1.0,
+                      bc in prop::array::uniform3(-1.0f64..1.0), br in 0.5f64..4.0, seed in any::<u64>()) {
+        let (c, bc) = (DVec3::from_array(c), DVec3::from_array(bc));
+        let bs = BoundingSphere { center: bc, radius: br };
+        let f = move |p: DVec3| (p - c).length() - r;
+        let far = (c - bc).length() + r; // farthest point of the sphere from bc
+        let res = ImplicitSurface::from_fn(f, bs);
+        if far < br * 0.99 {
+            let s = res.map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let seeds = s.seed_points(seed);
+            prop_assert!(!seeds.is_empty());
+            for p in &seeds {
+                prop_assert!(((*p - c).length() - r).abs() <= s.tolerance());
+            }
+            let mut rng = SplitMix64(seed);
+            let a = c + rng.unit_vector() * r * 0.5;
+            let b = c + rng.unit_vector() * r * 1.5;
+            if bs.contains(b) {
+                let p = s.crossing(a, s.value(a), b, s.value(b));
+                prop_assert!(((p - c).length() - r).abs() <= s.tolerance());
+            }
+        } else if (c - bc).length() + r > br * 1.05 && (c - bc).length() - r < br * 0.95 {
+            // The sphere crosses the bounding sphere well away from tangency.
+            let crosses = matches!(res, Err(ImplicitError::CrossesBoundary { .. }));
+            prop_assert!(crosses);
+        }
+    }
+}
