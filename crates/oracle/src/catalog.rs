@@ -68,6 +68,10 @@ pub struct CatalogEntry {
 pub enum CatalogError {
     #[error("unknown catalog surface '{name}'; known: {known}")]
     UnknownName { name: String, known: String },
+    #[error(
+        "'{expression}' is an expression, not a catalog surface: give its bounding sphere (cx,cy,cz,r) too"
+    )]
+    MissingBoundingSphere { expression: String },
     #[error("catalog surface '{name}': {source}")]
     Implicit {
         name: String,
@@ -337,4 +341,56 @@ pub fn surface_from_expression(name: &str) -> Result<ImplicitSurface, CatalogErr
         b = b.dm_inf_hint(d);
     }
     b.build().map_err(wrap)
+}
+
+/// Resolve a command-line surface spec: a catalog name (optionally with another bounding
+/// sphere) or an expression in x, y, z (which needs a bounding sphere). A bare word that is
+/// neither a catalog name nor a valid expression is reported as an unknown catalog name.
+///
+/// ```
+/// use oracle::{BoundingSphere, Surface, catalog};
+/// let t = catalog::resolve("torus", None).unwrap();
+/// assert_eq!(t.bounding_sphere().radius, 2.0);
+/// let bs = BoundingSphere { center: glam::DVec3::ZERO, radius: 3.0 };
+/// let e = catalog::resolve("x^2+y^2+z^2-4", Some(bs)).unwrap();
+/// assert!(e.value(glam::DVec3::ZERO) < 0.0);
+/// assert!(catalog::resolve("x^2+y^2+z^2-4", None).is_err()); // needs a bounding sphere
+/// assert!(catalog::resolve("teapot", Some(bs)).is_err()); // unknown name
+/// ```
+pub fn resolve(spec: &str, bs: Option<BoundingSphere>) -> Result<ImplicitSurface, CatalogError> {
+    let spec = spec.trim();
+    let wrap = |source: ImplicitError| CatalogError::Implicit {
+        name: spec.to_string(),
+        source: Box::new(source),
+    };
+    if let (Some(e), Some(f)) = (entry(spec), native_fn(spec)) {
+        let Some(bs) = bs else {
+            return surface(spec);
+        };
+        let expr = Arc::new(Expr::parse(&e.expression).map_err(|err| wrap(err.into()))?);
+        let mut b = ImplicitSurface::builder(f, bs).gradient(move |p| expr.eval_grad(p).1);
+        if let Some(d) = e.dm_inf {
+            b = b.dm_inf_hint(d);
+        }
+        return b.build().map_err(wrap);
+    }
+    let is_word = !spec.is_empty() && spec.chars().all(|c| c.is_alphanumeric() || c == '_');
+    let expr = match Expr::parse(spec) {
+        Ok(x) => x,
+        Err(_) if is_word => {
+            return Err(CatalogError::UnknownName {
+                name: spec.to_string(),
+                known: names().join(", "),
+            });
+        }
+        Err(err) => return Err(wrap(err.into())),
+    };
+    let Some(bs) = bs else {
+        return Err(CatalogError::MissingBoundingSphere {
+            expression: spec.to_string(),
+        });
+    };
+    ImplicitSurface::builder_from_compiled(Arc::new(expr), bs)
+        .build()
+        .map_err(wrap)
 }

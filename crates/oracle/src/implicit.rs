@@ -80,6 +80,39 @@ pub enum ImplicitError {
     BadSeedPoint { point: [f64; 3] },
     #[error("invalid expression: {0}")]
     Expr(#[from] ExprError),
+    #[error("invalid bounding sphere '{text}': {reason}; write it as cx,cy,cz,r (e.g. 0,0,0,2)")]
+    BoundingSphereSyntax { text: String, reason: String },
+}
+
+/// Parse a bounding sphere written `cx,cy,cz,r` (as on the command line). The values are only
+/// checked for syntax and finiteness here, the radius sign by [`ImplicitBuilder::build`].
+///
+/// ```
+/// let bs = oracle::implicit::parse_bounding_sphere("1, 0, 0, 2.5").unwrap();
+/// assert_eq!((bs.center.x, bs.radius), (1.0, 2.5));
+/// assert!(oracle::implicit::parse_bounding_sphere("0,0,2").is_err());
+/// ```
+pub fn parse_bounding_sphere(text: &str) -> Result<BoundingSphere, ImplicitError> {
+    let err = |reason: String| ImplicitError::BoundingSphereSyntax {
+        text: text.to_string(),
+        reason,
+    };
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    if parts.len() != 4 {
+        return Err(err(format!("expected 4 numbers, found {}", parts.len())));
+    }
+    let mut v = [0.0; 4];
+    for (x, p) in v.iter_mut().zip(&parts) {
+        *x = p
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| err(format!("'{p}' is not a finite number")))?;
+    }
+    Ok(BoundingSphere {
+        center: DVec3::new(v[0], v[1], v[2]),
+        radius: v[3],
+    })
 }
 
 /// An implicit surface `f = 0` with its bounding sphere; implements [`Surface`]. Cheap to clone

@@ -899,3 +899,48 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn resolve_specs_and_bounding_sphere_syntax() {
+    use oracle::catalog::CatalogError;
+    use oracle::implicit::parse_bounding_sphere;
+    let bs = parse_bounding_sphere("0,0,0,3").unwrap();
+    assert_eq!(bs, ball(3.0));
+    for bad in [
+        "",
+        "1,2,3",
+        "1,2,3,4,5",
+        "0,0,zero,1",
+        "0,0,0,inf",
+        "0,0,0,NaN",
+    ] {
+        let e = parse_bounding_sphere(bad).unwrap_err();
+        assert!(e.to_string().contains("cx,cy,cz,r"), "{e}");
+    }
+    // Catalog name, default and overridden bounding sphere.
+    assert_eq!(
+        catalog::resolve("chair", None)
+            .unwrap()
+            .bounding_sphere()
+            .radius,
+        7.0
+    );
+    let t = catalog::resolve(" torus ", Some(ball(3.0))).unwrap();
+    assert_eq!(t.bounding_sphere().radius, 3.0);
+    assert_eq!(t.dm_inf_hint(), Some(0.3));
+    assert!(matches!(
+        catalog::resolve("torus", Some(ball(1.0))),
+        Err(CatalogError::Implicit { .. })
+    ));
+    // Expressions.
+    let s = catalog::resolve("x^2+y^2+z^2-1", Some(ball(2.0))).unwrap();
+    assert!(s.expr().is_some());
+    assert!(matches!(
+        catalog::resolve("x^2+y^2+z^2-1", None),
+        Err(CatalogError::MissingBoundingSphere { .. })
+    ));
+    let e = catalog::resolve("x^2+(y^2-1", Some(ball(2.0))).unwrap_err();
+    assert!(e.to_string().contains("at column 11"), "{e}");
+    let e = catalog::resolve("spere", Some(ball(2.0))).unwrap_err();
+    assert!(matches!(e, CatalogError::UnknownName { .. }), "{e}");
+}
