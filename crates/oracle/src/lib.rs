@@ -44,7 +44,7 @@ impl BoundingSphere {
     }
     fn line_params(&self, a: DVec3, d: DVec3) -> Option<(f64, f64)> {
         let dd = d.length_squared();
-        if !(dd > 0.0) {
+        if dd.is_nan() || dd <= 0.0 {
             return self.contains(a).then_some((0.0, 1.0));
         }
         let m = a - self.center;

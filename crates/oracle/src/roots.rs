@@ -1,33 +1,170 @@
 //! Root finding shared by the backends: bisection, subdivision, random-line seeds, projection.
 
-use crate::Surface;
+use crate::{OracleError, Surface};
 use glam::DVec3;
 
+/// True if `v` is -1, 0 or 1: a value of a sign-only function, on which interpolation
+/// (secant, regula falsi, Newton) is meaningless and bisection must be used.
+#[inline]
+pub fn is_sign_value(v: f64) -> bool {
+    v == 0.0 || v == 1.0 || v == -1.0
+}
+
 /// Bisection on `[a, b]` where `fa` and `fb` have opposite signs, until the bracket is shorter
-/// than `tol`. Returns the midpoint of the final bracket. Works for sign-only functions.
+/// than `tol`. Returns the midpoint of the final bracket, which is within `tol / 2` of a sign
+/// change. Works for sign-only functions. Signs follow the bipolar convention: `f < 0` is inside,
+/// `f >= 0` (zero included) outside, so a zero at an end is found as the limit of the bracket.
+///
+/// If `f` returns NaN at a probe, returns a point with NaN coordinates (never a silently wrong
+/// point); use [`try_bisect`] to get the offending point as an error.
 pub fn bisect(f: impl Fn(DVec3) -> f64, a: DVec3, fa: f64, b: DVec3, fb: f64, tol: f64) -> DVec3 {
-    let (mut a, mut b) = (a, b);
+    try_bisect(f, a, fa, b, fb, tol).unwrap_or(DVec3::NAN)
+}
+
+/// [`bisect`] reporting a NaN value (at an end or at a probe) as [`OracleError::NaN`] with the
+/// point. If `fa` and `fb` have the same sign (a violated precondition), returns the end with the
+/// smaller |value|.
+pub fn try_bisect(
+    f: impl Fn(DVec3) -> f64,
+    a: DVec3,
+    fa: f64,
+    b: DVec3,
+    fb: f64,
+    tol: f64,
+) -> Result<DVec3, OracleError> {
+    check_ends(a, fa, b, fb)?;
     let a_neg = fa < 0.0;
-    debug_assert!(a_neg != (fb < 0.0));
-    let _ = fb;
+    if a_neg == (fb < 0.0) {
+        return Ok(if fa.abs() <= fb.abs() { a } else { b });
+    }
+    let (mut a, mut b) = (a, b);
     let tol2 = tol * tol;
-    for _ in 0..200 {
+    for _ in 0..2100 {
         if (b - a).length_squared() <= tol2 {
             break;
         }
         let m = 0.5 * (a + b);
+        if m == a || m == b {
+            break; // the bracket is down to adjacent floats
+        }
         let fm = f(m);
+        if fm.is_nan() {
+            return Err(nan_at(m));
+        }
         if (fm < 0.0) == a_neg {
             a = m;
         } else {
             b = m;
         }
     }
-    0.5 * (a + b)
+    Ok(0.5 * (a + b))
+}
+
+fn nan_at(p: DVec3) -> OracleError {
+    OracleError::NaN(p.x, p.y, p.z)
+}
+
+fn check_ends(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Result<(), OracleError> {
+    if fa.is_nan() {
+        return Err(nan_at(a));
+    }
+    if fb.is_nan() {
+        return Err(nan_at(b));
+    }
+    Ok(())
+}
+
+/// Safeguarded root finding on `[a, b]` (same contract as [`try_bisect`]: the result is within
+/// `tol / 2` of a sign change of `f`, with `f < 0` inside and `f >= 0` outside).
+///
+/// Uses the Illinois variant of regula falsi, which converges superlinearly on smooth functions,
+/// with three safeguards: bisection when the values are sign-only (-1, 0, 1) or an end value is
+/// exactly 0; a bisection step whenever the bracket has not halved within three steps (so the
+/// cost is at most about four times that of bisection); and interpolated probes kept about
+/// `tol` inside the bracket, so the bracket closes on the root from both sides.
+pub fn try_find_root(
+    f: impl Fn(DVec3) -> f64,
+    a: DVec3,
+    fa: f64,
+    b: DVec3,
+    fb: f64,
+    tol: f64,
+) -> Result<DVec3, OracleError> {
+    check_ends(a, fa, b, fb)?;
+    let neg0 = fa < 0.0;
+    if neg0 == (fb < 0.0) {
+        return Ok(if fa.abs() <= fb.abs() { a } else { b });
+    }
+    let d = b - a;
+    let len = d.length();
+    if len.is_nan() || len <= tol {
+        return Ok(0.5 * (a + b));
+    }
+    if is_sign_value(fa) && is_sign_value(fb) {
+        return try_bisect(f, a, fa, b, fb, tol);
+    }
+    let tt = tol / len; // tolerance in parameter units
+    let (mut t0, mut g0, mut t1, mut g1) = (0.0_f64, fa, 1.0_f64, fb);
+    let mut last_replaced = 2u8; // 0: t0, 1: t1, 2: none yet
+    let mut w_ref = 1.0;
+    let mut stall = 0;
+    for _ in 0..400 {
+        let w = t1 - t0;
+        if w <= tt {
+            break;
+        }
+        if w <= 0.5 * w_ref {
+            w_ref = w;
+            stall = 0;
+        } else {
+            stall += 1;
+        }
+        let mid = 0.5 * (t0 + t1);
+        let t = if stall >= 3 || g0 == 0.0 || g1 == 0.0 {
+            stall = 0;
+            w_ref = w;
+            mid
+        } else {
+            let s = t0 - g0 * (t1 - t0) / (g1 - g0);
+            // Keep probes about `tol` inside the bracket: when the estimate is within `tol` of
+            // an end, the probe lands just past the root and closes the bracket.
+            let (lo, hi) = (t0 + 0.99 * tt, t1 - 0.99 * tt);
+            if s.is_finite() && lo < hi {
+                s.clamp(lo, hi)
+            } else {
+                mid
+            }
+        };
+        if t <= t0 || t >= t1 {
+            break; // adjacent floats
+        }
+        let p = a + d * t;
+        let g = f(p);
+        if g.is_nan() {
+            return Err(nan_at(p));
+        }
+        if (g < 0.0) == neg0 {
+            t0 = t;
+            g0 = g;
+            if last_replaced == 0 {
+                g1 *= 0.5; // Illinois: the retained end keeps its sign, its weight halves
+            }
+            last_replaced = 0;
+        } else {
+            t1 = t;
+            g1 = g;
+            if last_replaced == 1 {
+                g0 *= 0.5;
+            }
+            last_replaced = 1;
+        }
+    }
+    Ok(a + d * (0.5 * (t0 + t1)))
 }
 
 /// All sign changes of `f` on `[a, b]` sampled at steps of at most `step`, each refined by
-/// bisection, pushed in order from `a`.
+/// bisection, pushed in order from `a`. If `f` returns NaN, pushes one point with NaN
+/// coordinates and stops (see [`try_all_crossings`]).
 pub fn all_crossings(
     f: impl Fn(DVec3) -> f64,
     a: DVec3,
@@ -36,19 +173,49 @@ pub fn all_crossings(
     tol: f64,
     out: &mut Vec<DVec3>,
 ) {
+    if try_all_crossings(f, a, b, step, tol, out).is_err() {
+        out.push(DVec3::NAN);
+    }
+}
+
+/// [`all_crossings`] reporting NaN as an error (crossings found before it stay in `out`). Each
+/// sign change is refined by [`try_find_root`] (bisection for sign-only values).
+pub fn try_all_crossings(
+    f: impl Fn(DVec3) -> f64,
+    a: DVec3,
+    b: DVec3,
+    step: f64,
+    tol: f64,
+    out: &mut Vec<DVec3>,
+) -> Result<(), OracleError> {
     let len = (b - a).length();
-    let n = ((len / step).ceil() as usize).clamp(1, 1 << 20);
+    let n = if step > 0.0 && (len / step).is_finite() {
+        ((len / step).ceil() as usize).clamp(1, 1 << 20)
+    } else {
+        1
+    };
     let mut p0 = a;
     let mut f0 = f(a);
+    if f0.is_nan() {
+        return Err(nan_at(a));
+    }
     for i in 1..=n {
-        let p1 = a + (b - a) * (i as f64 / n as f64);
+        let p1 = if i == n {
+            b
+        } else {
+            a + (b - a) * (i as f64 / n as f64)
+        };
         let f1 = f(p1);
+        if f1.is_nan() {
+            return Err(nan_at(p1));
+        }
         if (f0 < 0.0) != (f1 < 0.0) {
-            out.push(bisect(&f, p0, f0, p1, f1, tol));
+            out.push(try_find_root(&f, p0, f0, p1, f1, tol)?);
         }
         p0 = p1;
         f0 = f1;
     }
+    Ok(())
 }
 
 /// Deterministic SplitMix64 generator: small, seedable, enough for seeds and BRIO rounds.
@@ -106,7 +273,7 @@ pub fn project_newton<S: Surface + ?Sized>(s: &S, p: DVec3) -> Option<DVec3> {
         let f = s.value(x);
         let g = s.gradient(x);
         let g2 = g.length_squared();
-        if !f.is_finite() || !(g2 > 0.0) {
+        if !f.is_finite() || g2.is_nan() || g2 <= 0.0 {
             return None;
         }
         let step = g * (f / g2);

@@ -1,0 +1,946 @@
+//! Implicit backend: expression parser/compiler, ImplicitSurface checks and oracles, root
+//! finding, catalog.
+
+use glam::DVec3;
+use oracle::catalog;
+use oracle::expr::{Expr, ExprErrorKind};
+use oracle::implicit::{ImplicitError, ImplicitSurface, fibonacci_sphere};
+use oracle::roots::{self, SplitMix64};
+use oracle::{BoundingSphere, OracleError, Surface};
+use proptest::prelude::*;
+use std::cell::Cell;
+
+fn ball(r: f64) -> BoundingSphere {
+    BoundingSphere {
+        center: DVec3::ZERO,
+        radius: r,
+    }
+}
+
+fn ev(src: &str, p: [f64; 3]) -> f64 {
+    Expr::parse(src)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .eval(DVec3::from_array(p))
+}
+
+// ---------------------------------------------------------------- parser
+
+#[test]
+fn precedence_and_associativity() {
+    let p = [3.0, 2.0, -1.0];
+    assert_eq!(ev("-x^2", p), -9.0);
+    assert_eq!(ev("(-x)^2", p), 9.0);
+    assert_eq!(ev("2^3^2", p), 512.0);
+    assert_eq!(ev("1-2-3", p), -4.0);
+    assert_eq!(ev("8/4/2", p), 1.0);
+    assert_eq!(ev("2+3*4", p), 14.0);
+    assert_eq!(ev("(2+3)*4", p), 20.0);
+    assert_eq!(ev("x^-1", p), 1.0 / 3.0);
+    assert_eq!(ev("2**3", p), 8.0);
+    assert_eq!(ev("- - x", p), 3.0);
+    assert_eq!(ev("+y", p), 2.0);
+    assert_eq!(ev("2*-y", p), -4.0);
+    assert_eq!(ev("-2^-2", p), -0.25);
+    assert_eq!(ev("x*y^2*z", p), -12.0);
+    assert_eq!(ev("x^2/y^2", p), 2.25);
+}
+
+#[test]
+fn numbers_constants_functions() {
+    let p = [0.5, -2.0, 4.0];
+    assert_eq!(ev("1e-3*1000", p), 1.0);
+    assert_eq!(ev("2.5E+2", p), 250.0);
+    assert_eq!(ev(".5+.5", p), 1.0);
+    assert_eq!(ev("pi", p), std::f64::consts::PI);
+    assert_eq!(ev("sqrt(z)", p), 2.0);
+    assert_eq!(ev("cbrt(-8)", p), -2.0);
+    assert_eq!(ev("ln(exp(2))", p), 2.0);
+    assert_eq!(ev("log(z)", p), 4f64.ln());
+    assert_eq!(ev("abs(y)", p), 2.0);
+    assert_eq!(ev("sign(y) + sign(0) + sign(x)", p), 0.0);
+    assert_eq!(ev("min(x, y)", p), -2.0);
+    assert_eq!(ev("max(x, y)", p), 0.5);
+    assert_eq!(ev("pow(2, 10)", p), 1024.0);
+    assert_eq!(ev("pow(z, 0.5)", p), 2.0);
+    assert_eq!(
+        ev("sin(x)^2+cos(x)^2", p),
+        0.5f64.sin().powi(2) + 0.5f64.cos().powi(2)
+    );
+    assert_eq!(ev("tan(x)", p), 0.5f64.tan());
+    assert_eq!(ev("atan(x)", p), 0.5f64.atan());
+    assert!(ev("sqrt(y)", p).is_nan());
+    assert!(
+        ev("y^0.3", p).is_nan(),
+        "non-integer power of a negative number is NaN"
+    );
+}
+
+#[test]
+fn compilation_folds_and_shares() {
+    // x^2 appears three times, y^2 twice: shared; constants folded.
+    let e = Expr::parse("(x^2+y^2+z^2+1-0.09)^2-4*(x^2+y^2) + 0*(2+3)").unwrap();
+    assert!(
+        e.instruction_count() <= 12,
+        "{} instructions",
+        e.instruction_count()
+    );
+    let c = Expr::parse("2*pi*(3+4)^2").unwrap();
+    assert_eq!(c.instruction_count(), 0);
+    assert_eq!(c.eval(DVec3::ZERO), 2.0 * std::f64::consts::PI * 49.0);
+    let p = Expr::parse("x^8").unwrap();
+    assert_eq!(p.instruction_count(), 3);
+    assert_eq!(p.eval(DVec3::new(2.0, 0.0, 0.0)), 256.0);
+}
+
+#[test]
+fn parse_error_columns_and_caret() {
+    let e = Expr::parse("x^2+(y^2-1").unwrap_err();
+    assert_eq!(e.column, 11);
+    assert!(matches!(&e.kind, ExprErrorKind::Expected { expected, .. } if expected == "')'"));
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with("expected ')', found end of input at column 11: x^2+(y^2-1"),
+        "{msg}"
+    );
+    // The caret is under the column.
+    let lines: Vec<&str> = msg.lines().collect();
+    assert_eq!(lines.len(), 2);
+    let input_start = lines[0].find(": x^2").unwrap() + 2;
+    assert_eq!(lines[1].find('^').unwrap(), input_start + e.column - 1);
+    assert_eq!(lines[1].trim_start(), "^");
+
+    let cases: &[(&str, usize)] = &[
+        ("x + * y", 5),
+        ("2x", 2),
+        ("x # y", 3),
+        ("x)", 2),
+        ("(x", 3),
+        ("min(x y)", 7),
+        ("sqrt", 5),
+        ("1e", 1),
+        ("1e999", 1),
+        ("", 1),
+        ("   ", 4),
+        ("x +", 4),
+        ("x^2 + 3.1.4", 7),
+    ];
+    for &(src, col) in cases {
+        let e = Expr::parse(src).unwrap_err();
+        assert_eq!(e.column, col, "{src:?}: {e}");
+        assert!(e.to_string().contains(&format!("at column {col}")), "{e}");
+    }
+}
+
+#[test]
+fn unknown_names_are_named() {
+    let e = Expr::parse("x^2 + w").unwrap_err();
+    assert_eq!(e.kind, ExprErrorKind::UnknownVariable("w".into()));
+    assert_eq!(e.column, 7);
+    assert!(e.to_string().contains("unknown variable 'w'"));
+    let e = Expr::parse("1 + foo(x)").unwrap_err();
+    assert_eq!(e.kind, ExprErrorKind::UnknownFunction("foo".into()));
+    assert_eq!(e.column, 5);
+    assert!(e.to_string().contains("unknown function 'foo'"));
+    let e = Expr::parse("X+1").unwrap_err();
+    assert_eq!(e.kind, ExprErrorKind::UnknownVariable("X".into()));
+    let e = Expr::parse("x(2)").unwrap_err();
+    assert_eq!(e.kind, ExprErrorKind::NotAFunction("x".into()));
+    let e = Expr::parse("min(x)").unwrap_err();
+    assert!(matches!(
+        e.kind,
+        ExprErrorKind::Arity {
+            expected: 2,
+            found: 1,
+            ..
+        }
+    ));
+    let e = Expr::parse("sin(x, y)").unwrap_err();
+    assert!(matches!(
+        e.kind,
+        ExprErrorKind::Arity {
+            expected: 1,
+            found: 2,
+            ..
+        }
+    ));
+}
+
+#[test]
+fn deep_nesting_is_an_error_not_a_crash() {
+    let src = format!("{}x{}", "(".repeat(100_000), ")".repeat(100_000));
+    assert_eq!(Expr::parse(&src).unwrap_err().kind, ExprErrorKind::TooDeep);
+    let src = format!("{}x", "-".repeat(100_000));
+    assert_eq!(Expr::parse(&src).unwrap_err().kind, ExprErrorKind::TooDeep);
+    let ok = format!("{}x{}", "(".repeat(100), ")".repeat(100));
+    assert_eq!(Expr::parse(&ok).unwrap().eval(DVec3::X), 1.0);
+}
+
+/// Random expression trees with an independent reference evaluation.
+#[derive(Clone, Debug)]
+enum T {
+    Var(usize),
+    Num(f64),
+    Neg(Box<T>),
+    Bin(char, Box<T>, Box<T>),
+    PowC(Box<T>, f64),
+    F1(&'static str, Box<T>),
+    F2(&'static str, Box<T>, Box<T>),
+}
+
+impl T {
+    fn src(&self) -> String {
+        match self {
+            T::Var(i) => ["x", "y", "z"][*i].to_string(),
+            T::Num(v) => format!("{v:?}"),
+            T::Neg(a) => format!("(-{})", a.src()),
+            T::Bin(op, a, b) => format!("({}{op}{})", a.src(), b.src()),
+            T::PowC(a, n) => format!("({})^({n:?})", a.src()),
+            T::F1(f, a) => format!("{f}({})", a.src()),
+            T::F2(f, a, b) => format!("{f}({}, {})", a.src(), b.src()),
+        }
+    }
+    fn is_const(&self) -> bool {
+        match self {
+            T::Var(_) => false,
+            T::Num(_) => true,
+            T::Neg(a) | T::PowC(a, _) | T::F1(_, a) => a.is_const(),
+            T::Bin(_, a, b) | T::F2(_, a, b) => a.is_const() && b.is_const(),
+        }
+    }
+    /// Reference: integer powers of non-constants by binary exponentiation (as documented by
+    /// the compiler), everything else by the obvious f64 operation.
+    fn eval(&self, p: [f64; 3]) -> f64 {
+        fn powi(a: f64, n: u32) -> f64 {
+            match n {
+                0 => 1.0,
+                1 => a,
+                _ => {
+                    let h = powi(a, n / 2);
+                    if n % 2 == 1 { h * h * a } else { h * h }
+                }
+            }
+        }
+        match self {
+            T::Var(i) => p[*i],
+            T::Num(v) => *v,
+            T::Neg(a) => -a.eval(p),
+            T::Bin(op, a, b) => {
+                let (a, b) = (a.eval(p), b.eval(p));
+                match op {
+                    '+' => a + b,
+                    '-' => a - b,
+                    '*' => a * b,
+                    _ => a / b,
+                }
+            }
+            T::PowC(a, n) => {
+                let v = a.eval(p);
+                if a.is_const() || n.fract() != 0.0 {
+                    if *n == 0.5 { v.sqrt() } else { v.powf(*n) }
+                } else if *n < 0.0 {
+                    1.0 / powi(v, n.abs() as u32)
+                } else {
+                    powi(v, *n as u32)
+                }
+            }
+            T::F1(f, a) => {
+                let v = a.eval(p);
+                match *f {
+                    "sqrt" => v.sqrt(),
+                    "exp" => v.exp(),
+                    "ln" => v.ln(),
+                    "sin" => v.sin(),
+                    "cos" => v.cos(),
+                    _ => v.abs(),
+                }
+            }
+            T::F2(f, a, b) => {
+                let (a, b) = (a.eval(p), b.eval(p));
+                if *f == "min" { a.min(b) } else { a.max(b) }
+            }
+        }
+    }
+}
+
+fn tree() -> impl Strategy<Value = T> {
+    let leaf = prop_oneof![
+        (0usize..3).prop_map(T::Var),
+        (-4i32..5).prop_map(|v| T::Num(v as f64)),
+        (-3.0f64..3.0).prop_map(T::Num),
+    ];
+    leaf.prop_recursive(5, 48, 2, |inner| {
+        prop_oneof![
+            inner.clone().prop_map(|a| T::Neg(Box::new(a))),
+            (
+                prop::sample::select(vec!['+', '-', '*', '/']),
+                inner.clone(),
+                inner.clone()
+            )
+                .prop_map(|(o, a, b)| T::Bin(o, Box::new(a), Box::new(b))),
+            (
+                inner.clone(),
+                prop::sample::select(vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, -1.0, -2.0, 0.5, 1.5])
+            )
+                .prop_map(|(a, n)| T::PowC(Box::new(a), n)),
+            (
+                prop::sample::select(vec!["sqrt", "exp", "ln", "sin", "cos", "abs"]),
+                inner.clone()
+            )
+                .prop_map(|(f, a)| T::F1(f, Box::new(a))),
+            (
+                prop::sample::select(vec!["min", "max"]),
+                inner.clone(),
+                inner
+            )
+                .prop_map(|(f, a, b)| T::F2(f, Box::new(a), Box::new(b))),
+        ]
+    })
+}
+
+fn same(a: f64, b: f64) -> bool {
+    (a.is_nan() && b.is_nan()) || a == b
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// The compiled program (folding, sharing, powers as products) computes exactly what the
+    /// tree says, bit for bit, at random points.
+    #[test]
+    fn compiled_equals_reference(t in tree(), pts in prop::collection::vec(prop::array::uniform3(-2.0f64..2.0), 8)) {
+        let src = t.src();
+        let e = Expr::parse(&src).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        for p in pts {
+            let (got, want) = (e.eval(DVec3::from_array(p)), t.eval(p));
+            prop_assert!(same(got, want), "{src} at {p:?}: compiled {got}, reference {want}");
+        }
+    }
+
+    /// Re-parsing the printed tree gives the same program (the printer is the parser's inverse
+    /// on these trees) and the slow tree interpreter agrees up to rounding of powers.
+    #[test]
+    fn tree_interpreter_agrees(t in tree(), p in prop::array::uniform3(-2.0f64..2.0)) {
+        let e = Expr::parse(&t.src()).unwrap();
+        let (a, b) = (e.eval(DVec3::from_array(p)), e.eval_tree(DVec3::from_array(p)));
+        if a.is_finite() && b.is_finite() && a.abs() < 1e6 {
+            prop_assert!((a - b).abs() <= 1e-6 * (1.0 + a.abs()) || (a - b).abs() < 1e-3,
+                "{}: {a} vs {b}", t.src());
+        }
+    }
+
+    /// Bisection and the safeguarded method land on the unit sphere to the tolerance.
+    #[test]
+    fn roots_hit_the_sphere(seed in any::<u64>(), sign_only in any::<bool>()) {
+        let f = move |p: DVec3| {
+            let v = p.length_squared() - 1.0;
+            if sign_only { if v < 0.0 { -1.0 } else if v > 0.0 { 1.0 } else { 0.0 } } else { v }
+        };
+        let mut rng = SplitMix64(seed);
+        let a = rng.unit_vector() * 0.9 * rng.next_f64();
+        let b = rng.unit_vector() * 1.9;
+        let tol = 1e-7 * 2.0;
+        for p in [
+            roots::bisect(f, a, f(a), b, f(b), tol),
+            roots::try_find_root(f, a, f(a), b, f(b), tol).unwrap(),
+            roots::try_find_root(f, b, f(b), a, f(a), tol).unwrap(),
+        ] {
+            prop_assert!((p.length() - 1.0).abs() <= tol, "{p} off by {}", p.length() - 1.0);
+        }
+    }
+}
+
+#[test]
+fn gradient_is_exact() {
+    let mut rng = SplitMix64(11);
+    for e in catalog::entries() {
+        let x = Expr::parse(&e.expression).unwrap();
+        for _ in 0..50 {
+            let p = e.bounding_sphere.center
+                + rng.unit_vector() * e.bounding_sphere.radius * rng.next_f64();
+            let (v, g) = x.eval_grad(p);
+            assert_eq!(v, x.eval(p));
+            let h = 1e-6;
+            let fd = DVec3::new(
+                x.eval(p + DVec3::X * h) - x.eval(p - DVec3::X * h),
+                x.eval(p + DVec3::Y * h) - x.eval(p - DVec3::Y * h),
+                x.eval(p + DVec3::Z * h) - x.eval(p - DVec3::Z * h),
+            ) / (2.0 * h);
+            let err = (g - fd).length();
+            assert!(
+                err <= 1e-5 * (1.0 + g.length()) + 1e-6 * v.abs(),
+                "{} at {p}: {g} vs {fd}",
+                e.name
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------- roots
+
+#[test]
+fn root_with_zero_at_an_end() {
+    let f = |p: DVec3| p.x;
+    let (a, b) = (DVec3::ZERO, DVec3::new(-1.0, 0.0, 0.0));
+    let tol = 1e-9;
+    // f(a) = 0 counts as outside (f >= 0); the crossing is at a.
+    for p in [
+        roots::bisect(f, a, 0.0, b, -1.0, tol),
+        roots::try_find_root(f, a, 0.0, b, -1.0, tol).unwrap(),
+        roots::try_find_root(f, b, -1.0, a, 0.0, tol).unwrap(),
+    ] {
+        assert!(p.distance(a) <= tol, "{p}");
+    }
+    // A plateau of zeros: the transition between f < 0 and f >= 0 is at x = -0.5, not at a zero
+    // found first.
+    let g = |p: DVec3| {
+        if p.x < -0.5 {
+            -2.0
+        } else if p.x <= 0.0 {
+            0.0
+        } else {
+            p.x
+        }
+    };
+    let (a, b) = (DVec3::new(1.0, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0));
+    for p in [
+        roots::bisect(g, a, 1.0, b, -2.0, tol),
+        roots::try_find_root(g, a, 1.0, b, -2.0, tol).unwrap(),
+    ] {
+        assert!((p.x + 0.5).abs() <= tol, "{p}");
+    }
+}
+
+#[test]
+fn nan_is_reported_with_its_point() {
+    let f = |p: DVec3| {
+        if p.x > 0.2 && p.x < 0.3 {
+            f64::NAN
+        } else {
+            p.x - 0.5
+        }
+    };
+    let (a, b) = (DVec3::ZERO, DVec3::X);
+    // Bisection probes 0.5 then 0.25: NaN.
+    let e = roots::try_bisect(f, a, f(a), b, f(b), 1e-9).unwrap_err();
+    assert_eq!(e, OracleError::NaN(0.25, 0.0, 0.0));
+    assert!(roots::bisect(f, a, f(a), b, f(b), 1e-9).is_nan());
+    let e = roots::try_find_root(|_| f64::NAN, a, -1.0, b, 1.0, 1e-9).unwrap_err();
+    assert!(matches!(e, OracleError::NaN(..)));
+    assert!(roots::try_find_root(f, a, f64::NAN, b, 1.0, 1e-9).is_err());
+    let mut out = Vec::new();
+    assert!(roots::try_all_crossings(f, a, b, 0.01, 1e-9, &mut out).is_err());
+    out.clear();
+    roots::all_crossings(f, a, b, 0.01, 1e-9, &mut out);
+    assert!(out.last().unwrap().is_nan());
+}
+
+#[test]
+fn safeguarded_method_is_faster_than_bisection_on_smooth_functions() {
+    let mut rng = SplitMix64(5);
+    let (mut n_illinois, mut n_bisect) = (0, 0);
+    for _ in 0..200 {
+        let a = DVec3::X;
+        let b = a + rng.unit_vector() * 1.5;
+        let count = Cell::new(0);
+        let f = |p: DVec3| {
+            count.set(count.get() + 1);
+            let (x2, y2, z2) = (p.x * p.x, p.y * p.y, p.z * p.z);
+            (x2 + y2 + z2 + 0.91).powi(2) - 4.0 * (x2 + y2) + 0.5 * p.z
+        };
+        let (fa, fb) = (f(a), f(b));
+        if (fa < 0.0) == (fb < 0.0) {
+            continue;
+        }
+        count.set(0);
+        let p = roots::try_find_root(f, a, fa, b, fb, 2e-7).unwrap();
+        n_illinois += count.get();
+        count.set(0);
+        let q = roots::bisect(f, a, fa, b, fb, 2e-7);
+        n_bisect += count.get();
+        assert!(p.distance(q) <= 2e-7, "{p} vs {q}");
+    }
+    assert!(n_bisect > 1000, "{n_bisect}");
+    // Measured: about 11 evaluations per root against 22 (the function is far from linear at
+    // the scale of the segment, so the first steps are slow).
+    assert!(
+        n_illinois * 10 < n_bisect * 6,
+        "illinois {n_illinois} evaluations, bisection {n_bisect}"
+    );
+}
+
+#[test]
+fn sign_only_values_use_bisection() {
+    let count = Cell::new(0);
+    let f = |p: DVec3| {
+        count.set(count.get() + 1);
+        if p.x < 0.3 { -1.0 } else { 1.0 }
+    };
+    let (a, b) = (DVec3::ZERO, DVec3::X);
+    let p = roots::try_find_root(f, a, -1.0, b, 1.0, 1e-6).unwrap();
+    assert!((p.x - 0.3).abs() <= 1e-6);
+    assert!(count.get() <= 21, "{} evaluations", count.get());
+    assert!(roots::is_sign_value(-1.0) && roots::is_sign_value(0.0) && !roots::is_sign_value(0.5));
+}
+
+// ---------------------------------------------------------------- ImplicitSurface
+
+#[test]
+fn crossings_along_the_torus_axis() {
+    for s in [
+        catalog::surface("torus").unwrap(),
+        catalog::surface_from_expression("torus").unwrap(),
+    ] {
+        let mut out = Vec::new();
+        s.crossings(
+            DVec3::new(-2.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            &mut out,
+        );
+        assert_eq!(out.len(), 4, "{out:?}");
+        for (p, want) in out.iter().zip([-1.3, -0.7, 0.7, 1.3]) {
+            assert!((p.x - want).abs() <= s.tolerance(), "{p} vs {want}");
+        }
+    }
+}
+
+#[test]
+fn bipolar_oracle_precision_on_the_sphere() {
+    let s = ImplicitSurface::from_expr("x^2+y^2+z^2-1", ball(2.0)).unwrap();
+    let mut rng = SplitMix64(3);
+    for _ in 0..500 {
+        let a = rng.unit_vector() * rng.next_f64() * 0.99;
+        let b = rng.unit_vector() * (1.01 + rng.next_f64());
+        let p = s.crossing(a, s.value(a), b, s.value(b));
+        assert!(
+            (p.length() - 1.0).abs() <= s.tolerance(),
+            "{}",
+            p.length() - 1.0
+        );
+        // and the point is on the segment
+        assert!((p - a).cross(b - a).length() <= 1e-9 * (b - a).length());
+    }
+}
+
+#[test]
+fn sign_only_sphere() {
+    let f = |p: DVec3| {
+        let v = p.length_squared() - 1.0;
+        if v < 0.0 {
+            -1.0
+        } else if v > 0.0 {
+            1.0
+        } else {
+            0.0
+        }
+    };
+    let surfaces = [
+        ImplicitSurface::from_fn(f, ball(2.0)).unwrap(),
+        ImplicitSurface::from_expr("sign(x^2+y^2+z^2-1)", ball(2.0)).unwrap(),
+    ];
+    for s in surfaces {
+        assert!(s.is_sign_only());
+        let mut rng = SplitMix64(9);
+        for _ in 0..200 {
+            let a = rng.unit_vector() * 0.5;
+            let b = rng.unit_vector() * 1.8;
+            let p = s.crossing(a, s.value(a), b, s.value(b));
+            assert!((p.length() - 1.0).abs() <= s.tolerance());
+        }
+        let seeds = s.seed_points(4);
+        assert!(seeds.len() >= 20);
+        assert!(
+            seeds
+                .iter()
+                .all(|p| (p.length() - 1.0).abs() <= s.tolerance())
+        );
+        let mut out = Vec::new();
+        s.crossings(
+            DVec3::new(-1.9, 0.1, 0.0),
+            DVec3::new(1.9, 0.1, 0.0),
+            &mut out,
+        );
+        assert_eq!(out.len(), 2);
+    }
+    assert!(!catalog::surface("sphere").unwrap().is_sign_only());
+}
+
+#[test]
+fn bounding_sphere_errors() {
+    for r in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let e = ImplicitSurface::from_expr("x^2+y^2+z^2-1", ball(r)).unwrap_err();
+        assert!(matches!(e, ImplicitError::BadBoundingSphere { .. }), "{e}");
+        assert!(e.to_string().contains("radius"));
+    }
+    let bad_center = BoundingSphere {
+        center: DVec3::new(f64::NAN, 0.0, 0.0),
+        radius: 2.0,
+    };
+    assert!(matches!(
+        ImplicitSurface::from_expr("x^2+y^2+z^2-1", bad_center),
+        Err(ImplicitError::BadBoundingSphere { .. })
+    ));
+    // The unit sphere crosses a ball of radius 0.9 ...
+    let e = ImplicitSurface::from_expr("x^2+y^2+z^2-1", ball(0.9)).unwrap_err();
+    let ImplicitError::CrossesBoundary { point, value, .. } = e else {
+        panic!("{e}")
+    };
+    assert!((DVec3::from_array(point).length() - 0.9).abs() < 1e-12);
+    assert!(value <= 0.0);
+    // ... and a ball off-center; the message says what to do.
+    let off = BoundingSphere {
+        center: DVec3::new(1.5, 0.0, 0.0),
+        radius: 1.0,
+    };
+    let e = ImplicitSurface::from_fn(|p: DVec3| p.length_squared() - 1.0, off).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("enlarge the radius or move the center"),
+        "{e}"
+    );
+    // Touching the sphere (f = 0 there) is also rejected.
+    let e = ImplicitSurface::from_fn(
+        |p: DVec3| (p.length_squared() - 4.0).min(p.length_squared() - 1.0),
+        ball(2.0),
+    );
+    assert!(matches!(e, Err(ImplicitError::CrossesBoundary { .. })));
+}
+
+#[test]
+fn nan_and_empty_inputs_are_errors() {
+    // NaN inside a small interior ball: found on the grid.
+    let f = |p: DVec3| {
+        if p.length() < 0.3 {
+            f64::NAN
+        } else {
+            p.length_squared() - 1.0
+        }
+    };
+    let e = ImplicitSurface::from_fn(f, ball(2.0)).unwrap_err();
+    let ImplicitError::NaN { point } = e else {
+        panic!("{e}")
+    };
+    assert!(DVec3::from_array(point).length() < 0.3);
+    assert!(e.to_string().contains("NaN"));
+    // NaN on the bounding sphere.
+    let e = ImplicitSurface::from_expr("sqrt(x)+y^2+z^2-1", ball(2.0)).unwrap_err();
+    assert!(matches!(e, ImplicitError::NaN { .. }), "{e}");
+    // Nothing inside.
+    let e = ImplicitSurface::from_expr("x^2+y^2+z^2+1", ball(2.0)).unwrap_err();
+    assert!(
+        matches!(e, ImplicitError::NoSurfaceInside { n: 32, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("no surface inside"));
+    // Parse errors come through with their column.
+    let e = ImplicitSurface::from_expr("x^2+(y^2-1", ball(2.0)).unwrap_err();
+    assert!(
+        matches!(&e, ImplicitError::Expr(x) if x.column == 11),
+        "{e}"
+    );
+    // Bad parameters.
+    let b = |s| {
+        ImplicitSurface::builder_from_expr("x^2+y^2+z^2-1", ball(2.0))
+            .unwrap()
+            .dm_inf_hint(s)
+    };
+    assert!(matches!(
+        b(0.0).build(),
+        Err(ImplicitError::BadParameter {
+            name: "dm_inf_hint",
+            ..
+        })
+    ));
+    assert!(matches!(
+        b(f64::NAN).build(),
+        Err(ImplicitError::BadParameter { .. })
+    ));
+    assert_eq!(b(0.5).build().unwrap().dm_inf_hint(), Some(0.5));
+    let e = ImplicitSurface::builder(|p: DVec3| p.length_squared() - 1.0, ball(2.0))
+        .tolerance(-1.0)
+        .build();
+    assert!(matches!(
+        e,
+        Err(ImplicitError::BadParameter {
+            name: "tolerance",
+            ..
+        })
+    ));
+    let e = ImplicitSurface::builder(|p: DVec3| p.length_squared() - 1.0, ball(2.0))
+        .seed_points(vec![DVec3::splat(5.0)])
+        .build();
+    assert!(matches!(e, Err(ImplicitError::BadSeedPoint { .. })));
+}
+
+#[test]
+fn tiny_component_needs_user_seeds() {
+    // A sphere of radius 0.01: no grid vertex falls inside.
+    let f = |p: DVec3| (p - DVec3::splat(0.33)).length_squared() - 1e-4;
+    assert!(matches!(
+        ImplicitSurface::from_fn(f, ball(2.0)),
+        Err(ImplicitError::NoSurfaceInside { .. })
+    ));
+    let s = ImplicitSurface::builder(f, ball(2.0))
+        .seed_points(vec![DVec3::splat(0.33) + DVec3::X * 0.01])
+        .build()
+        .unwrap();
+    assert_eq!(s.seed_points(0)[0], DVec3::splat(0.33) + DVec3::X * 0.01);
+}
+
+#[test]
+fn seeds_find_every_component_and_are_deterministic() {
+    // Two disjoint spheres, one small.
+    let c1 = DVec3::new(-0.8, 0.0, 0.0);
+    let c2 = DVec3::new(1.0, 0.5, 0.3);
+    let f = move |p: DVec3| ((p - c1).length() - 0.5).min((p - c2).length() - 0.2);
+    let s = ImplicitSurface::from_fn(f, ball(2.0)).unwrap();
+    let seeds = s.seed_points(1);
+    assert!(seeds.len() <= 200 && seeds.len() >= 50, "{}", seeds.len());
+    let on1 = seeds
+        .iter()
+        .filter(|p| ((**p - c1).length() - 0.5).abs() <= 1e-6)
+        .count();
+    let on2 = seeds
+        .iter()
+        .filter(|p| ((**p - c2).length() - 0.2).abs() <= 1e-6)
+        .count();
+    assert_eq!(on1 + on2, seeds.len());
+    assert!(on1 >= 10 && on2 >= 3, "{on1} {on2}");
+    // Distinct points.
+    for (i, p) in seeds.iter().enumerate() {
+        for q in &seeds[..i] {
+            assert!(p.distance(*q) > 1e-7);
+        }
+    }
+    // Deterministic: same seed, same points, whatever the thread count.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let three = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap();
+    let s1 = one.install(|| {
+        ImplicitSurface::from_fn(f, ball(2.0))
+            .unwrap()
+            .seed_points(1)
+    });
+    let s3 = three.install(|| {
+        ImplicitSurface::from_fn(f, ball(2.0))
+            .unwrap()
+            .seed_points(1)
+    });
+    assert_eq!(s1, seeds);
+    assert_eq!(s3, seeds);
+    assert_ne!(
+        s.seed_points(2),
+        seeds,
+        "the random lines depend on the seed"
+    );
+}
+
+#[test]
+fn gradient_and_projection() {
+    let s = ImplicitSurface::from_expr("x^2+y^2+z^2-1", ball(2.0)).unwrap();
+    let p = DVec3::new(0.3, -0.2, 0.5);
+    assert_eq!(s.gradient(p), 2.0 * p);
+    let c = ImplicitSurface::from_fn(|p: DVec3| p.length_squared() - 1.0, ball(2.0)).unwrap();
+    assert!((c.gradient(p) - 2.0 * p).length() < 1e-6);
+    let q = s.project(DVec3::new(0.0, 1.3, 0.2)).unwrap();
+    assert!((q.length() - 1.0).abs() < 1e-7);
+}
+
+// ---------------------------------------------------------------- catalog
+
+#[test]
+fn catalog_names_and_entries() {
+    let names = catalog::names();
+    assert_eq!(
+        names,
+        [
+            "sphere",
+            "ellipsoid",
+            "torus",
+            "double_torus",
+            "tanglecube",
+            "chair",
+            "blobs",
+            "heart",
+            "trefoil",
+            "barth_octic",
+            "klein_bottle"
+        ]
+    );
+    let genus: Vec<Option<u32>> = names[..8]
+        .iter()
+        .map(|n| catalog::entry(n).unwrap().genus)
+        .collect();
+    assert_eq!(genus, [0, 0, 1, 2, 5, 3, 0, 0].map(Some));
+    assert_eq!(catalog::entry("sphere").unwrap().dm_inf, Some(1.0));
+    assert_eq!(catalog::entry("torus").unwrap().dm_inf, Some(0.3));
+    assert_eq!(catalog::entry("ellipsoid").unwrap().dm_inf, Some(0.16));
+    assert_eq!(catalog::entry("chair").unwrap().dm_inf, None);
+    assert!(!catalog::entry("heart").unwrap().smooth);
+    assert!(!catalog::entry("barth_octic").unwrap().smooth);
+    assert!(!catalog::entry("klein_bottle").unwrap().smooth);
+    assert_eq!(catalog::entry("trefoil").unwrap().genus, Some(1));
+    assert_eq!(
+        catalog::entry("double_torus")
+            .unwrap()
+            .bounding_sphere
+            .center,
+        DVec3::X
+    );
+    let e = catalog::surface("teapot").unwrap_err();
+    assert!(
+        e.to_string().contains("unknown catalog surface 'teapot'")
+            && e.to_string().contains("tanglecube")
+    );
+    assert!(catalog::entry("teapot").is_none());
+}
+
+#[test]
+fn native_closures_equal_compiled_expressions() {
+    let mut rng = SplitMix64(2024);
+    for e in catalog::entries() {
+        let native = catalog::native_fn(e.name).unwrap();
+        let x = Expr::parse(&e.expression).unwrap();
+        let bs = e.bounding_sphere;
+        let pts: Vec<DVec3> = (0..5000)
+            .map(|_| bs.center + rng.unit_vector() * bs.radius * rng.next_f64().cbrt() * 1.2)
+            .collect();
+        let scale = pts.iter().map(|p| x.eval(*p).abs()).fold(1.0, f64::max);
+        for p in pts {
+            let (a, b) = (native(p), x.eval(p));
+            assert!(
+                (a - b).abs() <= 1e-12 * scale,
+                "{} at {p}: native {a}, compiled {b}",
+                e.name
+            );
+        }
+    }
+}
+
+#[test]
+fn catalog_functions_are_positive_on_their_bounding_spheres() {
+    for e in catalog::entries() {
+        let f = catalog::native_fn(e.name).unwrap();
+        for u in fibonacci_sphere(20_000) {
+            let p = e.bounding_sphere.center + u * e.bounding_sphere.radius;
+            assert!(f(p) > 0.0, "{} at {p}", e.name);
+        }
+    }
+}
+
+#[test]
+fn catalog_seeds_are_on_the_surfaces() {
+    for name in catalog::names() {
+        let s = catalog::surface(name).unwrap_or_else(|e| panic!("{e}"));
+        let seeds = s.seed_points(0);
+        assert!(seeds.len() >= 50, "{name}: {} seeds", seeds.len());
+        for p in &seeds {
+            let (v, g) = (s.value(*p), s.gradient(*p).length());
+            assert!(
+                v.abs() <= s.tolerance() * g + 1e-12,
+                "{name}: f({p}) = {v}, |grad| = {g}"
+            );
+            assert!(s.bounding_sphere().contains(*p));
+        }
+        // The expression path builds too and agrees on the grid seeds.
+        let x = catalog::surface_from_expression(name).unwrap();
+        assert_eq!(x.is_sign_only(), s.is_sign_only());
+    }
+}
+
+#[test]
+fn user_seeds_are_kept_under_the_cap() {
+    let user = vec![DVec3::X, DVec3::Y, DVec3::Z];
+    let s = ImplicitSurface::builder(|p: DVec3| p.length_squared() - 1.0, ball(2.0))
+        .seed_points(user.clone())
+        .max_seeds(5)
+        .build()
+        .unwrap();
+    let seeds = s.seed_points(0);
+    assert_eq!(seeds.len(), 5);
+    assert_eq!(&seeds[..3], &user[..]);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Random spheres in random bounding spheres: accepted when inside (seeds and crossings on
+    /// them), rejected with `CrossesBoundary` when they stick out.
+    #[test]
+    fn random_spheres(c in prop::array::uniform3(-1.0f64..1.0), r in 0.2f64..1.0,
+                      bc in prop::array::uniform3(-1.0f64..1.0), br in 0.5f64..4.0, seed in any::<u64>()) {
+        let (c, bc) = (DVec3::from_array(c), DVec3::from_array(bc));
+        let bs = BoundingSphere { center: bc, radius: br };
+        let f = move |p: DVec3| (p - c).length() - r;
+        let far = (c - bc).length() + r; // farthest point of the sphere from bc
+        let res = ImplicitSurface::from_fn(f, bs);
+        if far < br * 0.99 {
+            let s = res.map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let seeds = s.seed_points(seed);
+            prop_assert!(!seeds.is_empty());
+            for p in &seeds {
+                prop_assert!(((*p - c).length() - r).abs() <= s.tolerance());
+            }
+            let mut rng = SplitMix64(seed);
+            let a = c + rng.unit_vector() * r * 0.5;
+            let b = c + rng.unit_vector() * r * 1.5;
+            if bs.contains(b) {
+                let p = s.crossing(a, s.value(a), b, s.value(b));
+                prop_assert!(((p - c).length() - r).abs() <= s.tolerance());
+            }
+        } else if (c - bc).length() + r > br * 1.05 && (c - bc).length() - r < br * 0.95 {
+            // The sphere crosses the bounding sphere well away from tangency.
+            let crosses = matches!(res, Err(ImplicitError::CrossesBoundary { .. }));
+            prop_assert!(crosses);
+        }
+    }
+}
+
+#[test]
+fn resolve_specs_and_bounding_sphere_syntax() {
+    use oracle::catalog::CatalogError;
+    use oracle::implicit::parse_bounding_sphere;
+    let bs = parse_bounding_sphere("0,0,0,3").unwrap();
+    assert_eq!(bs, ball(3.0));
+    for bad in [
+        "",
+        "1,2,3",
+        "1,2,3,4,5",
+        "0,0,zero,1",
+        "0,0,0,inf",
+        "0,0,0,NaN",
+    ] {
+        let e = parse_bounding_sphere(bad).unwrap_err();
+        assert!(e.to_string().contains("cx,cy,cz,r"), "{e}");
+    }
+    // Catalog name, default and overridden bounding sphere.
+    assert_eq!(
+        catalog::resolve("chair", None)
+            .unwrap()
+            .bounding_sphere()
+            .radius,
+        7.0
+    );
+    let t = catalog::resolve(" torus ", Some(ball(3.0))).unwrap();
+    assert_eq!(t.bounding_sphere().radius, 3.0);
+    assert_eq!(t.dm_inf_hint(), Some(0.3));
+    assert!(matches!(
+        catalog::resolve("torus", Some(ball(1.0))),
+        Err(CatalogError::Implicit { .. })
+    ));
+    // Expressions.
+    let s = catalog::resolve("x^2+y^2+z^2-1", Some(ball(2.0))).unwrap();
+    assert!(s.expr().is_some());
+    assert!(matches!(
+        catalog::resolve("x^2+y^2+z^2-1", None),
+        Err(CatalogError::MissingBoundingSphere { .. })
+    ));
+    let e = catalog::resolve("x^2+(y^2-1", Some(ball(2.0))).unwrap_err();
+    assert!(e.to_string().contains("at column 11"), "{e}");
+    let e = catalog::resolve("spere", Some(ball(2.0))).unwrap_err();
+    assert!(matches!(e, CatalogError::UnknownName { .. }), "{e}");
+}
