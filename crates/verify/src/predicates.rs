@@ -198,11 +198,23 @@ mod tests {
 
     #[test]
     fn shared_cases() {
-        // Two fan triangles around the origin: adjacent, no overlap.
+        // Opposite sectors around the origin: only the vertex in common.
         assert!(!shared_vertex_overlap(
             O,
             [DVec3::X, DVec3::Y],
+            [-DVec3::X, -DVec3::Y]
+        ));
+        // Sectors sharing a ray (the second triangle's edge lies on the first's): overlap.
+        assert!(shared_vertex_overlap(
+            O,
+            [DVec3::X, DVec3::Y],
             [DVec3::Y, -DVec3::X]
+        ));
+        // Non-coplanar fans, as around a mesh vertex: no overlap.
+        assert!(!shared_vertex_overlap(
+            O,
+            [DVec3::X, DVec3::Y],
+            [-DVec3::X, DVec3::Z]
         ));
         // Overlapping sectors in the same plane.
         let d = DVec3::new(1.0, 1.0, 0.0);
