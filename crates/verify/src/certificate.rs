@@ -167,7 +167,7 @@ pub fn circumcircle(a: DVec3, b: DVec3, c: DVec3) -> Option<(DVec3, f64)> {
     let (u, v) = (b - a, c - a);
     let w = u.cross(v);
     let d = 2.0 * w.length_squared();
-    if !(d > 0.0) {
+    if d.is_nan() || d <= 0.0 {
         return None;
     }
     let off = (v.length_squared() * w.cross(u) + u.length_squared() * v.cross(w)) / d;

@@ -48,7 +48,7 @@ pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec
         return b + w * (c - b);
     }
     let denom = va + vb + vc;
-    if !(denom.abs() > 0.0) || !denom.is_finite() {
+    if denom == 0.0 || !denom.is_finite() {
         // Degenerate: nearest of the three edges.
         let seg = |u: DVec3, v: DVec3| {
             let d = v - u;
@@ -180,7 +180,8 @@ pub fn mesh_to_surface(
     surface: &dyn Surface,
     per_edge: usize,
 ) -> (Vec<(DVec3, f64)>, Vec<DVec3>, usize) {
-    let per_tri: Vec<(Vec<(DVec3, f64)>, Vec<DVec3>, usize)> = mesh
+    type PerTriangle = (Vec<(DVec3, f64)>, Vec<DVec3>, usize);
+    let per_tri: Vec<PerTriangle> = mesh
         .triangles
         .par_iter()
         .map(|t| {

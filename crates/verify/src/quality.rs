@@ -33,7 +33,7 @@ pub fn triangle_shape(a: DVec3, b: DVec3, c: DVec3) -> Option<([f64; 3], f64, f6
     let (ab, bc, ca) = (b - a, c - b, a - c);
     let cross = ab.cross(-ca);
     let twice_area = cross.length();
-    if !(twice_area > 0.0) {
+    if twice_area.is_nan() || twice_area <= 0.0 {
         return None;
     }
     let angle = |u: DVec3, v: DVec3| u.cross(v).length().atan2(u.dot(v));
