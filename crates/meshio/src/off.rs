@@ -87,7 +87,7 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         ));
     }
     let (nv, nf) = (counts[0], counts[1]);
-    let mut vertices = Vec::with_capacity(nv.min(1 << 24));
+    let mut vertices = Vec::with_capacity(nv.min(1 << 16));
     for i in 0..nv {
         let Some((ln, l)) = lines.next_line()? else {
             return Err(MeshIoError::Truncated {

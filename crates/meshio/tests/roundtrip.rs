@@ -106,7 +106,7 @@ property float y\nproperty double z\nproperty uchar red\nelement face 1\n\
 property list ushort short vertex_index\nelement edge 1\nproperty int vertex1\n\
 property int vertex2\nend_header\n"
         .to_vec();
-    let pts = [
+    let pts: [[f64; 3]; 4] = [
         [0.0, 0.0, 0.5],
         [1.0, 0.0, 0.5],
         [1.0, 1.0, 0.5],

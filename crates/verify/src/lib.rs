@@ -1,1 +1,695 @@
-//! Certificates for triangle meshes (in progress).
+//! Certificates for triangle meshes: what holds and what does not, for any triangle mesh.
+//!
+//! - [`check`]: combinatorics (closed, edge- and vertex-manifold, oriented, components, Euler
+//!   characteristic and genus, duplicate/unreferenced vertices, degenerate triangles), exact
+//!   self-intersections (BVH + `robust` predicates) and quality (angles, radius-edge ratios,
+//!   area, enclosed volume).
+//! - [`check_against`]: all of the above plus geometry against a surface oracle (mesh -> S and
+//!   S -> mesh distances, two-sided Hausdorff estimate, normal deviation) and the paper's
+//!   conditions (loose epsilon-sample certificate, vertices on every component, theorem 4.7).
+//!
+//! The result is a [`Report`] (serde, JSON) with one PASS/FAIL/INFO line per check
+//! ([`Report::summary`]). Output is deterministic whatever the thread count.
+//!
+//! ```
+//! use glam::DVec3;
+//! use meshio::TriMesh;
+//! // A tetrahedron, oriented outward.
+//! let mesh = TriMesh {
+//!     vertices: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+//!     triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+//! };
+//! let report = verify::check(&mesh, &verify::Options::default());
+//! assert!(report.passed(), "{}", report.summary());
+//! let topo = report.topology.as_ref().unwrap();
+//! assert!(topo.is_closed_oriented_manifold());
+//! assert_eq!(topo.genera(), vec![Some(0)]);
+//! assert!((report.quality.as_ref().unwrap().volume - 1.0 / 6.0).abs() < 1e-15);
+//! println!("{}", report.summary());
+//! let json = report.to_json();
+//! assert!(json.contains("\"closed\""));
+//! ```
+
+use std::fmt;
+use std::sync::Arc;
+
+use glam::DVec3;
+use meshio::TriMesh;
+use oracle::Surface;
+use serde::Serialize;
+
+pub mod bvh;
+pub mod certificate;
+pub mod distance;
+pub mod intersect;
+pub mod medial;
+pub mod predicates;
+pub mod quality;
+pub mod topology;
+
+pub use certificate::{
+    ComponentCoverage, EpsilonCertificate, HausdorffBound, SeedCoverage, SurfaceBall,
+};
+pub use distance::{DistanceStats, Geometry, MeshDistance, NormalDeviation};
+pub use intersect::SelfIntersections;
+pub use medial::{MedialAxisEstimate, MedialError, estimate_dm};
+pub use quality::Quality;
+pub use topology::{Component, Topology};
+
+/// A d_M function: point of S -> distance to the medial axis.
+pub type DmFn = Arc<dyn Fn(DVec3) -> f64 + Send + Sync>;
+
+/// Where the certificate takes d_M from.
+#[derive(Clone, Default)]
+pub enum DmSource {
+    /// The surface's [`Surface::dm_inf_hint`] as a constant (a lower bound of d_M, so the
+    /// achieved epsilon is an upper bound); the certificate is skipped without a hint.
+    #[default]
+    Auto,
+    /// d_M = `value` everywhere (uniform sizing: d_M^inf); also used as d_M^sup.
+    Constant(f64),
+    /// A known d_M function and its supremum over S (e.g. `|x|` near the unit sphere, sup 1).
+    Function { dm: DmFn, sup: f64 },
+    /// Estimated by Voronoi poles ([`MedialAxisEstimate`]) from the dense surface samples
+    /// ([`Options::surface_samples`], else the mesh vertices).
+    Poles,
+}
+
+impl fmt::Debug for DmSource {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DmSource::Auto => write!(f, "Auto"),
+            DmSource::Constant(v) => write!(f, "Constant({v})"),
+            DmSource::Function { sup, .. } => write!(f, "Function {{ sup: {sup} }}"),
+            DmSource::Poles => write!(f, "Poles"),
+        }
+    }
+}
+
+/// What to check and how.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Run the exact self-intersection test (default true).
+    pub self_intersections: bool,
+    /// Angle histogram bin width in degrees (default 10).
+    pub angle_bin_deg: f64,
+    /// FAIL the angle check below this minimum angle (default: report only).
+    pub min_angle_deg: Option<f64>,
+    /// Lists in the report (boundary edges, pairs, ...) keep at most this many items.
+    pub max_listed: usize,
+    /// Mesh -> S samples: a barycentric grid with this many subdivisions per edge,
+    /// (n+1)(n+2)/2 points per triangle (default 4: 15 points).
+    pub samples_per_edge: usize,
+    /// Dense samples of S for the S -> mesh distance (e.g. vertices of a much finer mesh).
+    /// Default: projections of the mesh samples onto S (they miss unmeshed components).
+    pub surface_samples: Option<Vec<DVec3>>,
+    /// FAIL the Hausdorff check above this distance (default: report only).
+    pub max_hausdorff: Option<f64>,
+    /// Requested epsilon of the loose epsilon-sample certificate.
+    pub epsilon: Option<f64>,
+    pub dm: DmSource,
+    /// Surface Delaunay balls of the restricted facets (from the mesher). Default: computed
+    /// from the mesh ([`certificate::surface_delaunay_balls`]).
+    pub surface_balls: Option<Vec<SurfaceBall>>,
+    /// Points on every component of S for condition 2 of definition 2.2.
+    /// Default: `surface.seed_points(seed)`.
+    pub component_seeds: Option<Vec<DVec3>>,
+    pub seed: u64,
+    /// A seed is covered if the mesh is within this distance. Default:
+    /// max(2 x measured Hausdorff, 1e-3 x bounding radius).
+    pub seed_tolerance: Option<f64>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            self_intersections: true,
+            angle_bin_deg: 10.0,
+            min_angle_deg: None,
+            max_listed: 20,
+            samples_per_edge: 4,
+            surface_samples: None,
+            max_hausdorff: None,
+            epsilon: None,
+            dm: DmSource::Auto,
+            surface_balls: None,
+            component_seeds: None,
+            seed: 0,
+            seed_tolerance: None,
+        }
+    }
+}
+
+/// Outcome of one check.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq, Eq)]
+pub enum Status {
+    #[serde(rename = "PASS")]
+    Pass,
+    #[serde(rename = "FAIL")]
+    Fail,
+    /// A measurement without a pass criterion.
+    #[serde(rename = "INFO")]
+    Info,
+    /// Not run (reason in the detail).
+    #[serde(rename = "SKIP")]
+    Skipped,
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Status::Pass => "PASS",
+            Status::Fail => "FAIL",
+            Status::Info => "INFO",
+            Status::Skipped => "SKIP",
+        })
+    }
+}
+
+/// One line of the summary.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Check {
+    /// Stable name: `input`, `closed`, `edge-manifold`, `vertex-manifold`, `oriented`,
+    /// `components`, `duplicate-vertices`, `degenerate-triangles`, `unreferenced-vertices`,
+    /// `self-intersections`, `angles`, `radius-edge`, `area-volume`, `hausdorff`, `normals`,
+    /// `loose-epsilon`, `components-sampled`, `theorem-4.7`.
+    pub name: String,
+    pub status: Status,
+    pub detail: String,
+}
+
+/// Everything measured on a mesh. Sections are `None` when not run.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Report {
+    pub vertices: usize,
+    pub triangles: usize,
+    /// Why the mesh was rejected (indices out of range, non-finite coordinates).
+    pub input_error: Option<String>,
+    pub topology: Option<Topology>,
+    pub self_intersections: Option<SelfIntersections>,
+    pub quality: Option<Quality>,
+    pub geometry: Option<Geometry>,
+    pub certificate: Option<EpsilonCertificate>,
+    pub components_sampled: Option<ComponentCoverage>,
+    pub hausdorff_bound: Option<HausdorffBound>,
+    pub checks: Vec<Check>,
+}
+
+impl Report {
+    /// No check failed.
+    pub fn passed(&self) -> bool {
+        self.checks.iter().all(|c| c.status != Status::Fail)
+    }
+    /// The check with this name.
+    pub fn check(&self, name: &str) -> Option<&Check> {
+        self.checks.iter().find(|c| c.name == name)
+    }
+    /// Status of the check with this name.
+    pub fn status(&self, name: &str) -> Option<Status> {
+        self.check(name).map(|c| c.status)
+    }
+    /// Names of the failed checks.
+    pub fn failures(&self) -> Vec<&str> {
+        self.checks
+            .iter()
+            .filter(|c| c.status == Status::Fail)
+            .map(|c| c.name.as_str())
+            .collect()
+    }
+    /// One line per check (`PASS closed: ...`) and a verdict line.
+    pub fn summary(&self) -> String {
+        let w = self.checks.iter().map(|c| c.name.len()).max().unwrap_or(0);
+        let mut s = format!(
+            "mesh: {} vertices, {} triangles\n",
+            self.vertices, self.triangles
+        );
+        for c in &self.checks {
+            s += &format!("{} {:<w$}  {}\n", c.status, c.name, c.detail);
+        }
+        let f = self.failures();
+        if f.is_empty() {
+            s += "verdict: PASS\n";
+        } else {
+            s += &format!("verdict: FAIL ({})\n", f.join(", "));
+        }
+        s
+    }
+    /// Pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+    /// Write [`Report::to_json`] to a file.
+    pub fn write_json(&self, path: impl AsRef<std::path::Path>) -> std::io::Result<()> {
+        std::fs::write(path, self.to_json())
+    }
+
+    fn push(&mut self, name: &str, status: Status, detail: String) {
+        self.checks.push(Check {
+            name: name.to_owned(),
+            status,
+            detail,
+        });
+    }
+}
+
+fn pass_fail(ok: bool) -> Status {
+    if ok { Status::Pass } else { Status::Fail }
+}
+
+fn list<T: fmt::Debug>(v: &[T], total: usize) -> String {
+    if total == 0 {
+        return String::new();
+    }
+    let more = if total > v.len() {
+        format!(" (+{} more)", total - v.len())
+    } else {
+        String::new()
+    };
+    let shown: Vec<String> = v.iter().take(5).map(|x| format!("{x:?}")).collect();
+    let more = if v.len() > 5 && more.is_empty() {
+        format!(" (+{} more)", total - 5)
+    } else {
+        more
+    };
+    format!(": {}{more}", shown.join(" "))
+}
+
+/// Check a mesh on its own: combinatorics, self-intersections, quality.
+///
+/// ```
+/// use glam::DVec3;
+/// use meshio::TriMesh;
+/// // One triangle: an open surface with 3 boundary edges.
+/// let mesh = TriMesh { vertices: vec![DVec3::ZERO, DVec3::X, DVec3::Y], triangles: vec![[0, 1, 2]] };
+/// let r = verify::check(&mesh, &verify::Options::default());
+/// assert_eq!(r.status("closed"), Some(verify::Status::Fail));
+/// assert_eq!(r.topology.unwrap().boundary_edges_total, 3);
+/// ```
+pub fn check(mesh: &TriMesh, opts: &Options) -> Report {
+    run(mesh, None, opts)
+}
+
+/// Check a mesh against the surface it approximates: everything [`check`] does, plus the
+/// distances between mesh and surface, normal deviation and the paper's conditions.
+///
+/// ```
+/// use glam::DVec3;
+/// use meshio::TriMesh;
+/// use oracle::{BoundingSphere, Surface};
+/// struct Plane; // z = 0, as seen from the unit ball around the origin
+/// impl Surface for Plane {
+///     fn bounding_sphere(&self) -> BoundingSphere { BoundingSphere { center: DVec3::ZERO, radius: 2.0 } }
+///     fn value(&self, p: DVec3) -> f64 { p.z }
+///     fn project(&self, p: DVec3) -> Option<DVec3> { Some(DVec3::new(p.x, p.y, 0.0)) }
+/// }
+/// let mesh = TriMesh {
+///     vertices: vec![DVec3::new(0.0, 0.0, 0.1), DVec3::new(1.0, 0.0, 0.1), DVec3::new(0.0, 1.0, 0.1)],
+///     triangles: vec![[0, 1, 2]],
+/// };
+/// let opts = verify::Options { component_seeds: Some(vec![DVec3::new(0.2, 0.2, 0.0)]), ..Default::default() };
+/// let r = verify::check_against(&mesh, &Plane, &opts);
+/// let g = r.geometry.as_ref().unwrap();
+/// assert!((g.mesh_to_surface.max - 0.1).abs() < 1e-12);
+/// assert!(g.normals.max_deg < 1e-6); // facet normal +z, gradient +z
+/// println!("{}", r.summary());
+/// ```
+pub fn check_against(mesh: &TriMesh, surface: &dyn Surface, opts: &Options) -> Report {
+    run(mesh, Some(surface), opts)
+}
+
+fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report {
+    let mut r = Report {
+        vertices: mesh.vertices.len(),
+        triangles: mesh.triangles.len(),
+        input_error: None,
+        topology: None,
+        self_intersections: None,
+        quality: None,
+        geometry: None,
+        certificate: None,
+        components_sampled: None,
+        hausdorff_bound: None,
+        checks: Vec::new(),
+    };
+    if let Err(e) = mesh.validate() {
+        r.input_error = Some(e.to_string());
+        r.push("input", Status::Fail, e.to_string());
+        return r;
+    }
+    if mesh.triangles.is_empty() {
+        r.input_error = Some("the mesh has no triangles".into());
+        r.push("input", Status::Fail, "the mesh has no triangles".into());
+        return r;
+    }
+    r.push(
+        "input",
+        Status::Pass,
+        "indices in range, coordinates finite".into(),
+    );
+    let ml = opts.max_listed;
+
+    let t = topology::analyze(mesh, ml);
+    r.push(
+        "closed",
+        pass_fail(t.is_closed()),
+        format!(
+            "{} boundary edges{}",
+            t.boundary_edges_total,
+            list(&t.boundary_edges, t.boundary_edges_total)
+        ),
+    );
+    r.push(
+        "edge-manifold",
+        pass_fail(t.is_edge_manifold()),
+        format!(
+            "{} edges with more than 2 facets{}",
+            t.non_manifold_edges_total,
+            list(&t.non_manifold_edges, t.non_manifold_edges_total)
+        ),
+    );
+    r.push(
+        "vertex-manifold",
+        pass_fail(t.is_vertex_manifold()),
+        format!(
+            "{} vertices with more than one umbrella{}",
+            t.non_manifold_vertices_total,
+            list(&t.non_manifold_vertices, t.non_manifold_vertices_total)
+        ),
+    );
+    let non_orientable = t.components.iter().filter(|c| !c.orientable).count();
+    r.push(
+        "oriented",
+        pass_fail(t.is_consistently_oriented()),
+        format!(
+            "{} interior edges used twice in the same direction{}{}",
+            t.inconsistent_edges_total,
+            list(&t.inconsistent_edges, t.inconsistent_edges_total),
+            if non_orientable > 0 {
+                format!("; {non_orientable} non-orientable components")
+            } else {
+                String::new()
+            }
+        ),
+    );
+    let genera: Vec<String> = t
+        .components
+        .iter()
+        .map(|c| {
+            format!(
+                "chi={} genus={}",
+                c.euler_characteristic,
+                c.genus.map_or("-".to_string(), |g| g.to_string())
+            )
+        })
+        .collect();
+    let shown: Vec<String> = genera.iter().take(8).cloned().collect();
+    r.push(
+        "components",
+        Status::Info,
+        format!(
+            "{} components [{}{}]",
+            t.components.len(),
+            shown.join("; "),
+            if genera.len() > 8 { "; ..." } else { "" }
+        ),
+    );
+    r.push(
+        "duplicate-vertices",
+        pass_fail(t.duplicate_vertices_total == 0),
+        format!(
+            "{} vertices equal to an earlier one{}",
+            t.duplicate_vertices_total,
+            list(&t.duplicate_vertices, t.duplicate_vertices_total)
+        ),
+    );
+    r.push(
+        "degenerate-triangles",
+        pass_fail(t.degenerate_triangles_total == 0),
+        format!(
+            "{} triangles with a repeated index or collinear corners (exact){}",
+            t.degenerate_triangles_total,
+            list(&t.degenerate_triangles, t.degenerate_triangles_total)
+        ),
+    );
+    r.push(
+        "unreferenced-vertices",
+        if t.unreferenced_vertices_total == 0 {
+            Status::Pass
+        } else {
+            Status::Info
+        },
+        format!(
+            "{} vertices used by no triangle",
+            t.unreferenced_vertices_total
+        ),
+    );
+    r.topology = Some(t);
+
+    let bvh = intersect::triangle_bvh(mesh);
+    if opts.self_intersections {
+        let si = intersect::self_intersections(mesh, &bvh, ml);
+        r.push(
+            "self-intersections",
+            pass_fail(si.pairs_total == 0),
+            format!(
+                "{} intersecting triangle pairs (exact; {} candidate pairs tested){}",
+                si.pairs_total,
+                si.candidate_pairs,
+                list(&si.pairs, si.pairs_total)
+            ),
+        );
+        r.self_intersections = Some(si);
+    } else {
+        r.push(
+            "self-intersections",
+            Status::Skipped,
+            "disabled by options".into(),
+        );
+    }
+
+    let q = quality::analyze(mesh, opts.angle_bin_deg);
+    let angle_detail = format!(
+        "min {:.3} deg, max {:.3} deg",
+        q.min_angle_deg, q.max_angle_deg
+    );
+    match opts.min_angle_deg {
+        Some(m) => r.push(
+            "angles",
+            pass_fail(q.min_angle_deg >= m),
+            format!("{angle_detail} (required min >= {m})"),
+        ),
+        None => r.push("angles", Status::Info, angle_detail),
+    }
+    r.push(
+        "radius-edge",
+        Status::Info,
+        format!(
+            "circumradius/shortest edge: min {:.4}, mean {:.4}, max {:.4}",
+            q.radius_edge_min, q.radius_edge_mean, q.radius_edge_max
+        ),
+    );
+    r.push(
+        "area-volume",
+        Status::Info,
+        format!("area {:.6}, signed volume {:.6}", q.total_area, q.volume),
+    );
+    r.quality = Some(q);
+
+    let Some(surface) = surface else {
+        return r;
+    };
+    against(&mut r, mesh, &bvh, surface, opts);
+    r
+}
+
+fn against(r: &mut Report, mesh: &TriMesh, bvh: &bvh::Bvh, surface: &dyn Surface, opts: &Options) {
+    let ml = opts.max_listed;
+    let g = distance::geometry(
+        mesh,
+        bvh,
+        surface,
+        opts.samples_per_edge,
+        opts.surface_samples.as_deref(),
+    );
+    let detail = format!(
+        "two-sided {:.3e} ({:.3e} of the bounding radius); mesh->S max {:.3e} mean {:.3e} \
+         ({} samples, {} projection failures); S->mesh max {:.3e} mean {:.3e} ({})",
+        g.hausdorff,
+        g.hausdorff_relative,
+        g.mesh_to_surface.max,
+        g.mesh_to_surface.mean,
+        g.mesh_to_surface.samples,
+        g.projection_failures,
+        g.surface_to_mesh.max,
+        g.surface_to_mesh.mean,
+        g.surface_samples_source
+    );
+    match opts.max_hausdorff {
+        Some(m) => r.push(
+            "hausdorff",
+            pass_fail(g.hausdorff <= m),
+            format!("{detail}; limit {m}"),
+        ),
+        None => r.push(
+            "hausdorff",
+            if g.projection_failures == 0 {
+                Status::Info
+            } else {
+                Status::Fail
+            },
+            detail,
+        ),
+    }
+    r.push(
+        "normals",
+        pass_fail(g.normals.inverted_facets == 0),
+        format!(
+            "facet normal vs surface gradient at vertices: max {:.3} deg, mean {:.3} deg, \
+             {} facets facing inward",
+            g.normals.max_deg, g.normals.mean_deg, g.normals.inverted_facets
+        ),
+    );
+    let hausdorff = g.hausdorff;
+    r.geometry = Some(g);
+
+    // d_M source.
+    let dm: Option<(DmFn, f64, String)> = match &opts.dm {
+        DmSource::Auto => surface.dm_inf_hint().filter(|v| *v > 0.0).map(|v| {
+            let f: DmFn = Arc::new(move |_| v);
+            (f, v, format!("constant d_M^inf hint {v} of the surface"))
+        }),
+        DmSource::Constant(v) => {
+            let v = *v;
+            let f: DmFn = Arc::new(move |_| v);
+            Some((f, v, format!("constant {v}")))
+        }
+        DmSource::Function { dm, sup } => Some((dm.clone(), *sup, "given function".into())),
+        DmSource::Poles => {
+            let samples = opts.surface_samples.as_deref().unwrap_or(&mesh.vertices);
+            match MedialAxisEstimate::new(samples, None) {
+                Ok(m) => {
+                    let sup = samples.iter().map(|&p| m.dm(p)).fold(0.0, f64::max);
+                    let n = m.poles.len();
+                    let m = Arc::new(m);
+                    let f: DmFn = Arc::new(move |x| m.dm(x));
+                    Some((
+                        f,
+                        sup,
+                        format!("Voronoi poles of {} samples ({n} poles)", samples.len()),
+                    ))
+                }
+                Err(e) => {
+                    r.push("loose-epsilon", Status::Fail, e.to_string());
+                    None
+                }
+            }
+        }
+    };
+    let computed;
+    let balls = match &opts.surface_balls {
+        Some(b) => b.as_slice(),
+        None => {
+            computed = if dm.is_some() {
+                certificate::surface_delaunay_balls(mesh, surface)
+            } else {
+                Vec::new()
+            };
+            &computed
+        }
+    };
+    match &dm {
+        Some((f, sup, source)) => {
+            let cert = certificate::loose_epsilon(
+                balls,
+                mesh.triangles.len(),
+                f.as_ref(),
+                opts.epsilon,
+                source,
+                ml,
+            );
+            r.push(
+                "loose-epsilon",
+                pass_fail(cert.passed()),
+                format!(
+                    "achieved eps {:.4} (max r/d_M(c), facet {:?}){}; {} balls, {} facets \
+                     without ball, d_M: {}",
+                    cert.eps_achieved,
+                    cert.worst_facet,
+                    match cert.requested_eps {
+                        Some(e) =>
+                            format!(", requested {e}: {} facets exceed", cert.exceeding_total),
+                        None => String::new(),
+                    },
+                    cert.balls,
+                    cert.facets_without_ball,
+                    cert.dm_source
+                ),
+            );
+            let hb = certificate::hausdorff_bound(cert.eps_achieved, *sup, hausdorff);
+            r.push(
+                "theorem-4.7",
+                if hb.applicable {
+                    pass_fail(hb.holds)
+                } else {
+                    Status::Info
+                },
+                format!(
+                    "measured Hausdorff {:.3e} vs 4.5 eps^2 d_M^sup = {:.3e} (eps {:.4}, \
+                     d_M^sup {:.4}){}",
+                    hb.hausdorff,
+                    hb.bound,
+                    hb.eps,
+                    hb.dm_sup,
+                    if hb.applicable {
+                        ""
+                    } else {
+                        "; not applicable: eps >= 0.096"
+                    }
+                ),
+            );
+            r.certificate = Some(cert);
+            r.hausdorff_bound = Some(hb);
+        }
+        None => {
+            if r.check("loose-epsilon").is_none() {
+                r.push(
+                    "loose-epsilon",
+                    Status::Skipped,
+                    "no d_M: the surface gives no dm_inf_hint; set Options::dm".into(),
+                );
+            }
+            r.push(
+                "theorem-4.7",
+                Status::Skipped,
+                "needs the certificate's eps and d_M^sup".into(),
+            );
+        }
+    }
+
+    // Condition 2 of definition 2.2.
+    let seeds = match &opts.component_seeds {
+        Some(s) => s.clone(),
+        None => surface.seed_points(opts.seed),
+    };
+    let radius = surface.bounding_sphere().radius;
+    let tol = opts
+        .seed_tolerance
+        .unwrap_or((2.0 * hausdorff).max(1e-3 * radius));
+    let dist = MeshDistance::new(mesh, bvh);
+    let cov = certificate::component_coverage(&dist, &seeds, tol);
+    r.push(
+        "components-sampled",
+        pass_fail(cov.uncovered == 0 && !seeds.is_empty()),
+        if seeds.is_empty() {
+            "no seed points on S to check against".into()
+        } else {
+            format!(
+                "{} of {} seed points of S farther than {:.3e} from the mesh",
+                cov.uncovered,
+                seeds.len(),
+                tol
+            )
+        },
+    );
+    r.components_sampled = Some(cov);
+}

@@ -1,0 +1,308 @@
+//! Distances between a mesh and a surface: point-triangle distance, exact nearest triangle
+//! through the BVH, one- and two-sided Hausdorff estimates, normal deviation.
+
+use glam::DVec3;
+use meshio::TriMesh;
+use oracle::Surface;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::bvh::Bvh;
+
+/// Closest point of the triangle `abc` to `p` (Ericson, Real-Time Collision Detection 5.1.5).
+/// Works for degenerate triangles too (falls back to the closest edge point).
+pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return a + v * ab;
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return a + w * ac;
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return b + w * (c - b);
+    }
+    let denom = va + vb + vc;
+    if denom == 0.0 || !denom.is_finite() {
+        // Degenerate: nearest of the three edges.
+        let seg = |u: DVec3, v: DVec3| {
+            let d = v - u;
+            let t = if d.length_squared() > 0.0 {
+                ((p - u).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            u + t * d
+        };
+        let cands = [seg(a, b), seg(b, c), seg(c, a)];
+        return cands
+            .into_iter()
+            .min_by(|x, y| {
+                (*x - p)
+                    .length_squared()
+                    .total_cmp(&(*y - p).length_squared())
+            })
+            .unwrap_or(a);
+    }
+    let v = vb / denom;
+    let w = vc / denom;
+    a + ab * v + ac * w
+}
+
+/// Exact nearest-triangle queries on a mesh (branch and bound on the BVH).
+pub struct MeshDistance<'a> {
+    mesh: &'a TriMesh,
+    bvh: &'a Bvh,
+}
+
+impl<'a> MeshDistance<'a> {
+    pub fn new(mesh: &'a TriMesh, bvh: &'a Bvh) -> Self {
+        MeshDistance { mesh, bvh }
+    }
+    /// Nearest triangle to `p` and the distance (smallest index on ties).
+    pub fn nearest(&self, p: DVec3) -> Option<(usize, f64)> {
+        self.bvh
+            .nearest(p, |t| {
+                let [a, b, c] =
+                    self.mesh.triangles[t as usize].map(|i| self.mesh.vertices[i as usize]);
+                (closest_point_on_triangle(p, a, b, c) - p).length_squared()
+            })
+            .map(|(t, d2)| (t as usize, d2.sqrt()))
+    }
+}
+
+/// Statistics of a set of distances.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct DistanceStats {
+    pub samples: usize,
+    pub max: f64,
+    pub mean: f64,
+    pub rms: f64,
+    /// Where the maximum is attained.
+    pub argmax: Option<[f64; 3]>,
+}
+
+impl DistanceStats {
+    fn from(values: &[(DVec3, f64)]) -> Self {
+        let mut s = DistanceStats {
+            samples: values.len(),
+            max: 0.0,
+            mean: 0.0,
+            rms: 0.0,
+            argmax: None,
+        };
+        for &(p, d) in values {
+            if d > s.max || s.argmax.is_none() {
+                s.max = d;
+                s.argmax = Some(p.to_array());
+            }
+            s.mean += d;
+            s.rms += d * d;
+        }
+        if !values.is_empty() {
+            s.mean /= values.len() as f64;
+            s.rms = (s.rms / values.len() as f64).sqrt();
+        }
+        s
+    }
+}
+
+/// Geometry of the mesh against the surface.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Geometry {
+    /// Mesh -> S: samples on the triangles projected onto S.
+    pub mesh_to_surface: DistanceStats,
+    /// Samples whose projection the oracle could not compute (excluded).
+    pub projection_failures: usize,
+    /// S -> mesh: dense samples of S to their nearest triangle (exact).
+    pub surface_to_mesh: DistanceStats,
+    /// Where the S samples came from.
+    pub surface_samples_source: String,
+    /// max of the two one-sided distances.
+    pub hausdorff: f64,
+    pub bounding_radius: f64,
+    /// hausdorff / bounding radius.
+    pub hausdorff_relative: f64,
+    pub normals: NormalDeviation,
+}
+
+/// Angle between each facet's normal and the surface gradient at its three vertices.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct NormalDeviation {
+    pub max_deg: f64,
+    pub mean_deg: f64,
+    /// Facets with an angle above 90 degrees at some vertex (facing inward).
+    pub inverted_facets: usize,
+    /// (facet, vertex) pairs where the gradient was zero or not finite (skipped).
+    pub undefined: usize,
+}
+
+/// Barycentric grid with `n` subdivisions per edge: (n+1)(n+2)/2 points per triangle.
+pub fn triangle_samples(a: DVec3, b: DVec3, c: DVec3, n: usize, out: &mut Vec<DVec3>) {
+    let n = n.max(1);
+    for i in 0..=n {
+        for j in 0..=n - i {
+            let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+            out.push(a + (b - a) * u + (c - a) * v);
+        }
+    }
+}
+
+/// Mesh -> S distances of samples on the triangles: `(sample, |p - project(p)|)`, in triangle
+/// order, and the number of samples whose projection failed.
+pub fn mesh_to_surface(
+    mesh: &TriMesh,
+    surface: &dyn Surface,
+    per_edge: usize,
+) -> (Vec<(DVec3, f64)>, Vec<DVec3>, usize) {
+    type PerTriangle = (Vec<(DVec3, f64)>, Vec<DVec3>, usize);
+    let per_tri: Vec<PerTriangle> = mesh
+        .triangles
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            let mut pts = Vec::new();
+            triangle_samples(a, b, c, per_edge, &mut pts);
+            let mut d = Vec::with_capacity(pts.len());
+            let mut proj = Vec::with_capacity(pts.len());
+            let mut fail = 0;
+            for p in pts {
+                match surface.project(p) {
+                    Some(q) if q.is_finite() => {
+                        d.push((p, (p - q).length()));
+                        proj.push(q);
+                    }
+                    _ => fail += 1,
+                }
+            }
+            (d, proj, fail)
+        })
+        .collect();
+    let mut all = Vec::new();
+    let mut projected = Vec::new();
+    let mut fails = 0;
+    for (d, p, f) in per_tri {
+        all.extend(d);
+        projected.extend(p);
+        fails += f;
+    }
+    (all, projected, fails)
+}
+
+/// S -> mesh distances of the given samples to their nearest triangle.
+pub fn surface_to_mesh(dist: &MeshDistance<'_>, samples: &[DVec3]) -> Vec<(DVec3, f64)> {
+    samples
+        .par_iter()
+        .map(|&p| (p, dist.nearest(p).map_or(f64::INFINITY, |x| x.1)))
+        .collect()
+}
+
+/// Normal deviation of the facets against the surface gradient.
+pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviation {
+    let per: Vec<([Option<f64>; 3], bool)> = mesh
+        .triangles
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            let mut out = [None; 3];
+            let mut inverted = false;
+            for (k, v) in [a, b, c].into_iter().enumerate() {
+                let g = surface.gradient(v).normalize_or_zero();
+                if n == DVec3::ZERO || g == DVec3::ZERO || !g.is_finite() {
+                    continue;
+                }
+                let ang = n.cross(g).length().atan2(n.dot(g)).to_degrees();
+                inverted |= ang > 90.0;
+                out[k] = Some(ang);
+            }
+            (out, inverted)
+        })
+        .collect();
+    let mut nd = NormalDeviation {
+        max_deg: 0.0,
+        mean_deg: 0.0,
+        inverted_facets: 0,
+        undefined: 0,
+    };
+    let mut n = 0usize;
+    for (angles, inv) in &per {
+        nd.inverted_facets += *inv as usize;
+        for a in angles {
+            match a {
+                Some(a) => {
+                    nd.max_deg = nd.max_deg.max(*a);
+                    nd.mean_deg += a;
+                    n += 1;
+                }
+                None => nd.undefined += 1,
+            }
+        }
+    }
+    if n > 0 {
+        nd.mean_deg /= n as f64;
+    }
+    nd
+}
+
+/// Compute [`Geometry`]. `surface_samples`: dense samples of S; if `None`, the projections
+/// of the mesh samples are used (they cover only the parts of S near the mesh).
+pub fn geometry(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    surface: &dyn Surface,
+    per_edge: usize,
+    surface_samples: Option<&[DVec3]>,
+) -> Geometry {
+    let (m2s, projected, fails) = mesh_to_surface(mesh, surface, per_edge);
+    let dist = MeshDistance::new(mesh, bvh);
+    let (s2m, source) = match surface_samples {
+        Some(s) => (
+            surface_to_mesh(&dist, s),
+            format!("{} given samples", s.len()),
+        ),
+        None => (
+            surface_to_mesh(&dist, &projected),
+            format!("{} projections of the mesh samples onto S", projected.len()),
+        ),
+    };
+    let mesh_to_surface = DistanceStats::from(&m2s);
+    let surface_to_mesh = DistanceStats::from(&s2m);
+    let hausdorff = mesh_to_surface.max.max(surface_to_mesh.max);
+    let bounding_radius = surface.bounding_sphere().radius;
+    Geometry {
+        mesh_to_surface,
+        projection_failures: fails,
+        surface_to_mesh,
+        surface_samples_source: source,
+        hausdorff,
+        bounding_radius,
+        hausdorff_relative: hausdorff / bounding_radius,
+        normals: normal_deviation(mesh, surface),
+    }
+}
