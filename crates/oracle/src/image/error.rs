@@ -1,0 +1,155 @@
+//! Errors of the image backend: each names the file (if any), the field and the fix.
+
+use std::path::PathBuf;
+
+fn show(p: &Option<PathBuf>) -> String {
+    match p {
+        Some(p) => format!("{}: ", p.display()),
+        None => String::new(),
+    }
+}
+
+/// Errors raised while loading a volume or building an [`ImageSurface`](super::ImageSurface).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ImageError {
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(
+        "{}: the file is truncated ({detail}); re-export or re-download it",
+        path.display()
+    )]
+    Truncated { path: PathBuf, detail: String },
+    #[error("{}: not a valid NIfTI-1 file ({detail}); NIfTI-2 is not supported, convert it with e.g. `nibabel`", path.display())]
+    Nifti { path: PathBuf, detail: String },
+    #[error(
+        "{}: datatype {field} is not supported; convert the image to u8, i8, u16, i16, u32, i32, f32 or f64",
+        path.display()
+    )]
+    UnsupportedType { path: PathBuf, field: String },
+    #[error(
+        "{}: dim = {dims:?} is a 2D image (dim[3] = {nz}), not a volume; give a 3D file, or a folder of 2D slices with a spacing",
+        path.display()
+    )]
+    NotAVolume {
+        path: PathBuf,
+        dims: Vec<u64>,
+        nz: u64,
+    },
+    #[error(
+        "{}: dim = {dims:?} has {frames} frames (dim[4] > 1); extract one 3D volume first (e.g. `fslroi` or nibabel)",
+        path.display()
+    )]
+    FourD {
+        path: PathBuf,
+        dims: Vec<u64>,
+        frames: u64,
+    },
+    #[error(
+        "{}the image is empty (dims {dims:?}); every dimension must be at least 1",
+        show(path)
+    )]
+    Empty {
+        path: Option<PathBuf>,
+        dims: [usize; 3],
+    },
+    #[error("{dims:?} voxels need {expected} values but {actual} were given")]
+    LengthMismatch {
+        dims: [usize; 3],
+        expected: usize,
+        actual: usize,
+    },
+    #[error(
+        "{}{field} gives a singular or non-finite voxel-to-world transform ({detail}); fix the header or pass a spacing",
+        show(path)
+    )]
+    BadAffine {
+        path: Option<PathBuf>,
+        field: String,
+        detail: String,
+    },
+    #[error("spacing {spacing:?} is invalid; give three positive finite numbers (sx, sy, sz)")]
+    BadSpacing { spacing: [f64; 3] },
+    #[error(
+        "{}all voxels equal {value}: the image is constant, so there is no surface",
+        show(path)
+    )]
+    Constant { path: Option<PathBuf>, value: f64 },
+    #[error(
+        "{}voxel {index:?} is NaN or infinite; fix the data (or replace NaN by the background) before meshing",
+        show(path)
+    )]
+    NaN {
+        path: Option<PathBuf>,
+        index: [usize; 3],
+    },
+    #[error(
+        "iso value required for a non-binary image; the data range is [{min}, {max}] (pass an iso value, or a label for a segmentation)"
+    )]
+    IsoRequired { min: f64, max: f64 },
+    #[error(
+        "iso value {iso} is outside the data range [{min}, {max}] (or equal to an end): there is no surface; pick a value strictly inside the range"
+    )]
+    IsoOutOfRange { iso: f64, min: f64, max: f64 },
+    #[error(
+        "background {background} is on the foreground side of iso {iso}; choose a background {side} the iso value, or flip the foreground"
+    )]
+    BadBackground {
+        background: f64,
+        iso: f64,
+        side: &'static str,
+    },
+    #[error("label {label} is not present in the image; labels present: {present}")]
+    LabelAbsent { label: i64, present: String },
+    #[error(
+        "{}label {label} fills the whole image: there is no surface",
+        show(path)
+    )]
+    LabelEverywhere { path: Option<PathBuf>, label: i64 },
+    #[error(
+        "{}value {value} is not an integer, so the image is not a label image; mesh it with an iso value instead",
+        show(path)
+    )]
+    NotLabels { path: Option<PathBuf>, value: f64 },
+    #[error("{}: no PNG or TIFF slices found in the folder; put the 2D slices (*.png, *.tif, *.tiff) there", dir.display())]
+    NoSlices { dir: PathBuf },
+    #[error("{}: slice is {found_w}x{found_h} but the first slice {} is {w}x{h}; all slices must have the same size", path.display(), first.display())]
+    SliceSize {
+        path: PathBuf,
+        first: PathBuf,
+        w: u32,
+        h: u32,
+        found_w: u32,
+        found_h: u32,
+    },
+    #[error("{}: slice has voxel type {found} but the first slice {} has {expected}; convert the stack to one bit depth", path.display(), first.display())]
+    SliceType {
+        path: PathBuf,
+        first: PathBuf,
+        expected: String,
+        found: String,
+    },
+    #[error("{}: cannot decode the image ({detail})", path.display())]
+    Decode { path: PathBuf, detail: String },
+    #[error("{}: raw volume of dims {dims:?} and type {dtype} needs {expected} bytes (after an offset of {offset}) but the file has {actual}; check --dims, --dtype and the header offset", path.display())]
+    RawSize {
+        path: PathBuf,
+        dims: [usize; 3],
+        dtype: String,
+        offset: u64,
+        expected: u64,
+        actual: u64,
+    },
+    #[error("{}: the raw format needs dims and a dtype (e.g. --dims 256,256,128 --dtype u16)", path.display())]
+    RawNeedsDims { path: PathBuf },
+    #[error("{}: unknown image format (extension '{ext}'); use .nii, .nii.gz, .hdr, .tif/.tiff (multi-page), .raw with dims, or a folder of slices", path.display())]
+    UnknownFormat { path: PathBuf, ext: String },
+    #[error(
+        "the volume has {n} voxels, more than this backend indexes ({max}); crop or downsample it"
+    )]
+    TooLarge { n: usize, max: usize },
+}

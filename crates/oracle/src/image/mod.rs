@@ -1,0 +1,56 @@
+//! Voxel-image oracle (paper section 6.6.2): a level set of a 3D greyscale image.
+//!
+//! - [`Volume`]: voxels in their native type ([`Voxels`]), dims, a voxel-to-world affine
+//!   (`glam::DAffine3`, voxel centres at integer coordinates) and the intensity scaling.
+//! - Loaders: [`read_nifti`] (NIfTI-1 `.nii`, `.nii.gz`, `.hdr`/`.img`), [`read_slice_folder`]
+//!   (PNG/TIFF slices, 8/16 bit, natural name order), [`read_tiff_stack`] (multi-page TIFF),
+//!   [`read_raw`] (headerless volume) and [`load_volume`] which picks one from the path.
+//! - [`ImageSurface`]: the [`Surface`](crate::Surface) of the trilinear interpolant at an iso
+//!   value (or of one label), in **world** coordinates.
+//! - [`synthetic`]: volumes sampled from implicit functions, and [`write_nifti`] for tests.
+//!
+//! Conventions: the value is negative inside, where the intensity is **above** the iso value
+//! (bright foreground) unless [`ImageOptions::dark_foreground`] is set. Outside the voxel grid
+//! the image is continued by the background value, so a surface touching the border is closed.
+//! The oracle works in world space (`value(p) = interpolate(affine⁻¹ p)`), so the inside is
+//! decided by the value's sign and an affine with a negative determinant cannot turn the
+//! surface inside out.
+//!
+//! ```
+//! use oracle::image::{synthetic, ImageOptions, ImageSurface};
+//! use oracle::Surface;
+//! use glam::{DAffine3, DVec3};
+//! // A ball of radius 10 sampled on 32^3 voxels of 1 mm (signed distance, inside negative).
+//! let vol = synthetic::sample_implicit(
+//!     |p| p.length() - 10.0,
+//!     [32, 32, 32],
+//!     DAffine3::from_translation(DVec3::splat(-15.5)),
+//! );
+//! // The sample is positive outside, so the foreground is dark (low values).
+//! let opts = ImageOptions { iso: Some(0.0), dark_foreground: true, ..Default::default() };
+//! let s = ImageSurface::new(vol, &opts).unwrap();
+//! assert!(s.value(DVec3::ZERO) < 0.0 && s.value(DVec3::splat(14.0)) > 0.0);
+//! assert_eq!(s.component_count(), 1);
+//! ```
+
+// `!(x > y)` is used on purpose: it is true for NaN, which must take the safe branch.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod distance;
+mod error;
+mod nifti_io;
+mod stack;
+mod surface;
+pub mod synthetic;
+mod topology;
+mod volume;
+
+pub use error::ImageError;
+pub use nifti_io::{NiftiWriteOptions, Qform, nifti_affine, read_nifti, write_nifti};
+pub use stack::{
+    LoadOptions, RawOptions, load_volume, read_raw, read_slice_folder, read_tiff_stack,
+};
+pub use surface::{ImageOptions, ImageSurface};
+pub use topology::Topology;
+pub(crate) use volume::with_voxels;
+pub use volume::{Dtype, Stats, Volume, Voxel, Voxels};

@@ -1,0 +1,340 @@
+//! Image stacks (a folder of 2D slices, a multi-page TIFF) and raw volumes.
+
+use super::{Dtype, ImageError, Volume, Voxels, read_nifti};
+use glam::{DAffine3, DMat3, DVec3};
+use std::cmp::Ordering;
+use std::path::{Path, PathBuf};
+
+/// Layout of a headerless raw volume (x fastest, then y, then z).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RawOptions {
+    pub dims: [usize; 3],
+    pub dtype: Dtype,
+    pub big_endian: bool,
+    /// Bytes to skip at the start of the file (a header).
+    pub offset: u64,
+}
+
+/// How [`load_volume`] reads a path. `spacing` applies to stacks and raw volumes (NIfTI files
+/// carry their own transform and ignore it).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    /// Voxel size `(sx, sy, sz)` in world units; default `(1, 1, 1)`.
+    pub spacing: Option<[f64; 3]>,
+    /// Read the file as raw voxels with this layout (whatever its extension).
+    pub raw: Option<RawOptions>,
+}
+
+fn spacing_affine(spacing: Option<[f64; 3]>) -> Result<DAffine3, ImageError> {
+    let s = spacing.unwrap_or([1.0; 3]);
+    if s.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(ImageError::BadSpacing { spacing: s });
+    }
+    Ok(DAffine3::from_mat3(DMat3::from_diagonal(DVec3::from(s))))
+}
+
+/// Read a volume from `path`: a folder of slices, `.nii`/`.nii.gz`/`.hdr`/`.img`, a
+/// `.tif`/`.tiff` (multi-page) or, with `opts.raw`, a raw file.
+///
+/// ```no_run
+/// use oracle::image::{load_volume, ImageOptions, ImageSurface, LoadOptions};
+/// let vol = load_volume("brain.nii.gz".as_ref(), &LoadOptions::default())?;
+/// let surface = ImageSurface::new(vol, &ImageOptions { iso: Some(300.0), ..Default::default() })?;
+/// # Ok::<(), oracle::image::ImageError>(())
+/// ```
+pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
+    if let Some(raw) = opts.raw {
+        return read_raw(path, &raw, opts.spacing);
+    }
+    if path.is_dir() {
+        return read_slice_folder(path, opts.spacing);
+    }
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let ends = |s: &str| name.ends_with(s);
+    if ends(".nii") || ends(".nii.gz") || ends(".hdr") || ends(".hdr.gz") || ends(".img") {
+        read_nifti(path)
+    } else if ends(".tif") || ends(".tiff") {
+        read_tiff_stack(path, opts.spacing)
+    } else if ends(".raw") {
+        Err(ImageError::RawNeedsDims {
+            path: path.to_path_buf(),
+        })
+    } else {
+        Err(ImageError::UnknownFormat {
+            path: path.to_path_buf(),
+            ext: path
+                .extension()
+                .map(|e| e.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        })
+    }
+}
+
+/// Read a headerless raw volume. Errors (giving expected vs actual bytes) unless the file
+/// holds exactly `offset + nx*ny*nz*size` bytes.
+pub fn read_raw(
+    path: &Path,
+    raw: &RawOptions,
+    spacing: Option<[f64; 3]>,
+) -> Result<Volume, ImageError> {
+    let affine = spacing_affine(spacing)?;
+    let bytes = std::fs::read(path).map_err(|source| ImageError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let n = raw
+        .dims
+        .iter()
+        .try_fold(1u64, |a, &d| a.checked_mul(d as u64));
+    let expected = n
+        .and_then(|n| n.checked_mul(raw.dtype.size() as u64))
+        .unwrap_or(u64::MAX);
+    if raw.dims.contains(&0) {
+        return Err(ImageError::Empty {
+            path: Some(path.to_path_buf()),
+            dims: raw.dims,
+        });
+    }
+    let actual = bytes.len() as u64;
+    if raw.offset.checked_add(expected) != Some(actual) {
+        return Err(ImageError::RawSize {
+            path: path.to_path_buf(),
+            dims: raw.dims,
+            dtype: raw.dtype.to_string(),
+            offset: raw.offset,
+            expected,
+            actual,
+        });
+    }
+    let voxels = Voxels::from_bytes(raw.dtype, &bytes[raw.offset as usize..], raw.big_endian);
+    drop(bytes);
+    Ok(Volume::new(raw.dims, voxels, affine)?.with_source(path))
+}
+
+/// Natural order: digit runs compare as numbers (`slice2 < slice10`), the rest bytewise.
+pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        if a[i].is_ascii_digit() && b[j].is_ascii_digit() {
+            let si = i;
+            while i < a.len() && a[i].is_ascii_digit() {
+                i += 1;
+            }
+            let sj = j;
+            while j < b.len() && b[j].is_ascii_digit() {
+                j += 1;
+            }
+            let (na, nb) = (trim0(&a[si..i]), trim0(&b[sj..j]));
+            let c = na.len().cmp(&nb.len()).then(na.cmp(nb));
+            if c != Ordering::Equal {
+                return c;
+            }
+        } else {
+            if a[i] != b[j] {
+                return a[i].cmp(&b[j]);
+            }
+            i += 1;
+            j += 1;
+        }
+    }
+    (a.len() - i).cmp(&(b.len() - j)).then(a.cmp(b))
+}
+
+fn trim0(s: &[u8]) -> &[u8] {
+    let k = s.iter().position(|&c| c != b'0').unwrap_or(s.len());
+    &s[k..]
+}
+
+enum Slice {
+    U8(Vec<u8>),
+    U16(Vec<u16>),
+}
+
+fn decode_slice(path: &Path) -> Result<(u32, u32, Slice), ImageError> {
+    use image::DynamicImage as D;
+    let img = image::open(path).map_err(|e| ImageError::Decode {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })?;
+    let (w, h) = (img.width(), img.height());
+    let s = match img {
+        D::ImageLuma8(b) => Slice::U8(b.into_raw()),
+        D::ImageLuma16(b) => Slice::U16(b.into_raw()),
+        // Colour or alpha: converted to luma (documented); 16-bit stays 16-bit.
+        D::ImageLumaA16(_) | D::ImageRgb16(_) | D::ImageRgba16(_) => {
+            Slice::U16(img.to_luma16().into_raw())
+        }
+        _ => Slice::U8(img.to_luma8().into_raw()),
+    };
+    Ok((w, h, s))
+}
+
+/// Read a folder of 2D slices (`*.png`, `*.tif`, `*.tiff`; 8 or 16 bit grey, colour converted
+/// to luma) in natural name order (`s2` before `s10`). Slice `k` is `z = k`; pixel `(col, row)`
+/// is voxel `(x, y)`. The affine is `diag(spacing)` (default 1). Errors name the first slice
+/// whose size or bit depth differs from the first one.
+pub fn read_slice_folder(dir: &Path, spacing: Option<[f64; 3]>) -> Result<Volume, ImageError> {
+    let affine = spacing_affine(spacing)?;
+    let io = |source| ImageError::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file()
+                && p.extension().is_some_and(|e| {
+                    let e = e.to_string_lossy().to_ascii_lowercase();
+                    e == "png" || e == "tif" || e == "tiff"
+                })
+        })
+        .collect();
+    if files.is_empty() {
+        return Err(ImageError::NoSlices {
+            dir: dir.to_path_buf(),
+        });
+    }
+    files.sort_by(|a, b| {
+        let na = a.file_name().unwrap_or_default().to_string_lossy();
+        let nb = b.file_name().unwrap_or_default().to_string_lossy();
+        natural_cmp(&na, &nb)
+    });
+    let (w, h, first) = decode_slice(&files[0])?;
+    let nz = files.len();
+    let mut out = match first {
+        Slice::U8(v) => {
+            let mut o = Vec::with_capacity(v.len() * nz);
+            o.extend_from_slice(&v);
+            Voxels::U8(o)
+        }
+        Slice::U16(v) => {
+            let mut o = Vec::with_capacity(v.len() * nz);
+            o.extend_from_slice(&v);
+            Voxels::U16(o)
+        }
+    };
+    for f in &files[1..] {
+        let (fw, fh, s) = decode_slice(f)?;
+        if (fw, fh) != (w, h) {
+            return Err(ImageError::SliceSize {
+                path: f.clone(),
+                first: files[0].clone(),
+                w,
+                h,
+                found_w: fw,
+                found_h: fh,
+            });
+        }
+        match (&mut out, s) {
+            (Voxels::U8(o), Slice::U8(v)) => o.extend_from_slice(&v),
+            (Voxels::U16(o), Slice::U16(v)) => o.extend_from_slice(&v),
+            (o, s) => {
+                return Err(ImageError::SliceType {
+                    path: f.clone(),
+                    first: files[0].clone(),
+                    expected: o.dtype().to_string(),
+                    found: match s {
+                        Slice::U8(_) => "u8".into(),
+                        Slice::U16(_) => "u16".into(),
+                    },
+                });
+            }
+        }
+    }
+    let dims = [w as usize, h as usize, nz];
+    Ok(Volume::new(dims, out, affine)?.with_source(dir))
+}
+
+/// Read a multi-page TIFF (one page per slice; 8/16/32-bit integer or 32/64-bit float grey)
+/// through the `tiff` crate. The affine is `diag(spacing)` (default 1).
+pub fn read_tiff_stack(path: &Path, spacing: Option<[f64; 3]>) -> Result<Volume, ImageError> {
+    use tiff::decoder::{Decoder, DecodingResult as R};
+    let affine = spacing_affine(spacing)?;
+    let dec_err = |e: tiff::TiffError| ImageError::Decode {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    };
+    let file = std::fs::File::open(path).map_err(|source| ImageError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut dec = Decoder::new(std::io::BufReader::new(file)).map_err(dec_err)?;
+    let (w, h) = dec.dimensions().map_err(dec_err)?;
+    let mut out: Option<Voxels> = None;
+    let mut nz = 0usize;
+    loop {
+        let (pw, ph) = dec.dimensions().map_err(dec_err)?;
+        let page = PathBuf::from(format!("{} (page {nz})", path.display()));
+        if (pw, ph) != (w, h) {
+            return Err(ImageError::SliceSize {
+                path: page,
+                first: PathBuf::from(format!("{} (page 0)", path.display())),
+                w,
+                h,
+                found_w: pw,
+                found_h: ph,
+            });
+        }
+        let img = dec.read_image().map_err(dec_err)?;
+        let n = (w as usize) * (h as usize);
+        let bad = |found: &str, expected: &str| ImageError::SliceType {
+            path: PathBuf::from(format!("{} (page {nz})", path.display())),
+            first: PathBuf::from(format!("{} (page 0)", path.display())),
+            expected: expected.to_string(),
+            found: found.to_string(),
+        };
+        macro_rules! push {
+            ($v:ident, $variant:ident) => {{
+                if $v.len() != n {
+                    return Err(ImageError::Decode {
+                        path: path.to_path_buf(),
+                        detail: format!(
+                            "page {nz} has {} samples for {w}x{h} pixels; only single-channel (grey) stacks are supported",
+                            $v.len()
+                        ),
+                    });
+                }
+                match &mut out {
+                    None => out = Some(Voxels::$variant($v)),
+                    Some(Voxels::$variant(o)) => o.extend_from_slice(&$v),
+                    Some(o) => return Err(bad(stringify!($variant), &o.dtype().to_string())),
+                }
+            }};
+        }
+        match img {
+            R::U8(v) => push!(v, U8),
+            R::I8(v) => push!(v, I8),
+            R::U16(v) => push!(v, U16),
+            R::I16(v) => push!(v, I16),
+            R::U32(v) => push!(v, U32),
+            R::I32(v) => push!(v, I32),
+            R::F32(v) => push!(v, F32),
+            R::F64(v) => push!(v, F64),
+            _ => {
+                return Err(ImageError::UnsupportedType {
+                    path: path.to_path_buf(),
+                    field: "TIFF sample format (64-bit integer or 16-bit float)".into(),
+                });
+            }
+        }
+        nz += 1;
+        if !dec.more_images() {
+            break;
+        }
+        dec.next_image().map_err(dec_err)?;
+    }
+    let voxels = out.expect("at least one page");
+    if nz == 1 {
+        return Err(ImageError::NotAVolume {
+            path: path.to_path_buf(),
+            dims: vec![w as u64, h as u64, 1],
+            nz: 1,
+        });
+    }
+    Ok(Volume::new([w as usize, h as usize, nz], voxels, affine)?.with_source(path))
+}

@@ -1,0 +1,458 @@
+//! The voxel-image oracle: trilinear interpolation of (intensity - iso), in world space.
+
+use super::topology::{self, Topology};
+use super::{ImageError, Stats, Volume, Voxel, distance, with_voxels};
+use crate::{BoundingSphere, Surface};
+use glam::{DAffine3, DMat3, DVec3};
+use std::sync::OnceLock;
+
+/// How an [`ImageSurface`] picks its level set.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ImageOptions {
+    /// Iso value (in scaled intensity units). Default: halfway between the two values of a
+    /// binary image; required otherwise.
+    pub iso: Option<f64>,
+    /// Mesh the boundary of the voxels equal to this label (indicator function, iso 0.5,
+    /// trilinear). Overrides `iso`; `dark_foreground` and `background` are ignored.
+    pub label: Option<i64>,
+    /// The inside is where the intensity is **below** the iso value (default: above).
+    pub dark_foreground: bool,
+    /// Value of the image outside the voxel grid (scaled units). Default: the data minimum
+    /// (maximum with `dark_foreground`). Must lie on the outside side of the iso value.
+    pub background: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Mode {
+    /// value = a * raw + b.
+    Intensity { a: f64, b: f64 },
+    /// value = 0.5 - interp(indicator(slope * raw + inter == label)).
+    Label { label: f64, slope: f64, inter: f64 },
+}
+
+/// A level set of a [`Volume`] as a [`Surface`], in world coordinates.
+///
+/// `value(p)` = `s * (I(affine⁻¹ p) - iso)` where `I` is the trilinear interpolant of the scaled
+/// intensities (background outside the grid) and `s = -1` (bright foreground inside) or `+1`
+/// (`dark_foreground`). With a label, `value = 0.5 - I_L` for the label's indicator `I_L`.
+/// The value is thus negative inside, positive outside, and positive on and outside the
+/// bounding sphere (the grid box enlarged by 2 voxels, where the image is background).
+pub struct ImageSurface {
+    vol: Volume,
+    inv: DAffine3,
+    inv_t: DMat3,
+    n: [isize; 3],
+    nf: [f64; 3],
+    mode: Mode,
+    /// Background in raw units (intensity mode) or 0 (label indicator).
+    bg_raw: f64,
+    iso: f64,
+    stats: Stats,
+    sphere: BoundingSphere,
+    topo: OnceLock<Topology>,
+    dm: OnceLock<Option<f64>>,
+}
+
+impl std::fmt::Debug for ImageSurface {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ImageSurface")
+            .field("dims", &self.vol.dims())
+            .field("dtype", &self.vol.dtype())
+            .field("iso", &self.iso)
+            .field("mode", &self.mode)
+            .finish()
+    }
+}
+
+impl ImageSurface {
+    /// Build the oracle. Errors: NaN voxels, a constant image, a missing iso for a non-binary
+    /// image, an iso outside the data range (no surface), an absent label, a background on the
+    /// foreground side.
+    pub fn new(vol: Volume, opts: &ImageOptions) -> Result<ImageSurface, ImageError> {
+        let stats = vol.stats()?;
+        if stats.min == stats.max {
+            return Err(ImageError::Constant {
+                path: vol.source().map(|p| p.to_path_buf()),
+                value: stats.min,
+            });
+        }
+        let (slope, inter) = vol.scaling();
+        let (mode, bg_raw, iso) = if let Some(label) = opts.label {
+            let labels = vol.labels()?;
+            let Some(&(_, count)) = labels.iter().find(|(l, _)| *l == label) else {
+                let mut present: Vec<String> =
+                    labels.iter().take(32).map(|(l, _)| l.to_string()).collect();
+                if labels.len() > 32 {
+                    present.push(format!("... ({} labels)", labels.len()));
+                }
+                return Err(ImageError::LabelAbsent {
+                    label,
+                    present: present.join(", "),
+                });
+            };
+            if count == vol.len() {
+                return Err(ImageError::LabelEverywhere {
+                    path: vol.source().map(|p| p.to_path_buf()),
+                    label,
+                });
+            }
+            let mode = Mode::Label {
+                label: label as f64,
+                slope,
+                inter,
+            };
+            (mode, 0.0, 0.5)
+        } else {
+            let iso = match (opts.iso, stats.binary) {
+                (Some(iso), _) => iso,
+                (None, Some((lo, hi))) => 0.5 * (lo + hi),
+                (None, None) => {
+                    return Err(ImageError::IsoRequired {
+                        min: stats.min,
+                        max: stats.max,
+                    });
+                }
+            };
+            if !(iso > stats.min && iso < stats.max) {
+                return Err(ImageError::IsoOutOfRange {
+                    iso,
+                    min: stats.min,
+                    max: stats.max,
+                });
+            }
+            let s = if opts.dark_foreground { 1.0 } else { -1.0 };
+            let bg = opts.background.unwrap_or(if opts.dark_foreground {
+                stats.max
+            } else {
+                stats.min
+            });
+            if !(s * (bg - iso) > 0.0) {
+                return Err(ImageError::BadBackground {
+                    background: bg,
+                    iso,
+                    side: if opts.dark_foreground {
+                        "above"
+                    } else {
+                        "below"
+                    },
+                });
+            }
+            let mode = Mode::Intensity {
+                a: s * slope,
+                b: s * (inter - iso),
+            };
+            (mode, (bg - inter) / slope, iso)
+        };
+        let d = vol.dims();
+        if d[0].saturating_mul(d[1]).saturating_mul(d[2]) >= u32::MAX as usize {
+            return Err(ImageError::TooLarge {
+                n: vol.len(),
+                max: u32::MAX as usize - 1,
+            });
+        }
+        let aff = vol.affine();
+        let inv = aff.inverse();
+        let lo = DVec3::splat(-2.0);
+        let hi = DVec3::new(d[0] as f64 + 1.0, d[1] as f64 + 1.0, d[2] as f64 + 1.0);
+        let center = aff.transform_point3(0.5 * (lo + hi));
+        let mut radius: f64 = 0.0;
+        for c in 0..8 {
+            let v = DVec3::new(
+                if c & 1 == 0 { lo.x } else { hi.x },
+                if c & 2 == 0 { lo.y } else { hi.y },
+                if c & 4 == 0 { lo.z } else { hi.z },
+            );
+            radius = radius.max((aff.transform_point3(v) - center).length());
+        }
+        Ok(ImageSurface {
+            inv,
+            inv_t: inv.matrix3.transpose(),
+            n: [d[0] as isize, d[1] as isize, d[2] as isize],
+            nf: [d[0] as f64, d[1] as f64, d[2] as f64],
+            mode,
+            bg_raw,
+            iso,
+            stats,
+            sphere: BoundingSphere {
+                center,
+                radius: radius * (1.0 + 1e-9),
+            },
+            vol,
+            topo: OnceLock::new(),
+            dm: OnceLock::new(),
+        })
+    }
+
+    /// The image.
+    pub fn volume(&self) -> &Volume {
+        &self.vol
+    }
+    /// The iso value in scaled units (0.5 for a label's indicator).
+    pub fn iso(&self) -> f64 {
+        self.iso
+    }
+    /// Data range and binary detection.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+    /// World-to-voxel transform.
+    pub fn world_to_voxel(&self) -> DAffine3 {
+        self.inv
+    }
+
+    /// The signed value at voxel coordinates `v` (voxel centres at integers).
+    #[inline]
+    pub fn value_voxel(&self, v: DVec3) -> f64 {
+        match self.mode {
+            Mode::Intensity { a, b } => {
+                let r = with_voxels!(self.vol.voxels(), d => self.interp(d, v, |x| x.to_f64(), self.bg_raw));
+                a * r + b
+            }
+            Mode::Label {
+                label,
+                slope,
+                inter,
+            } => {
+                let ind = |x: f64| ((slope * x + inter) == label) as u8 as f64;
+                let r = with_voxels!(self.vol.voxels(), d => self.interp(d, v, |x| ind(x.to_f64()), 0.0));
+                0.5 - r
+            }
+        }
+    }
+
+    /// Signed value of grid node `i` (linear index).
+    #[inline]
+    pub(crate) fn node_value(&self, i: usize) -> f64 {
+        self.map_raw(self.vol.voxels().get_f64(i))
+    }
+
+    /// Signed value of a raw voxel value (also of the background: `map_raw(bg_raw)`).
+    #[inline]
+    pub(crate) fn map_raw(&self, raw: f64) -> f64 {
+        match self.mode {
+            Mode::Intensity { a, b } => a * raw + b,
+            Mode::Label {
+                label,
+                slope,
+                inter,
+            } => 0.5 - ((slope * raw + inter) == label) as u8 as f64,
+        }
+    }
+
+    /// Signed value of the background (positive).
+    pub(crate) fn background_value(&self) -> f64 {
+        self.map_raw(self.bg_raw)
+    }
+
+    /// Inside bits of every grid node (`value < 0`), 64 nodes per word, x fastest.
+    pub(crate) fn inside_bits(&self) -> Vec<u64> {
+        use rayon::prelude::*;
+        let n = self.vol.len();
+        let mut bits = vec![0u64; n.div_ceil(64)];
+        fn fill<T: Voxel>(d: &[T], bits: &mut [u64], f: &(impl Fn(f64) -> f64 + Sync)) {
+            bits.par_chunks_mut(1024)
+                .enumerate()
+                .for_each(|(c, words)| {
+                    for (w, word) in words.iter_mut().enumerate() {
+                        let start = (c * 1024 + w) * 64;
+                        let end = (start + 64).min(d.len());
+                        let mut acc = 0u64;
+                        for (b, &x) in d[start..end].iter().enumerate() {
+                            acc |= ((f(x.to_f64()) < 0.0) as u64) << b;
+                        }
+                        *word = acc;
+                    }
+                });
+        }
+        let f = |x: f64| self.map_raw(x);
+        with_voxels!(self.vol.voxels(), d => fill(d, &mut bits, &f));
+        bits
+    }
+
+    #[inline(always)]
+    fn interp<T: Voxel>(&self, d: &[T], v: DVec3, fetch: impl Fn(T) -> f64, bg: f64) -> f64 {
+        let (x, y, z) = (v.x, v.y, v.z);
+        if !(x > -1.0 && y > -1.0 && z > -1.0 && x < self.nf[0] && y < self.nf[1] && z < self.nf[2])
+        {
+            return if v.is_nan() { f64::NAN } else { bg };
+        }
+        let (fx, fy, fz) = (x.floor(), y.floor(), z.floor());
+        let (tx, ty, tz) = (x - fx, y - fy, z - fz);
+        let (i, j, k) = (fx as isize, fy as isize, fz as isize);
+        let [nx, ny, nz] = self.n;
+        let c = if i >= 0 && j >= 0 && k >= 0 && i + 1 < nx && j + 1 < ny && k + 1 < nz {
+            let sx = 1usize;
+            let sy = nx as usize;
+            let sz = (nx * ny) as usize;
+            let b = i as usize + sy * (j as usize + ny as usize * k as usize);
+            // One bounds check for the whole cell, then plain fetches.
+            let cell = &d[b..=b + sx + sy + sz];
+            [
+                fetch(cell[0]),
+                fetch(cell[sx]),
+                fetch(cell[sy]),
+                fetch(cell[sx + sy]),
+                fetch(cell[sz]),
+                fetch(cell[sx + sz]),
+                fetch(cell[sy + sz]),
+                fetch(cell[sx + sy + sz]),
+            ]
+        } else {
+            let at = |a: isize, b: isize, c: isize| {
+                if a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz {
+                    bg
+                } else {
+                    fetch(d[(a + nx * (b + ny * c)) as usize])
+                }
+            };
+            [
+                at(i, j, k),
+                at(i + 1, j, k),
+                at(i, j + 1, k),
+                at(i + 1, j + 1, k),
+                at(i, j, k + 1),
+                at(i + 1, j, k + 1),
+                at(i, j + 1, k + 1),
+                at(i + 1, j + 1, k + 1),
+            ]
+        };
+        let x00 = c[0] + tx * (c[1] - c[0]);
+        let x10 = c[2] + tx * (c[3] - c[2]);
+        let x01 = c[4] + tx * (c[5] - c[4]);
+        let x11 = c[6] + tx * (c[7] - c[6]);
+        let y0 = x00 + ty * (x10 - x00);
+        let y1 = x01 + ty * (x11 - x01);
+        y0 + tz * (y1 - y0)
+    }
+
+    /// Topology of the level set from the voxel grid (computed once, then cached): see
+    /// [`Topology`].
+    pub fn topology(&self) -> &Topology {
+        self.topo.get_or_init(|| topology::compute(self))
+    }
+
+    /// Number of connected components of the surface found by the voxel scan
+    /// ([`Topology::surface_components`]). The mesh should have exactly this many.
+    pub fn component_count(&self) -> usize {
+        self.topology().surface_components
+    }
+
+    pub(crate) fn dims_isize(&self) -> [isize; 3] {
+        self.n
+    }
+}
+
+impl Surface for ImageSurface {
+    fn bounding_sphere(&self) -> BoundingSphere {
+        self.sphere
+    }
+
+    #[inline]
+    fn value(&self, p: DVec3) -> f64 {
+        self.value_voxel(self.inv.transform_point3(p))
+    }
+
+    /// Safeguarded Illinois (modified false position) on the segment: the bracket always keeps
+    /// opposite signs (by `value < 0`), each step lands at least tolerance/4 inside it, and a
+    /// bisection step is forced when two steps did not halve it. Ends when the bracket is
+    /// shorter than the tolerance; returns its midpoint.
+    fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
+        let tol = self.tolerance();
+        let d = b - a;
+        let len = d.length();
+        if !(len > tol && fa.is_finite() && fb.is_finite()) {
+            return crate::roots::bisect(|p| self.value(p), a, fa, b, fb, tol);
+        }
+        let ttol = tol / len;
+        let a_neg = fa < 0.0;
+        let (mut t0, mut f0, mut t1, mut f1) = (0.0f64, fa, 1.0f64, fb);
+        let mut last_side = 0i8;
+        let mut width_two_ago = f64::INFINITY;
+        let mut width_one_ago = 1.0;
+        for _ in 0..200 {
+            let w = t1 - t0;
+            if w <= ttol {
+                break;
+            }
+            let m = 0.25 * ttol;
+            let mut t = if w > 0.5 * width_two_ago {
+                0.5 * (t0 + t1)
+            } else {
+                let denom = f1 - f0;
+                if denom != 0.0 && denom.is_finite() {
+                    t0 - f0 * w / denom
+                } else {
+                    0.5 * (t0 + t1)
+                }
+            };
+            if !(t > t0 + m) {
+                t = t0 + m;
+            }
+            if !(t < t1 - m) {
+                t = t1 - m;
+            }
+            let f = self.value(a + d * t);
+            if f.is_nan() {
+                return crate::roots::bisect(|p| self.value(p), a, fa, b, fb, tol);
+            }
+            if (f < 0.0) == a_neg {
+                t0 = t;
+                f0 = f;
+                if last_side == -1 {
+                    f1 *= 0.5;
+                }
+                last_side = -1;
+            } else {
+                t1 = t;
+                f1 = f;
+                if last_side == 1 {
+                    f0 *= 0.5;
+                }
+                last_side = 1;
+            }
+            width_two_ago = width_one_ago;
+            width_one_ago = w;
+        }
+        a + d * (0.5 * (t0 + t1))
+    }
+
+    /// A quarter of the smallest voxel size: the trilinear interpolant has at most two
+    /// crossings per cell along a line, usually one.
+    fn crossing_step(&self) -> f64 {
+        let s = self.vol.spacing();
+        0.25 * s.x.min(s.y).min(s.z)
+    }
+
+    /// One point on every surface component found by the voxel scan (see [`Topology`]), plus up
+    /// to 64 more crossing points picked deterministically from `seed`.
+    fn seed_points(&self, seed: u64) -> Vec<DVec3> {
+        self.topology().seed_points(seed)
+    }
+
+    /// Central differences of the interpolant in voxel space (step 1e-4 voxel), mapped to world
+    /// space by the inverse-transpose of the affine.
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        let v = self.inv.transform_point3(p);
+        let h = 1e-4;
+        let g = DVec3::new(
+            self.value_voxel(v + DVec3::X * h) - self.value_voxel(v - DVec3::X * h),
+            self.value_voxel(v + DVec3::Y * h) - self.value_voxel(v - DVec3::Y * h),
+            self.value_voxel(v + DVec3::Z * h) - self.value_voxel(v - DVec3::Z * h),
+        ) / (2.0 * h);
+        self.inv_t * g
+    }
+
+    /// Estimate of d_M^inf from distance transforms of the inside and outside: see
+    /// [`ImageSurface::dm_inf_estimate`].
+    fn dm_inf_hint(&self) -> Option<f64> {
+        *self.dm.get_or_init(|| distance::dm_inf_estimate(self))
+    }
+}
+
+impl ImageSurface {
+    /// Same as [`Surface::dm_inf_hint`]: the smallest medial radius found on the ridges of the
+    /// Euclidean distance transform (see the `distance` module docs), clamped below by one voxel.
+    pub fn dm_inf_estimate(&self) -> Option<f64> {
+        self.dm_inf_hint()
+    }
+}

@@ -1,0 +1,463 @@
+//! Voxel storage in the native type, with a voxel-to-world affine.
+
+use super::ImageError;
+use glam::{DAffine3, DVec3};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// Element type of a [`Volume`]'s voxels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Dtype {
+    U8,
+    I8,
+    U16,
+    I16,
+    U32,
+    I32,
+    F32,
+    F64,
+}
+
+impl Dtype {
+    /// Size of one voxel in bytes.
+    pub fn size(self) -> usize {
+        match self {
+            Dtype::U8 | Dtype::I8 => 1,
+            Dtype::U16 | Dtype::I16 => 2,
+            Dtype::U32 | Dtype::I32 | Dtype::F32 => 4,
+            Dtype::F64 => 8,
+        }
+    }
+    /// Whether the type holds integers (labels are meaningful).
+    pub fn is_integer(self) -> bool {
+        !matches!(self, Dtype::F32 | Dtype::F64)
+    }
+}
+
+impl std::str::FromStr for Dtype {
+    type Err = String;
+    /// Parse `u8, i8, u16, i16, u32, i32, f32, f64` (also `uint8`, `int16`, `float32`, ...).
+    fn from_str(s: &str) -> Result<Self, String> {
+        Ok(match s.to_ascii_lowercase().as_str() {
+            "u8" | "uint8" => Dtype::U8,
+            "i8" | "int8" => Dtype::I8,
+            "u16" | "uint16" => Dtype::U16,
+            "i16" | "int16" => Dtype::I16,
+            "u32" | "uint32" => Dtype::U32,
+            "i32" | "int32" => Dtype::I32,
+            "f32" | "float32" | "float" => Dtype::F32,
+            "f64" | "float64" | "double" => Dtype::F64,
+            _ => {
+                return Err(format!(
+                    "unknown voxel type '{s}'; use one of u8, i8, u16, i16, u32, i32, f32, f64"
+                ));
+            }
+        })
+    }
+}
+
+impl std::fmt::Display for Dtype {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = match self {
+            Dtype::U8 => "u8",
+            Dtype::I8 => "i8",
+            Dtype::U16 => "u16",
+            Dtype::I16 => "i16",
+            Dtype::U32 => "u32",
+            Dtype::I32 => "i32",
+            Dtype::F32 => "f32",
+            Dtype::F64 => "f64",
+        };
+        f.write_str(s)
+    }
+}
+
+/// A voxel element type: converts to `f64` on the fly (storage stays native).
+pub trait Voxel: Copy + Send + Sync + PartialEq + 'static {
+    const DTYPE: Dtype;
+    fn to_f64(self) -> f64;
+    /// Decode one element from its bytes (`b.len() == DTYPE.size()`).
+    fn from_bytes(b: &[u8], big_endian: bool) -> Self;
+    /// Append the little-endian bytes of `self` (used by the writers).
+    fn push_le(self, out: &mut Vec<u8>);
+}
+
+macro_rules! impl_voxel {
+    ($t:ty, $d:ident) => {
+        impl Voxel for $t {
+            const DTYPE: Dtype = Dtype::$d;
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            #[inline]
+            fn from_bytes(b: &[u8], big_endian: bool) -> Self {
+                let a: [u8; std::mem::size_of::<$t>()] = b.try_into().expect("voxel size");
+                if big_endian {
+                    <$t>::from_be_bytes(a)
+                } else {
+                    <$t>::from_le_bytes(a)
+                }
+            }
+            fn push_le(self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
+        }
+    };
+}
+impl_voxel!(u8, U8);
+impl_voxel!(i8, I8);
+impl_voxel!(u16, U16);
+impl_voxel!(i16, I16);
+impl_voxel!(u32, U32);
+impl_voxel!(i32, I32);
+impl_voxel!(f32, F32);
+impl_voxel!(f64, F64);
+
+/// Voxel data in its native type, x fastest: index `x + nx * (y + ny * z)` (NIfTI order).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Voxels {
+    U8(Vec<u8>),
+    I8(Vec<i8>),
+    U16(Vec<u16>),
+    I16(Vec<i16>),
+    U32(Vec<u32>),
+    I32(Vec<i32>),
+    F32(Vec<f32>),
+    F64(Vec<f64>),
+}
+
+/// `with_voxels!(voxels, d => expr)` evaluates `expr` with `d: &Vec<T>` for the native `T`.
+macro_rules! with_voxels {
+    ($v:expr, $d:ident => $body:expr) => {
+        match $v {
+            $crate::image::Voxels::U8($d) => $body,
+            $crate::image::Voxels::I8($d) => $body,
+            $crate::image::Voxels::U16($d) => $body,
+            $crate::image::Voxels::I16($d) => $body,
+            $crate::image::Voxels::U32($d) => $body,
+            $crate::image::Voxels::I32($d) => $body,
+            $crate::image::Voxels::F32($d) => $body,
+            $crate::image::Voxels::F64($d) => $body,
+        }
+    };
+}
+pub(crate) use with_voxels;
+
+impl Voxels {
+    pub fn dtype(&self) -> Dtype {
+        match self {
+            Voxels::U8(_) => Dtype::U8,
+            Voxels::I8(_) => Dtype::I8,
+            Voxels::U16(_) => Dtype::U16,
+            Voxels::I16(_) => Dtype::I16,
+            Voxels::U32(_) => Dtype::U32,
+            Voxels::I32(_) => Dtype::I32,
+            Voxels::F32(_) => Dtype::F32,
+            Voxels::F64(_) => Dtype::F64,
+        }
+    }
+    pub fn len(&self) -> usize {
+        with_voxels!(self, d => d.len())
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Raw (unscaled) value of voxel `i` as `f64`.
+    pub fn get_f64(&self, i: usize) -> f64 {
+        with_voxels!(self, d => d[i].to_f64())
+    }
+    /// Decode `bytes` (exactly `n * dtype.size()` long) into native storage.
+    pub fn from_bytes(dtype: Dtype, bytes: &[u8], big_endian: bool) -> Voxels {
+        fn conv<T: Voxel>(bytes: &[u8], be: bool) -> Vec<T> {
+            bytes
+                .chunks_exact(T::DTYPE.size())
+                .map(|c| T::from_bytes(c, be))
+                .collect()
+        }
+        match dtype {
+            Dtype::U8 => Voxels::U8(bytes.to_vec()),
+            Dtype::I8 => Voxels::I8(conv(bytes, big_endian)),
+            Dtype::U16 => Voxels::U16(conv(bytes, big_endian)),
+            Dtype::I16 => Voxels::I16(conv(bytes, big_endian)),
+            Dtype::U32 => Voxels::U32(conv(bytes, big_endian)),
+            Dtype::I32 => Voxels::I32(conv(bytes, big_endian)),
+            Dtype::F32 => Voxels::F32(conv(bytes, big_endian)),
+            Dtype::F64 => Voxels::F64(conv(bytes, big_endian)),
+        }
+    }
+    /// Little-endian bytes of the data (for the writers).
+    pub fn to_le_bytes(&self) -> Vec<u8> {
+        with_voxels!(self, d => {
+            let mut out = Vec::with_capacity(d.len() * self.dtype().size());
+            for &v in d.iter() {
+                v.push_le(&mut out);
+            }
+            out
+        })
+    }
+}
+
+/// Value statistics of a volume (in scaled units: `slope * raw + inter`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stats {
+    pub min: f64,
+    pub max: f64,
+    /// `Some((lo, hi))` if the volume holds exactly two distinct values (binary image).
+    pub binary: Option<(f64, f64)>,
+}
+
+/// A 3D scalar image: native voxels, dims, voxel-to-world affine and intensity scaling.
+///
+/// Invariants (checked by [`Volume::new`]): `voxels.len() == dims[0] * dims[1] * dims[2]`,
+/// every dim is at least 1, the affine is finite and invertible, `slope` is finite and non-zero.
+/// The world position of voxel `(i, j, k)` (its centre) is `affine.transform_point3((i, j, k))`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Volume {
+    dims: [usize; 3],
+    voxels: Voxels,
+    affine: DAffine3,
+    slope: f64,
+    inter: f64,
+    source: Option<PathBuf>,
+}
+
+impl Volume {
+    /// A volume with identity scaling. Errors if the length does not match the dims, a dim is
+    /// zero, or the affine is singular or not finite.
+    pub fn new(dims: [usize; 3], voxels: Voxels, affine: DAffine3) -> Result<Volume, ImageError> {
+        let n = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+        if dims.contains(&0) {
+            return Err(ImageError::Empty { path: None, dims });
+        }
+        if n != Some(voxels.len()) {
+            return Err(ImageError::LengthMismatch {
+                dims,
+                expected: n.unwrap_or(usize::MAX),
+                actual: voxels.len(),
+            });
+        }
+        check_affine(&affine, None, "affine")?;
+        Ok(Volume {
+            dims,
+            voxels,
+            affine,
+            slope: 1.0,
+            inter: 0.0,
+            source: None,
+        })
+    }
+
+    /// Set the intensity scaling `value = slope * raw + inter` (NIfTI `scl_slope`/`scl_inter`).
+    /// A slope of 0 or a non-finite value means "no scaling" (the NIfTI rule).
+    pub fn with_scaling(mut self, slope: f64, inter: f64) -> Volume {
+        if slope != 0.0 && slope.is_finite() && inter.is_finite() {
+            self.slope = slope;
+            self.inter = inter;
+        } else {
+            self.slope = 1.0;
+            self.inter = 0.0;
+        }
+        self
+    }
+
+    /// Record the file the volume came from (used in error messages).
+    pub fn with_source(mut self, path: impl Into<PathBuf>) -> Volume {
+        self.source = Some(path.into());
+        self
+    }
+
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+    pub fn voxels(&self) -> &Voxels {
+        &self.voxels
+    }
+    pub fn dtype(&self) -> Dtype {
+        self.voxels.dtype()
+    }
+    pub fn affine(&self) -> DAffine3 {
+        self.affine
+    }
+    /// `(slope, inter)`: scaled value = `slope * raw + inter`.
+    pub fn scaling(&self) -> (f64, f64) {
+        (self.slope, self.inter)
+    }
+    pub fn source(&self) -> Option<&std::path::Path> {
+        self.source.as_deref()
+    }
+    /// Number of voxels.
+    pub fn len(&self) -> usize {
+        self.voxels.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.voxels.is_empty()
+    }
+    /// Linear index of voxel `(i, j, k)`.
+    #[inline]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        i + self.dims[0] * (j + self.dims[1] * k)
+    }
+    /// Scaled value of voxel `(i, j, k)`.
+    pub fn get(&self, i: usize, j: usize, k: usize) -> f64 {
+        self.slope * self.voxels.get_f64(self.index(i, j, k)) + self.inter
+    }
+    /// World position of the voxel coordinates `v` (voxel centres at integers).
+    pub fn to_world(&self, v: DVec3) -> DVec3 {
+        self.affine.transform_point3(v)
+    }
+    /// World lengths of the three voxel axes (column norms of the affine).
+    pub fn spacing(&self) -> DVec3 {
+        let m = self.affine.matrix3;
+        DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length())
+    }
+
+    /// Min, max (scaled) and binary detection. Errors on NaN or infinite voxels (naming the
+    /// voxel index), so that they are never silently read as a sign.
+    pub fn stats(&self) -> Result<Stats, ImageError> {
+        type Scan = (f64, f64, Option<(f64, f64)>);
+        fn scan<T: Voxel>(d: &[T]) -> Result<Scan, usize> {
+            let mut lo = f64::INFINITY;
+            let mut hi = f64::NEG_INFINITY;
+            let mut distinct: [Option<T>; 2] = [None, None];
+            let mut more = false;
+            for (i, &v) in d.iter().enumerate() {
+                let x = v.to_f64();
+                if !x.is_finite() {
+                    return Err(i);
+                }
+                lo = lo.min(x);
+                hi = hi.max(x);
+                if !more {
+                    match distinct {
+                        [None, _] => distinct[0] = Some(v),
+                        [Some(a), None] if a != v => distinct[1] = Some(v),
+                        [Some(a), Some(b)] if a != v && b != v => more = true,
+                        _ => {}
+                    }
+                }
+            }
+            let bin = match (more, distinct) {
+                (false, [Some(a), Some(b)]) => Some((a.to_f64(), b.to_f64())),
+                _ => None,
+            };
+            Ok((lo, hi, bin))
+        }
+        let r = with_voxels!(&self.voxels, d => scan(d));
+        let (lo, hi, bin) = r.map_err(|i| {
+            let nx = self.dims[0];
+            let ny = self.dims[1];
+            ImageError::NaN {
+                path: self.source.clone(),
+                index: [i % nx, (i / nx) % ny, i / (nx * ny)],
+            }
+        })?;
+        let s = |x: f64| self.slope * x + self.inter;
+        let (a, b) = (s(lo), s(hi));
+        let bin = bin.map(|(p, q)| {
+            let (p, q) = (s(p), s(q));
+            (p.min(q), p.max(q))
+        });
+        Ok(Stats {
+            min: a.min(b),
+            max: a.max(b),
+            binary: bin,
+        })
+    }
+
+    /// Labels present in the image with their voxel counts, sorted by label (scaled values,
+    /// which must be integers). Errors if a scaled value is not an integer.
+    pub fn labels(&self) -> Result<Vec<(i64, usize)>, ImageError> {
+        let mut map: BTreeMap<i64, usize> = BTreeMap::new();
+        let small = |d: &Voxels| -> Option<Vec<(i64, usize)>> {
+            // Histogram fast path for 8/16-bit types.
+            let (off, hist) = match d {
+                Voxels::U8(d) => (0i64, hist(d.iter().map(|&v| v as usize), 256)),
+                Voxels::I8(d) => (
+                    -128,
+                    hist(d.iter().map(|&v| (v as i64 + 128) as usize), 256),
+                ),
+                Voxels::U16(d) => (0, hist(d.iter().map(|&v| v as usize), 65536)),
+                Voxels::I16(d) => (
+                    -32768,
+                    hist(d.iter().map(|&v| (v as i64 + 32768) as usize), 65536),
+                ),
+                _ => return None,
+            };
+            Some(
+                hist.iter()
+                    .enumerate()
+                    .filter(|(_, c)| **c > 0)
+                    .map(|(i, &c)| (i as i64 + off, c))
+                    .collect(),
+            )
+        };
+        let raw: Vec<(f64, usize)> = if let Some(h) = small(&self.voxels) {
+            h.into_iter().map(|(v, c)| (v as f64, c)).collect()
+        } else {
+            let mut raw: BTreeMap<u64, (f64, usize)> = BTreeMap::new();
+            let r: Result<(), ImageError> = with_voxels!(&self.voxels, d => {
+                for (i, &v) in d.iter().enumerate() {
+                    let x = v.to_f64();
+                    if !x.is_finite() {
+                        return Err(ImageError::NaN {
+                            path: self.source.clone(),
+                            index: self.unindex(i),
+                        });
+                    }
+                    raw.entry(x.to_bits()).or_insert((x, 0)).1 += 1;
+                }
+                Ok(())
+            });
+            r?;
+            raw.into_values().collect()
+        };
+        for (x, c) in raw {
+            let v = self.slope * x + self.inter;
+            if v.fract() != 0.0 || v.abs() > 9.0e15 {
+                return Err(ImageError::NotLabels {
+                    path: self.source.clone(),
+                    value: v,
+                });
+            }
+            *map.entry(v as i64).or_insert(0) += c;
+        }
+        Ok(map.into_iter().collect())
+    }
+
+    /// Voxel `(i, j, k)` of linear index `i`.
+    pub fn unindex(&self, i: usize) -> [usize; 3] {
+        let nx = self.dims[0];
+        let ny = self.dims[1];
+        [i % nx, (i / nx) % ny, i / (nx * ny)]
+    }
+}
+
+fn hist(it: impl Iterator<Item = usize>, n: usize) -> Vec<usize> {
+    let mut h = vec![0usize; n];
+    for i in it {
+        h[i] += 1;
+    }
+    h
+}
+
+/// Check that an affine is finite and invertible; `field` names its origin for the message.
+pub(crate) fn check_affine(
+    a: &DAffine3,
+    path: Option<&std::path::Path>,
+    field: &str,
+) -> Result<(), ImageError> {
+    let m = a.matrix3;
+    let finite = a.translation.is_finite() && m.x_axis.is_finite() && m.y_axis.is_finite();
+    let finite = finite && m.z_axis.is_finite();
+    let det = m.determinant();
+    let scale = m.x_axis.length() * m.y_axis.length() * m.z_axis.length();
+    if !finite || !(det.abs() > 1e-12 * scale) || !(scale > 0.0) {
+        return Err(ImageError::BadAffine {
+            path: path.map(|p| p.to_path_buf()),
+            field: field.to_string(),
+            detail: format!("matrix {:?}, determinant {det}", m.to_cols_array()),
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,777 @@
+//! Tests of the voxel-image oracle (`oracle::image`).
+
+use glam::{DAffine3, DMat3, DQuat, DVec3};
+use oracle::Surface;
+use oracle::image::{
+    Dtype, ImageError, ImageOptions, ImageSurface, LoadOptions, NiftiWriteOptions, Qform,
+    RawOptions, Volume, Voxels, load_volume, read_nifti, read_raw, read_slice_folder,
+    read_tiff_stack, synthetic, write_nifti,
+};
+use std::path::PathBuf;
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("oracle-image-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn fixtures() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/images")
+}
+
+fn dark(iso: f64) -> ImageOptions {
+    ImageOptions {
+        iso: Some(iso),
+        dark_foreground: true,
+        ..Default::default()
+    }
+}
+
+/// Signed-distance ball of radius `r` centred at the origin, voxel size 1, on n^3 voxels.
+fn sdf_ball(n: usize, r: f64) -> ImageSurface {
+    let aff = DAffine3::from_translation(DVec3::splat(-(n as f64 - 1.0) / 2.0));
+    let vol = synthetic::sample_implicit(|p| p.length() - r, [n; 3], aff);
+    ImageSurface::new(vol, &dark(0.0)).unwrap()
+}
+
+#[test]
+fn ball_sign_seeds_and_components() {
+    let s = sdf_ball(32, 10.0);
+    assert!(s.value(DVec3::ZERO) < 0.0);
+    assert!(s.value(DVec3::new(12.0, 0.0, 0.0)) > 0.0);
+    assert_eq!(s.component_count(), 1);
+    let t = s.topology();
+    assert_eq!((t.inside_components, t.outside_components), (1, 1));
+    let seeds = s.seed_points(7);
+    assert!(!seeds.is_empty());
+    for p in &seeds {
+        // Trilinear interpolation of a distance function: within ~0.05 voxel of the sphere.
+        assert!(
+            (p.length() - 10.0).abs() < 0.05,
+            "seed {p} at radius {}",
+            p.length()
+        );
+        assert!(s.value(*p).abs() < 1e-9);
+    }
+    // Deterministic, seed-dependent extras.
+    assert_eq!(seeds, s.seed_points(7));
+    // Bounding sphere: value positive on it.
+    let bs = s.bounding_sphere();
+    for d in [
+        DVec3::X,
+        DVec3::Y,
+        DVec3::Z,
+        DVec3::ONE.normalize(),
+        -DVec3::ONE.normalize(),
+    ] {
+        assert!(s.value(bs.center + d * bs.radius) > 0.0);
+        assert!(bs.contains(d * 10.0));
+    }
+}
+
+#[test]
+fn crossing_matches_bisection_and_lands_on_surface() {
+    let s = sdf_ball(32, 10.0);
+    let tol = s.tolerance();
+    let mut rng = oracle::roots::SplitMix64(3);
+    for _ in 0..200 {
+        let a = rng.unit_vector() * 3.0 * rng.next_f64();
+        let b = rng.unit_vector() * (11.0 + 3.0 * rng.next_f64());
+        let (fa, fb) = (s.value(a), s.value(b));
+        assert!(fa < 0.0 && fb > 0.0);
+        let p = s.crossing(a, fa, b, fb);
+        let q = oracle::roots::bisect(|x| s.value(x), a, fa, b, fb, tol);
+        assert!((p - q).length() < 2.0 * tol, "{p} vs {q}");
+        // Reverse orientation too.
+        let p2 = s.crossing(b, fb, a, fa);
+        assert!((p2 - q).length() < 2.0 * tol);
+        assert!(((p - a).cross(b - a)).length() / (b - a).length() < 1e-9);
+    }
+}
+
+#[test]
+fn gradient_points_outward() {
+    let s = sdf_ball(32, 10.0);
+    for d in [DVec3::X, DVec3::new(0.3, -0.5, 0.8).normalize()] {
+        let g = s.gradient(d * 10.0);
+        assert!(g.normalize().dot(d) > 0.98, "{g}");
+        assert!((g.length() - 1.0).abs() < 0.1);
+    }
+}
+
+#[test]
+fn binary_ball_default_iso_and_dm_inf() {
+    let n = 40;
+    let aff = DAffine3::from_translation(DVec3::splat(-(n as f64 - 1.0) / 2.0));
+    let r = 12.0;
+    let vol = synthetic::sample_binary(|p| p.length() - r, [n; 3], aff);
+    let s = ImageSurface::new(vol, &ImageOptions::default()).unwrap();
+    assert_eq!(s.iso(), 0.5);
+    assert!(s.value(DVec3::ZERO) < 0.0);
+    assert_eq!(s.component_count(), 1);
+    let dm = s.dm_inf_hint().unwrap();
+    assert!(
+        dm > 0.75 * r && dm <= r + 1.0,
+        "binary ball dm_inf estimate {dm} for R = {r}"
+    );
+    // Each seed within a voxel of the sphere.
+    for p in s.seed_points(1) {
+        assert!((p.length() - r).abs() < 1.0, "{}", p.length());
+    }
+}
+
+#[test]
+fn dm_inf_of_sampled_ball_and_torus() {
+    let s = sdf_ball(40, 12.0);
+    let dm = s.dm_inf_hint().unwrap();
+    assert!(dm > 12.0 - 1.5 && dm <= 12.0 + 0.5, "ball: {dm}");
+    // Torus R = 10, r = 3: d_M^inf = 3 (the tube radius).
+    let n = 40;
+    let aff = DAffine3::from_translation(DVec3::splat(-(n as f64 - 1.0) / 2.0));
+    let torus = |p: DVec3| (DVec3::new(p.x, p.y, 0.0).length() - 10.0).hypot(p.z) - 3.0;
+    let vol = synthetic::sample_implicit(torus, [n; 3], aff);
+    let s = ImageSurface::new(vol, &dark(0.0)).unwrap();
+    assert_eq!(s.component_count(), 1);
+    let dm = s.dm_inf_hint().unwrap();
+    assert!(dm > 1.2 && dm <= 3.5, "torus: {dm}");
+}
+
+#[test]
+fn two_blobs_nested_shells_and_border() {
+    let n = 48;
+    let aff = DAffine3::from_translation(DVec3::splat(-(n as f64 - 1.0) / 2.0));
+    let c1 = DVec3::new(-10.0, 0.0, 0.0);
+    let c2 = DVec3::new(11.0, 2.0, -3.0);
+    let f = |p: DVec3| ((p - c1).length() - 7.0).min((p - c2).length() - 5.0);
+    let s = ImageSurface::new(synthetic::sample_implicit(f, [n; 3], aff), &dark(0.0)).unwrap();
+    assert_eq!(s.component_count(), 2);
+    let seeds = s.topology().component_seeds.clone();
+    assert!(seeds.iter().any(|p| (p - c1).length() < 8.0));
+    assert!(seeds.iter().any(|p| (p - c2).length() < 6.0));
+
+    // Shell 14 < |p| < 20 with a ball |p| < 6 inside: 3 surfaces; 2 inside, 2 outside regions.
+    let f = |p: DVec3| {
+        let r = p.length();
+        (r - 6.0).min((r - 20.0).max(14.0 - r))
+    };
+    let s = ImageSurface::new(synthetic::sample_implicit(f, [n; 3], aff), &dark(0.0)).unwrap();
+    let t = s.topology();
+    assert_eq!((t.inside_components, t.outside_components), (2, 2));
+    assert_eq!(s.component_count(), 3);
+    let radii: Vec<f64> = t.component_seeds.iter().map(|p| p.length()).collect();
+    for r in [6.0, 14.0, 20.0] {
+        assert!(
+            radii.iter().any(|x| (x - r).abs() < 0.1),
+            "no seed at radius {r}: {radii:?}"
+        );
+    }
+
+    // A ball cut by the grid box: closed by the background, one component; the value just
+    // outside the box is positive.
+    let f = |p: DVec3| (p - DVec3::new(20.0, 0.0, 0.0)).length() - 10.0;
+    let s = ImageSurface::new(synthetic::sample_implicit(f, [n; 3], aff), &dark(0.0)).unwrap();
+    assert_eq!(s.component_count(), 1);
+    let edge = (n as f64 - 1.0) / 2.0;
+    assert!(s.value(DVec3::new(edge - 0.5, 0.0, 0.0)) < 0.0);
+    assert!(s.value(DVec3::new(edge + 1.0, 0.0, 0.0)) > 0.0);
+    assert!(s.seed_points(0).iter().any(|p| p.x > edge));
+}
+
+#[test]
+fn diagonal_face_connections_use_the_asymptotic_decider() {
+    // Two voxels touching along an edge diagonal (xy face): joined or not by the face saddle.
+    for (hi, expect) in [(1.0f32, 2usize), (3.0, 1)] {
+        let mut v = vec![0f32; 4 * 4 * 3];
+        let idx = |i: usize, j: usize, k: usize| i + 4 * (j + 4 * k);
+        v[idx(1, 1, 1)] = hi;
+        v[idx(2, 2, 1)] = hi;
+        // iso 0.6: saddle of face (1,1)-(2,2) is (hi*hi - 0)/(2hi) - iso = hi/2 - 0.6.
+        let vol = Volume::new([4, 4, 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+        let s = ImageSurface::new(
+            vol,
+            &ImageOptions {
+                iso: Some(0.6),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(s.topology().inside_components, expect, "hi = {hi}");
+        // Cross-check against the interpolant at the face centre.
+        let inside_centre = s.value(DVec3::new(1.5, 1.5, 1.0)) < 0.0;
+        assert_eq!(inside_centre, expect == 1);
+    }
+}
+
+fn world_ellipsoid(p: DVec3) -> f64 {
+    // Ellipsoid with semi-axes 9, 6, 5 (mm) centred at (3, -2, 1), in world coordinates.
+    let q = (p - DVec3::new(3.0, -2.0, 1.0)) / DVec3::new(9.0, 6.0, 5.0);
+    q.length() - 1.0
+}
+
+fn oblique_affine() -> DAffine3 {
+    let rot = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.6);
+    let m = DMat3::from_quat(rot) * DMat3::from_diagonal(DVec3::new(0.7, 0.9, 1.6));
+    // Centre the grid (40 x 36 x 24 voxels) on the ellipsoid's centre.
+    let c = DVec3::new(19.5, 17.5, 11.5);
+    DAffine3::from_mat3_translation(m, DVec3::new(3.0, -2.0, 1.0) - m * c)
+}
+
+#[test]
+fn oblique_anisotropic_sform_matches_analytic_surface_in_world_space() {
+    let dir = tmpdir("oblique");
+    let aff = oblique_affine();
+    let vol = synthetic::sample_implicit(world_ellipsoid, [40, 36, 24], aff);
+    let path = dir.join("ellipsoid.nii.gz");
+    write_nifti(&path, &vol, &NiftiWriteOptions::new()).unwrap();
+    let back = read_nifti(&path).unwrap();
+    assert_eq!(back.dims(), [40, 36, 24]);
+    assert!((back.affine().matrix3 - aff.matrix3).abs_diff_eq(DMat3::ZERO, 1e-5));
+    let s = ImageSurface::new(back, &dark(0.0)).unwrap();
+    assert_eq!(s.component_count(), 1);
+    // Zero crossings on rays from the centre match the analytic surface within a voxel.
+    let c = DVec3::new(3.0, -2.0, 1.0);
+    let mut rng = oracle::roots::SplitMix64(11);
+    for _ in 0..100 {
+        let d = rng.unit_vector();
+        let b = c + d * 12.0;
+        let p = s.crossing(c, s.value(c), b, s.value(b));
+        // Analytic crossing along the ray: |(d * t) / axes| = 1.
+        let t = 1.0 / (d / DVec3::new(9.0, 6.0, 5.0)).length();
+        assert!(
+            ((p - c).length() - t).abs() < 0.3,
+            "ray {d}: {} vs {t}",
+            (p - c).length()
+        );
+    }
+    for p in s.seed_points(0) {
+        assert!(world_ellipsoid(p).abs() < 0.05, "{p}");
+    }
+}
+
+#[test]
+fn negative_determinant_affines_keep_the_inside_inside() {
+    let dir = tmpdir("negdet");
+    let n = 24;
+    let centre = DVec3::new(5.0, -7.0, 2.0);
+    let ball = |p: DVec3| (p - centre).length() - 6.0;
+    // x flipped (radiological LAS-like) sform, and a pixdim diagonal with a negative entry.
+    let m = DMat3::from_diagonal(DVec3::new(-1.0, 1.0, 1.2));
+    let aff = DAffine3::from_mat3_translation(m, centre - m * DVec3::splat(11.5));
+    assert!(aff.matrix3.determinant() < 0.0);
+    let vol = synthetic::sample_implicit(ball, [n; 3], aff);
+    let check = |s: &ImageSurface| {
+        assert!(s.value(centre) < 0.0);
+        assert!(s.value(centre + DVec3::new(7.0, 0.0, 0.0)) > 0.0);
+        assert!(s.value(centre + DVec3::new(0.0, 0.0, 8.0)) > 0.0);
+        let g = s.gradient(centre + DVec3::X * 6.0);
+        assert!(g.x > 0.0, "outward gradient {g}");
+        for p in s.seed_points(0) {
+            assert!(ball(p).abs() < 0.05);
+        }
+    };
+    check(&ImageSurface::new(vol.clone(), &dark(0.0)).unwrap());
+    // Through NIfTI: sform.
+    let p1 = dir.join("negdet_sform.nii");
+    write_nifti(&p1, &vol, &NiftiWriteOptions::new()).unwrap();
+    check(&ImageSurface::new(read_nifti(&p1).unwrap(), &dark(0.0)).unwrap());
+    // qform with qfac = -1 (z flipped) and the identity rotation.
+    let q = Qform {
+        b: 0.0,
+        c: 0.0,
+        d: 0.0,
+        offset: centre + DVec3::new(-11.5, -11.5, 11.5),
+        qfac: -1.0,
+        pixdim: DVec3::ONE,
+    };
+    let qa = q.affine();
+    assert!(qa.matrix3.determinant() < 0.0);
+    let volq = synthetic::sample_implicit(ball, [n; 3], qa);
+    let p2 = dir.join("negdet_qform.nii.gz");
+    let opts = NiftiWriteOptions {
+        sform: false,
+        qform: Some(q),
+        ..Default::default()
+    };
+    write_nifti(&p2, &volq, &opts).unwrap();
+    let back = read_nifti(&p2).unwrap();
+    assert!((back.affine().matrix3 - qa.matrix3).abs_diff_eq(DMat3::ZERO, 1e-6));
+    check(&ImageSurface::new(back, &dark(0.0)).unwrap());
+    // No sform, no qform: diagonal pixdim with pixdim[1] < 0.
+    let pd = DAffine3::from_mat3(DMat3::from_diagonal(DVec3::new(-1.0, 1.0, 1.0)));
+    let c0 = DVec3::new(-11.5, 11.5, 11.5);
+    let ball0 = |p: DVec3| (p - c0).length() - 6.0;
+    let vold = synthetic::sample_implicit(ball0, [n; 3], pd);
+    let p3 = dir.join("negdet_pixdim.nii");
+    let opts = NiftiWriteOptions {
+        sform: false,
+        pixdim: Some([-1.0, 1.0, 1.0]),
+        ..Default::default()
+    };
+    write_nifti(&p3, &vold, &opts).unwrap();
+    let back = read_nifti(&p3).unwrap();
+    assert_eq!(back.affine(), pd);
+    let s = ImageSurface::new(back, &dark(0.0)).unwrap();
+    assert!(s.value(c0) < 0.0 && s.value(c0 + DVec3::X * 7.0) > 0.0);
+}
+
+#[test]
+fn qform_rotation_matches_sform() {
+    // A rotation quaternion (b, c, d) with a > 0, pixdim (0.8, 1.1, 1.3), qfac = +1.
+    let rot = DQuat::from_axis_angle(DVec3::new(0.2, -1.0, 0.4).normalize(), 0.9);
+    let q = Qform {
+        b: rot.x,
+        c: rot.y,
+        d: rot.z,
+        offset: DVec3::new(-3.0, 4.0, 5.0),
+        qfac: 1.0,
+        pixdim: DVec3::new(0.8, 1.1, 1.3),
+    };
+    let expect = DMat3::from_quat(rot) * DMat3::from_diagonal(q.pixdim);
+    assert!((q.affine().matrix3 - expect).abs_diff_eq(DMat3::ZERO, 1e-12));
+    assert_eq!(q.affine().translation, q.offset);
+}
+
+fn all_dtype_volumes() -> Vec<Volume> {
+    let dims = [5, 4, 3];
+    let n = 60;
+    let aff = DAffine3::from_scale(DVec3::new(0.5, 0.75, 2.0));
+    let mk = |v: Voxels| Volume::new(dims, v, aff).unwrap();
+    vec![
+        mk(Voxels::U8((0..n).map(|i| (i * 4) as u8).collect())),
+        mk(Voxels::I8((0..n).map(|i| i as i8 - 30).collect())),
+        mk(Voxels::U16((0..n).map(|i| (i * 1000) as u16).collect())),
+        mk(Voxels::I16(
+            (0..n).map(|i| (i * 500 - 15000) as i16).collect(),
+        )),
+        mk(Voxels::U32((0..n).map(|i| i as u32 * 70_000_000).collect())),
+        mk(Voxels::I32(
+            (0..n)
+                .map(|i| i as i32 * 30_000_000 - 900_000_000)
+                .collect(),
+        )),
+        mk(Voxels::F32((0..n).map(|i| i as f32 * 0.25 - 3.0).collect())),
+        mk(Voxels::F64(
+            (0..n).map(|i| i as f64 * 1e-3 - 0.01).collect(),
+        )),
+    ]
+}
+
+#[test]
+fn nifti_round_trips_every_type_both_endians_and_scaling() {
+    let dir = tmpdir("roundtrip");
+    for (t, vol) in all_dtype_volumes().into_iter().enumerate() {
+        let vol = vol.with_scaling(0.5, -10.0);
+        for be in [false, true] {
+            for ext in ["nii", "nii.gz"] {
+                let p = dir.join(format!("v{t}_{be}.{ext}"));
+                let opts = NiftiWriteOptions {
+                    big_endian: be,
+                    ..NiftiWriteOptions::new()
+                };
+                write_nifti(&p, &vol, &opts).unwrap();
+                let back = read_nifti(&p).unwrap();
+                assert_eq!(back.voxels(), vol.voxels(), "{} be={be}", vol.dtype());
+                assert_eq!(back.dims(), vol.dims());
+                assert_eq!(back.scaling(), (0.5, -10.0));
+                assert_eq!(back.affine(), vol.affine());
+                // Scaling applied at sampling time: value = -(0.5 raw - 10 - iso).
+                let iso = back.get(2, 1, 1) - 0.01 * (back.get(2, 1, 1) - back.get(1, 1, 1));
+                let s = ImageSurface::new(
+                    back.clone(),
+                    &ImageOptions {
+                        iso: Some(iso),
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+                let v = s.value(back.to_world(DVec3::new(2.0, 1.0, 1.0)));
+                assert!((v + (back.get(2, 1, 1) - iso)).abs() < 1e-9 * (1.0 + v.abs()));
+            }
+        }
+    }
+}
+
+#[test]
+fn load_volume_dispatches_and_reads_stacks() {
+    let dir = tmpdir("stacks");
+    // 16-bit PNG slices named s1..s11: natural order puts s2 before s10.
+    let slices = dir.join("png16");
+    std::fs::create_dir_all(&slices).unwrap();
+    let (w, h) = (7u32, 5u32);
+    for k in 1..=11u16 {
+        let img = image::ImageBuffer::<image::Luma<u16>, _>::from_fn(w, h, |x, y| {
+            image::Luma([k * 1000 + (x + 10 * y) as u16])
+        });
+        img.save(slices.join(format!("s{k}.png"))).unwrap();
+    }
+    std::fs::write(slices.join("notes.txt"), "ignored").unwrap();
+    let opts = LoadOptions {
+        spacing: Some([0.5, 0.5, 2.0]),
+        ..Default::default()
+    };
+    let v = load_volume(&slices, &opts).unwrap();
+    assert_eq!(v.dims(), [7, 5, 11]);
+    assert_eq!(v.dtype(), Dtype::U16);
+    for k in 0..11 {
+        assert_eq!(v.get(3, 2, k), ((k + 1) * 1000 + 23) as f64);
+    }
+    assert_eq!(
+        v.to_world(DVec3::new(1.0, 1.0, 1.0)),
+        DVec3::new(0.5, 0.5, 2.0)
+    );
+
+    // 8-bit TIFF slices with one of a different size: error naming that file.
+    let bad = dir.join("tif8");
+    std::fs::create_dir_all(&bad).unwrap();
+    for k in 0..4u32 {
+        let ww = if k == 2 { 8 } else { 6 };
+        let img = image::GrayImage::from_fn(ww, 4, |x, _| image::Luma([(x * 10 + k) as u8]));
+        img.save(bad.join(format!("slice_{k:03}.tif"))).unwrap();
+    }
+    let e = read_slice_folder(&bad, None).unwrap_err();
+    assert!(matches!(e, ImageError::SliceSize { .. }));
+    let msg = e.to_string();
+    assert!(
+        msg.contains("slice_002.tif") && msg.contains("8x4") && msg.contains("6x4"),
+        "{msg}"
+    );
+
+    // Multi-page TIFF (16 bit) through the tiff crate.
+    let mp = dir.join("stack.tif");
+    {
+        let f = std::fs::File::create(&mp).unwrap();
+        let mut enc = tiff::encoder::TiffEncoder::new(f).unwrap();
+        for k in 0..5u16 {
+            let data: Vec<u16> = (0..12u16).map(|i| i + 100 * k).collect();
+            enc.write_image::<tiff::encoder::colortype::Gray16>(4, 3, &data)
+                .unwrap();
+        }
+    }
+    let v = load_volume(&mp, &LoadOptions::default()).unwrap();
+    assert_eq!(v.dims(), [4, 3, 5]);
+    assert_eq!(v.get(1, 2, 4), (9 + 400) as f64);
+    let v2 = read_tiff_stack(&mp, Some([1.0, 2.0, 3.0])).unwrap();
+    assert_eq!(v2.spacing(), DVec3::new(1.0, 2.0, 3.0));
+
+    // Raw: round trip, big endian, with a header offset; size mismatch is an error.
+    let raw = dir.join("vol.raw");
+    let vals: Vec<i16> = (0..60).map(|i| i * 7 - 200).collect();
+    let mut bytes = vec![0xAAu8; 16];
+    for v in &vals {
+        bytes.extend_from_slice(&v.to_be_bytes());
+    }
+    std::fs::write(&raw, &bytes).unwrap();
+    let ro = RawOptions {
+        dims: [5, 4, 3],
+        dtype: "int16".parse().unwrap(),
+        big_endian: true,
+        offset: 16,
+    };
+    let v = read_raw(&raw, &ro, Some([1.0, 1.0, 2.5])).unwrap();
+    assert_eq!(v.voxels(), &Voxels::I16(vals));
+    let e = read_raw(&raw, &RawOptions { offset: 0, ..ro }, None).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("needs 120 bytes") && msg.contains("has 136"),
+        "{msg}"
+    );
+    let e = read_raw(&raw, &ro, Some([1.0, 0.0, 1.0])).unwrap_err();
+    assert!(matches!(e, ImageError::BadSpacing { .. }));
+    assert!(matches!(
+        load_volume(&raw, &LoadOptions::default()),
+        Err(ImageError::RawNeedsDims { .. })
+    ));
+}
+
+#[test]
+fn labels_are_listed_and_meshed_one_at_a_time() {
+    let n = 24;
+    let aff = DAffine3::from_translation(DVec3::splat(-11.5));
+    let c1 = DVec3::new(-5.0, 0.0, 0.0);
+    let c2 = DVec3::new(5.0, 0.0, 0.0);
+    let mut v = vec![0u8; n * n * n];
+    for (i, x) in v.iter_mut().enumerate() {
+        let p = aff.transform_point3(DVec3::new(
+            (i % n) as f64,
+            ((i / n) % n) as f64,
+            (i / (n * n)) as f64,
+        ));
+        if (p - c1).length() < 4.0 {
+            *x = 3;
+        } else if (p - c2).length() < 4.0 || (p - c2 - DVec3::Z * 9.0).length() < 2.5 {
+            *x = 7;
+        }
+    }
+    let vol = Volume::new([n; 3], Voxels::U8(v), aff).unwrap();
+    let labels = vol.labels().unwrap();
+    assert_eq!(
+        labels.iter().map(|l| l.0).collect::<Vec<_>>(),
+        vec![0, 3, 7]
+    );
+    assert_eq!(labels.iter().map(|l| l.1).sum::<usize>(), n * n * n);
+    let opt = |l| ImageOptions {
+        label: Some(l),
+        ..Default::default()
+    };
+    let s3 = ImageSurface::new(vol.clone(), &opt(3)).unwrap();
+    assert_eq!(s3.component_count(), 1);
+    assert!(s3.value(c1) < 0.0 && s3.value(c2) > 0.0);
+    let s7 = ImageSurface::new(vol.clone(), &opt(7)).unwrap();
+    assert_eq!(s7.component_count(), 2);
+    assert!(s7.value(c2) < 0.0 && s7.value(c1) > 0.0);
+    // Without a label the 3-valued image needs an iso value.
+    let e = ImageSurface::new(vol.clone(), &ImageOptions::default()).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "iso value required for a non-binary image; the data range is [0, 7] (pass an iso value, or a label for a segmentation)"
+    );
+    let e = ImageSurface::new(vol, &opt(5)).unwrap_err();
+    assert!(e.to_string().contains("labels present: 0, 3, 7"), "{e}");
+}
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    let dir = tmpdir("errors");
+    let aff = DAffine3::IDENTITY;
+    // Constant image.
+    let vol = Volume::new([3, 3, 3], Voxels::U8(vec![4; 27]), aff).unwrap();
+    let e = ImageSurface::new(vol, &ImageOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("all voxels equal 4"), "{e}");
+    // NaN voxel, with its index.
+    let mut v = vec![0f32; 27];
+    v[1 + 3 * 2] = 1.0;
+    v[2 + 3 * (1 + 3 * 2)] = f32::NAN;
+    let vol = Volume::new([3, 3, 3], Voxels::F32(v), aff).unwrap();
+    let e = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(0.5),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("voxel [2, 1, 2] is NaN"), "{e}");
+    // Iso outside the data range.
+    let vol = synthetic::sample_implicit(|p| p.x, [4, 4, 4], aff);
+    let e = ImageSurface::new(
+        vol.clone(),
+        &ImageOptions {
+            iso: Some(9.0),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "iso value 9 is outside the data range [0, 3] (or equal to an end): there is no surface; pick a value strictly inside the range"
+    );
+    // Background on the wrong side.
+    let e = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(1.5),
+            background: Some(2.0),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(matches!(e, ImageError::BadBackground { .. }));
+    // Length mismatch, empty, singular affine.
+    assert!(matches!(
+        Volume::new([3, 3, 3], Voxels::U8(vec![0; 26]), aff),
+        Err(ImageError::LengthMismatch {
+            expected: 27,
+            actual: 26,
+            ..
+        })
+    ));
+    assert!(matches!(
+        Volume::new([3, 0, 3], Voxels::U8(vec![]), aff),
+        Err(ImageError::Empty { .. })
+    ));
+    assert!(matches!(
+        Volume::new(
+            [1, 1, 1],
+            Voxels::U8(vec![0]),
+            DAffine3::from_scale(DVec3::new(1.0, 0.0, 1.0))
+        ),
+        Err(ImageError::BadAffine { .. })
+    ));
+    // A 2D NIfTI (dim[3] = 1) and a 4D one.
+    let vol2d = Volume::new([4, 4, 1], Voxels::U8((0..16).collect()), aff).unwrap();
+    let p = dir.join("flat.nii");
+    let o = NiftiWriteOptions {
+        dim_override: Some([2, 4, 4, 1, 1, 1, 1, 1]),
+        ..NiftiWriteOptions::new()
+    };
+    write_nifti(&p, &vol2d, &o).unwrap();
+    let e = read_nifti(&p).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("flat.nii") && msg.contains("2D image (dim[3] = 1)"),
+        "{msg}"
+    );
+    let vol4 = Volume::new([2, 2, 8], Voxels::U8(vec![0; 32]), aff).unwrap();
+    let p = dir.join("series.nii");
+    let o = NiftiWriteOptions {
+        dim_override: Some([4, 2, 2, 2, 4, 1, 1, 1]),
+        ..NiftiWriteOptions::new()
+    };
+    write_nifti(&p, &vol4, &o).unwrap();
+    assert!(matches!(
+        read_nifti(&p),
+        Err(ImageError::FourD { frames: 4, .. })
+    ));
+    // Not a NIfTI file at all; missing file.
+    let p = dir.join("garbage.nii");
+    std::fs::write(&p, vec![7u8; 400]).unwrap();
+    let e = read_nifti(&p).unwrap_err();
+    assert!(e.to_string().contains("garbage.nii"), "{e}");
+    assert!(matches!(
+        read_nifti(dir.join("missing.nii")),
+        Err(ImageError::Io { .. })
+    ));
+    // Unknown extension; empty slice folder.
+    let p = dir.join("vol.xyz");
+    std::fs::write(&p, b"x").unwrap();
+    assert!(matches!(
+        load_volume(&p, &LoadOptions::default()),
+        Err(ImageError::UnknownFormat { .. })
+    ));
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    assert!(matches!(
+        read_slice_folder(&empty, None),
+        Err(ImageError::NoSlices { .. })
+    ));
+    // Non-integer values are not labels.
+    let vol = synthetic::sample_implicit(|p| p.x * 0.3, [4, 4, 4], aff);
+    assert!(matches!(vol.labels(), Err(ImageError::NotLabels { .. })));
+}
+
+#[test]
+fn real_looking_fixture_and_its_truncated_copy() {
+    let f = fixtures().join("phantom_i16_32.nii.gz");
+    let vol = read_nifti(&f).unwrap();
+    assert_eq!(vol.dims(), [32, 32, 32]);
+    assert_eq!(vol.dtype(), Dtype::I16);
+    let (slope, inter) = vol.scaling();
+    assert_eq!((slope, inter), (0.5, -100.0));
+    assert!(vol.affine().matrix3.determinant() < 0.0);
+    // "Skull" iso: bright shell above 250, closed; "brain" between 80 and 200.
+    let s = ImageSurface::new(
+        vol.clone(),
+        &ImageOptions {
+            iso: Some(250.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(s.component_count(), 2, "outer and inner skull surfaces");
+    let e = ImageSurface::new(vol, &ImageOptions::default()).unwrap_err();
+    assert!(matches!(e, ImageError::IsoRequired { .. }));
+
+    let t = fixtures().join("phantom_i16_32_truncated.nii.gz");
+    let e = read_nifti(&t).unwrap_err();
+    let msg = e.to_string();
+    assert!(matches!(e, ImageError::Truncated { .. }), "{e:?}");
+    assert!(
+        msg.contains("phantom_i16_32_truncated.nii.gz") && msg.contains("truncated"),
+        "{msg}"
+    );
+}
+
+/// The phantom: an ellipsoidal head with a bright skull shell, grey brain, dark ventricles,
+/// deterministic noise; i16 with scl_slope 0.5, scl_inter -100; LAS-like sform (x flipped).
+fn phantom() -> Volume {
+    let n = 32;
+    let m = DMat3::from_diagonal(DVec3::new(-6.0, 6.5, 6.0));
+    let aff = DAffine3::from_mat3_translation(m, -(m * DVec3::splat(15.5)));
+    let mut rng = oracle::roots::SplitMix64(2024);
+    let mut v = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let p = aff.transform_point3(DVec3::new(i as f64, j as f64, k as f64));
+                let r = (p / DVec3::new(80.0, 95.0, 85.0)).length();
+                let vent =
+                    ((p - DVec3::new(12.0, 5.0, 10.0)) / DVec3::new(10.0, 25.0, 12.0)).length();
+                let mut val: f64 = if r > 1.0 {
+                    0.0
+                } else if r > 0.82 {
+                    600.0
+                } else {
+                    140.0
+                };
+                if vent < 1.0 {
+                    val = 30.0;
+                }
+                val += 10.0 * (rng.next_f64() - 0.5);
+                v.push(((val + 100.0) / 0.5).round() as i16);
+            }
+        }
+    }
+    Volume::new([n; 3], Voxels::I16(v), aff)
+        .unwrap()
+        .with_scaling(0.5, -100.0)
+}
+
+#[test]
+#[ignore = "regenerates fixtures/images (run by hand)"]
+fn regenerate_fixtures() {
+    let f = fixtures().join("phantom_i16_32.nii.gz");
+    write_nifti(&f, &phantom(), &NiftiWriteOptions::new()).unwrap();
+    let bytes = std::fs::read(&f).unwrap();
+    let t = fixtures().join("phantom_i16_32_truncated.nii.gz");
+    std::fs::write(&t, &bytes[..bytes.len() * 2 / 3]).unwrap();
+}
+
+#[test]
+fn fixture_is_the_phantom() {
+    let vol = read_nifti(fixtures().join("phantom_i16_32.nii.gz")).unwrap();
+    let p = phantom();
+    assert_eq!(vol.voxels(), p.voxels());
+    assert!((vol.affine().matrix3 - p.affine().matrix3).abs_diff_eq(DMat3::ZERO, 1e-6));
+}
+
+#[test]
+fn tanglecube_64_topology_and_seeds() {
+    let vol = synthetic::tanglecube_volume(64);
+    let s = ImageSurface::new(vol, &dark(0.0)).unwrap();
+    assert_eq!(s.component_count(), 1);
+    let t = s.topology();
+    assert_eq!((t.inside_components, t.outside_components), (1, 1));
+    let h = 5.2 / 63.0;
+    for p in s.seed_points(5) {
+        // Within a fraction of a voxel of the analytic surface (|grad f| ≈ 10..30 there).
+        let g = {
+            let e = 1e-6;
+            DVec3::new(
+                synthetic::tanglecube(p + DVec3::X * e) - synthetic::tanglecube(p - DVec3::X * e),
+                synthetic::tanglecube(p + DVec3::Y * e) - synthetic::tanglecube(p - DVec3::Y * e),
+                synthetic::tanglecube(p + DVec3::Z * e) - synthetic::tanglecube(p - DVec3::Z * e),
+            ) / (2.0 * e)
+        };
+        let dist = synthetic::tanglecube(p).abs() / g.length();
+        assert!(dist < 0.25 * h, "seed {p} is {dist} from the surface");
+    }
+    let dm = s.dm_inf_hint().unwrap();
+    assert!(dm >= h && dm < 1.0, "tanglecube dm_inf estimate {dm}");
+}
+
+#[test]
+fn results_do_not_depend_on_thread_count() {
+    let vol = synthetic::tanglecube_volume(40);
+    let run = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let s = ImageSurface::new(vol.clone(), &dark(0.0)).unwrap();
+            (s.topology().clone(), s.seed_points(3), s.dm_inf_hint())
+        })
+    };
+    assert_eq!(run(1), run(3));
+}
