@@ -1,0 +1,127 @@
+//! Polyhedron oracle on the bunny (6966 triangles): `value()` (hierarchical winding number),
+//! `crossings()` (exact segment-triangle search through the BVH), `project()`, construction.
+//! Run: `cargo bench -p oracle --bench polyhedron`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use glam::DVec3;
+use meshio::TriMesh;
+use oracle::Surface;
+use oracle::polyhedron::PolyhedronSurface;
+use oracle::roots::SplitMix64;
+use std::hint::black_box;
+
+fn read_ply(path: &str) -> TriMesh {
+    use ply_rs_bw::parser::Parser;
+    use ply_rs_bw::ply::{DefaultElement, Property};
+    let mut f = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    let ply = Parser::<DefaultElement>::new().read_ply(&mut f).unwrap();
+    let num = |p: &Property| match p {
+        Property::Float(x) => *x as f64,
+        Property::Double(x) => *x,
+        other => panic!("unexpected {other:?}"),
+    };
+    let vertices = ply.payload["vertex"]
+        .iter()
+        .map(|v| DVec3::new(num(&v["x"]), num(&v["y"]), num(&v["z"])))
+        .collect();
+    let triangles = ply.payload["face"]
+        .iter()
+        .map(|f| match &f["vertex_indices"] {
+            Property::ListInt(l) => [l[0] as u32, l[1] as u32, l[2] as u32],
+            Property::ListUInt(l) => [l[0], l[1], l[2]],
+            other => panic!("unexpected {other:?}"),
+        })
+        .collect();
+    TriMesh {
+        vertices,
+        triangles,
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let mesh = read_ply(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/models/bunny.ply"
+    ));
+    let s = PolyhedronSurface::new(&mesh).unwrap();
+    let (lo, hi) = s.bbox();
+    let mut rng = SplitMix64(1);
+    let mut rnd = || lo + (hi - lo) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+    // Queries in the bounding box, and queries near the surface (what the mesher asks most).
+    let boxed: Vec<DVec3> = (0..1024).map(|_| rnd()).collect();
+    let h = s.suggested_size();
+    let near: Vec<DVec3> = mesh
+        .vertices
+        .iter()
+        .step_by(3)
+        .take(1024)
+        .enumerate()
+        .map(|(i, v)| *v + DVec3::new((i as f64).sin(), (i as f64 * 1.7).cos(), 0.3) * 0.2 * h)
+        .collect();
+    // Short segments (mesher-like: ~ sizing length) across the surface, and long chords.
+    let short: Vec<(DVec3, DVec3)> = near
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let d = DVec3::new((i as f64 * 0.3).cos(), (i as f64 * 0.5).sin(), 0.5).normalize();
+            (*p - d * h, *p + d * h)
+        })
+        .collect();
+    let long: Vec<(DVec3, DVec3)> = (0..256).map(|_| (rnd(), rnd())).collect();
+    let mut g = c.benchmark_group("bunny");
+    g.bench_function("build", |b| {
+        b.iter(|| PolyhedronSurface::new(black_box(&mesh)).unwrap())
+    });
+    let mut i = 0;
+    g.bench_function("value_bbox", |b| {
+        b.iter(|| {
+            i = (i + 1) % boxed.len();
+            s.value(black_box(boxed[i]))
+        })
+    });
+    g.bench_function("value_near_surface", |b| {
+        b.iter(|| {
+            i = (i + 1) % near.len();
+            s.value(black_box(near[i]))
+        })
+    });
+    let mut out = Vec::new();
+    g.bench_function("crossings_short", |b| {
+        b.iter(|| {
+            i = (i + 1) % short.len();
+            out.clear();
+            s.crossings(black_box(short[i].0), black_box(short[i].1), &mut out);
+            out.len()
+        })
+    });
+    g.bench_function("crossings_long", |b| {
+        b.iter(|| {
+            i = (i + 1) % long.len();
+            out.clear();
+            s.crossings(black_box(long[i].0), black_box(long[i].1), &mut out);
+            out.len()
+        })
+    });
+    g.bench_function("crossing_bipolar_short", |b| {
+        b.iter(|| {
+            i = (i + 1) % short.len();
+            let (a, bb) = short[i];
+            let (fa, fb) = (s.value(a), s.value(bb));
+            if (fa < 0.0) != (fb < 0.0) {
+                Some(s.crossing(a, fa, bb, fb))
+            } else {
+                None
+            }
+        })
+    });
+    g.bench_function("project_near", |b| {
+        b.iter(|| {
+            i = (i + 1) % near.len();
+            s.project(black_box(near[i]))
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,142 @@
+//! `.xyz` point files: one point per line, `x y z` or `x y z nx ny nz`, separated by spaces,
+//! tabs or commas. Blank lines and lines starting with `#` or `//` are skipped. Every data line
+//! must have the same number of columns (3 or 6).
+
+use glam::DVec3;
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
+
+/// Points with optional normals, as read from a file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointCloud {
+    pub points: Vec<DVec3>,
+    pub normals: Option<Vec<DVec3>>,
+}
+
+/// Errors reading an `.xyz` file.
+#[derive(Debug, thiserror::Error)]
+pub enum XyzError {
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(
+        "{path}:{line}: expected 3 (x y z) or 6 (x y z nx ny nz) numbers, found {found}; fix \
+         that line"
+    )]
+    Columns {
+        path: PathBuf,
+        line: usize,
+        found: usize,
+    },
+    #[error(
+        "{path}:{line}: {found} columns, but the first data line had {expected}; every line must \
+         have the same columns"
+    )]
+    Inconsistent {
+        path: PathBuf,
+        line: usize,
+        found: usize,
+        expected: usize,
+    },
+    #[error("{path}:{line}: column {column} is `{text}`, not a number; fix that value")]
+    Number {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        text: String,
+    },
+    #[error("{path}:{line}: column {column} is {value}, not finite; fix that value")]
+    NonFinite {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        value: f64,
+    },
+    #[error("{path}: no points (the file is empty or only has comments); give x y z lines")]
+    Empty { path: PathBuf },
+}
+
+/// Read an `.xyz` file.
+pub fn read_xyz(path: impl AsRef<Path>) -> Result<PointCloud, XyzError> {
+    let path = path.as_ref();
+    let f = std::fs::File::open(path).map_err(|source| XyzError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    read_xyz_from(std::io::BufReader::new(f), path)
+}
+
+/// Read `.xyz` text from any reader; `path` is only used in error messages.
+pub fn read_xyz_from(reader: impl BufRead, path: impl AsRef<Path>) -> Result<PointCloud, XyzError> {
+    let path = path.as_ref();
+    let mut points = Vec::new();
+    let mut normals = Vec::new();
+    let mut cols = 0usize;
+    let mut vals = Vec::with_capacity(6);
+    for (ln, line) in reader.lines().enumerate() {
+        let line_no = ln + 1;
+        let line = line.map_err(|source| XyzError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') || t.starts_with("//") {
+            continue;
+        }
+        vals.clear();
+        for (c, tok) in t
+            .split(|ch: char| ch.is_whitespace() || ch == ',')
+            .filter(|s| !s.is_empty())
+            .enumerate()
+        {
+            let v: f64 = tok.parse().map_err(|_| XyzError::Number {
+                path: path.to_path_buf(),
+                line: line_no,
+                column: c + 1,
+                text: tok.to_string(),
+            })?;
+            if !v.is_finite() {
+                return Err(XyzError::NonFinite {
+                    path: path.to_path_buf(),
+                    line: line_no,
+                    column: c + 1,
+                    value: v,
+                });
+            }
+            vals.push(v);
+        }
+        if vals.len() != 3 && vals.len() != 6 {
+            return Err(XyzError::Columns {
+                path: path.to_path_buf(),
+                line: line_no,
+                found: vals.len(),
+            });
+        }
+        if cols == 0 {
+            cols = vals.len();
+        } else if vals.len() != cols {
+            return Err(XyzError::Inconsistent {
+                path: path.to_path_buf(),
+                line: line_no,
+                found: vals.len(),
+                expected: cols,
+            });
+        }
+        points.push(DVec3::new(vals[0], vals[1], vals[2]));
+        if cols == 6 {
+            normals.push(DVec3::new(vals[3], vals[4], vals[5]));
+        }
+    }
+    if points.is_empty() {
+        return Err(XyzError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(PointCloud {
+        points,
+        normals: (cols == 6).then_some(normals),
+    })
+}

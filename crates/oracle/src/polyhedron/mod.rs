@@ -1,0 +1,495 @@
+//! Polyhedron oracle (section 6.6.4): a triangle mesh, possibly a soup with small holes.
+//!
+//! - Intersection oracle ([`Surface::crossings`]): every crossing of a segment with the
+//!   triangles, through a BVH, decided by exact predicates with a symbolic perturbation of the
+//!   segment (a crossing through a shared edge or vertex is counted once; a segment lying in a
+//!   triangle's plane does not cross it). Crossing points are computed in f64.
+//! - Inside/outside ([`Surface::value`]): `0.5 − w(p)` where `w` is the generalized winding
+//!   number (Jacobson et al. 2013), evaluated hierarchically (far BVH nodes by their dipole,
+//!   Barill et al. 2018). Negative inside, positive outside; robust to soups and small holes.
+//!   Triangles are expected counter-clockwise seen from outside (then `w ≈ 1` inside); a mesh
+//!   with the opposite global orientation is detected (negative signed volume) and flipped.
+//! - Bipolar oracle ([`Surface::crossing`]): the exact crossing where the sign changes, with
+//!   bisection on the winding number as a fallback (e.g. through a hole).
+//! - P1 ([`Surface::seed_points`]): triangle centroids, at least one per connected component.
+//!
+//! Invariants kept by [`PolyhedronSurface`]: every stored triangle is non-degenerate (exactly)
+//! and has finite vertices within the exact range of the predicates.
+
+mod bvh;
+mod predicates;
+
+use crate::roots::{SplitMix64, bisect};
+use crate::{BoundingSphere, Surface};
+use bvh::Bvh;
+use glam::DVec3;
+use meshio::TriMesh;
+
+/// Coordinates must stay below this magnitude for the exact predicates (Shewchuk's range).
+const MAX_COORD: f64 = 1e60;
+
+/// Errors building a [`PolyhedronSurface`].
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum PolyhedronError {
+    #[error("the mesh is empty (no vertices); give a triangle mesh with at least one face")]
+    NoVertices,
+    #[error(
+        "the mesh has {vertices} vertices but no triangles; a polyhedron needs faces (to mesh a \
+         point set, read it as points)"
+    )]
+    NoTriangles { vertices: usize },
+    #[error(
+        "vertex {index} has a non-finite coordinate ({x}, {y}, {z}); fix or remove that vertex"
+    )]
+    NonFinite {
+        index: usize,
+        x: f64,
+        y: f64,
+        z: f64,
+    },
+    #[error(
+        "vertex {index} has coordinate {value}, beyond the exact-predicate range (|c| < 1e60); \
+         rescale the mesh"
+    )]
+    OutOfRange { index: usize, value: f64 },
+    #[error(
+        "triangle {face} references vertex {index}, but the mesh has only {vertices} vertices \
+         (valid indices 0..{vertices}); fix the face list"
+    )]
+    BadIndex {
+        face: usize,
+        index: u32,
+        vertices: usize,
+    },
+    #[error(
+        "all {triangles} triangles are degenerate (zero area: repeated or collinear vertices); \
+         the mesh has no surface"
+    )]
+    AllDegenerate { triangles: usize },
+}
+
+/// What [`PolyhedronSurface::new`] found in (and tolerated about) its input.
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PolyhedronStats {
+    pub vertices: usize,
+    pub triangles: usize,
+    /// Vertices with exactly the same coordinates as an earlier vertex (welded for topology).
+    pub duplicate_vertices: usize,
+    /// Faces with repeated or exactly collinear vertices (ignored).
+    pub degenerate_triangles: usize,
+    /// Vertices referenced by no face.
+    pub unreferenced_vertices: usize,
+    /// Connected components of the non-degenerate faces (after welding).
+    pub components: usize,
+    /// Edges with one incident face (holes).
+    pub boundary_edges: usize,
+    /// Edges with more than two incident faces.
+    pub nonmanifold_edges: usize,
+    /// Edges whose two faces traverse them in the same direction (inconsistent orientation).
+    pub misoriented_edges: usize,
+}
+
+/// A triangle mesh as a surface oracle. See the module documentation.
+///
+/// ```
+/// use glam::DVec3;
+/// use meshio::TriMesh;
+/// use oracle::Surface;
+/// use oracle::polyhedron::PolyhedronSurface;
+/// // A tetrahedron, counter-clockwise seen from outside.
+/// let mesh = TriMesh {
+///     vertices: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+///     triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+/// };
+/// let s = PolyhedronSurface::new(&mesh).unwrap();
+/// assert!(s.value(DVec3::splat(0.1)) < 0.0); // inside
+/// assert!(s.value(DVec3::splat(2.0)) > 0.0); // outside
+/// let mut xs = Vec::new();
+/// s.crossings(DVec3::new(0.2, 0.2, -1.0), DVec3::new(0.2, 0.2, 1.0), &mut xs);
+/// assert_eq!(xs.len(), 2);
+/// ```
+#[derive(Clone, Debug)]
+pub struct PolyhedronSurface {
+    bvh: Bvh,
+    /// Component id of each triangle, in BVH (leaf) order.
+    component: Vec<u32>,
+    /// Non-degenerate faces as welded vertex indices, in input order, with their input index.
+    faces: Vec<([u32; 3], u32)>,
+    /// Welded vertex positions (indexed by the input vertex index of the representative).
+    vertices: Vec<DVec3>,
+    lo: DVec3,
+    hi: DVec3,
+    /// +1 if the mesh is oriented outward (positive signed volume), −1 otherwise.
+    orientation: f64,
+    stats: PolyhedronStats,
+}
+
+impl PolyhedronSurface {
+    /// Validate the mesh and build the BVH. Duplicate vertices and degenerate faces are
+    /// tolerated and counted in [`PolyhedronSurface::stats`].
+    pub fn new(mesh: &TriMesh) -> Result<Self, PolyhedronError> {
+        let nv = mesh.vertices.len();
+        if nv == 0 {
+            return Err(PolyhedronError::NoVertices);
+        }
+        if mesh.triangles.is_empty() {
+            return Err(PolyhedronError::NoTriangles { vertices: nv });
+        }
+        for (i, v) in mesh.vertices.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(PolyhedronError::NonFinite {
+                    index: i,
+                    x: v.x,
+                    y: v.y,
+                    z: v.z,
+                });
+            }
+            if let Some(c) = v.to_array().into_iter().find(|c| c.abs() > MAX_COORD) {
+                return Err(PolyhedronError::OutOfRange { index: i, value: c });
+            }
+        }
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            if let Some(&bad) = t.iter().find(|&&i| i as usize >= nv) {
+                return Err(PolyhedronError::BadIndex {
+                    face: f,
+                    index: bad,
+                    vertices: nv,
+                });
+            }
+        }
+        // Weld exactly equal vertices: canonical = smallest index with those coordinates.
+        let mut order: Vec<u32> = (0..nv as u32).collect();
+        let key = |i: u32| mesh.vertices[i as usize].to_array();
+        order.sort_by(|&i, &j| {
+            let (a, b) = (key(i), key(j));
+            a[0].total_cmp(&b[0])
+                .then(a[1].total_cmp(&b[1]))
+                .then(a[2].total_cmp(&b[2]))
+                .then(i.cmp(&j))
+        });
+        let mut canon: Vec<u32> = (0..nv as u32).collect();
+        let mut duplicate_vertices = 0;
+        for w in 1..nv {
+            let (p, c) = (order[w - 1], order[w]);
+            if mesh.vertices[p as usize] == mesh.vertices[c as usize] {
+                canon[c as usize] = canon[p as usize];
+                duplicate_vertices += 1;
+            }
+        }
+        let mut faces = Vec::with_capacity(mesh.triangles.len());
+        let mut degenerate = 0;
+        let mut referenced = vec![false; nv];
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            for &i in t {
+                referenced[i as usize] = true;
+            }
+            let c = t.map(|i| canon[i as usize]);
+            let [a, b, d] = c.map(|i| mesh.vertices[i as usize]);
+            if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] || predicates::is_degenerate(a, b, d) {
+                degenerate += 1;
+                continue;
+            }
+            faces.push((c, f as u32));
+        }
+        if faces.is_empty() {
+            return Err(PolyhedronError::AllDegenerate {
+                triangles: mesh.triangles.len(),
+            });
+        }
+        // Components (union-find on welded vertices).
+        let mut uf: Vec<u32> = (0..nv as u32).collect();
+        fn find(uf: &mut [u32], mut x: u32) -> u32 {
+            while uf[x as usize] != x {
+                uf[x as usize] = uf[uf[x as usize] as usize];
+                x = uf[x as usize];
+            }
+            x
+        }
+        for (t, _) in &faces {
+            let r0 = find(&mut uf, t[0]);
+            for &v in &t[1..] {
+                let r = find(&mut uf, v);
+                if r != r0 {
+                    let (lo, hi) = (r.min(r0), r.max(r0));
+                    uf[hi as usize] = lo;
+                }
+            }
+        }
+        let mut comp_id = vec![u32::MAX; nv];
+        let mut ncomp = 0u32;
+        let face_comp: Vec<u32> = faces
+            .iter()
+            .map(|(t, _)| {
+                let r = find(&mut uf, t[0]) as usize;
+                if comp_id[r] == u32::MAX {
+                    comp_id[r] = ncomp;
+                    ncomp += 1;
+                }
+                comp_id[r]
+            })
+            .collect();
+        // Edge statistics (sorted, deterministic).
+        let mut edges: Vec<(u32, u32, bool)> = Vec::with_capacity(faces.len() * 3);
+        for (t, _) in &faces {
+            for k in 0..3 {
+                let (u, v) = (t[k], t[(k + 1) % 3]);
+                edges.push((u.min(v), u.max(v), u < v));
+            }
+        }
+        edges.sort_unstable();
+        let (mut boundary_edges, mut nonmanifold_edges, mut misoriented_edges) = (0, 0, 0);
+        for run in edges.chunk_by(|x, y| x.0 == y.0 && x.1 == y.1) {
+            match run.len() {
+                1 => boundary_edges += 1,
+                2 => {
+                    if run[0].2 == run[1].2 {
+                        misoriented_edges += 1
+                    }
+                }
+                _ => nonmanifold_edges += 1,
+            }
+        }
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let mut volume = 0.0;
+        let tris: Vec<[DVec3; 3]> = faces
+            .iter()
+            .map(|(t, _)| {
+                let p = t.map(|i| mesh.vertices[i as usize]);
+                for v in p {
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
+                volume += p[0].dot(p[1].cross(p[2]));
+                p
+            })
+            .collect();
+        let diag = (hi - lo).length();
+        let scale = diag.max(lo.abs().max_element()).max(hi.abs().max_element());
+        let pad = 1e-9 * scale.max(f64::MIN_POSITIVE);
+        let ids: Vec<u32> = (0..faces.len() as u32).collect();
+        let bvh = Bvh::build(tris, ids, pad);
+        let component = bvh
+            .face_ids
+            .iter()
+            .map(|&i| face_comp[i as usize])
+            .collect();
+        let stats = PolyhedronStats {
+            vertices: nv,
+            triangles: mesh.triangles.len(),
+            duplicate_vertices,
+            degenerate_triangles: degenerate,
+            unreferenced_vertices: referenced.iter().filter(|&&r| !r).count(),
+            components: ncomp as usize,
+            boundary_edges,
+            nonmanifold_edges,
+            misoriented_edges,
+        };
+        Ok(PolyhedronSurface {
+            bvh,
+            component,
+            faces,
+            vertices: mesh.vertices.clone(),
+            lo,
+            hi,
+            orientation: if volume < 0.0 { -1.0 } else { 1.0 },
+            stats,
+        })
+    }
+
+    /// Counts of what the input contained (duplicates, degenerate faces, components, ...).
+    pub fn stats(&self) -> &PolyhedronStats {
+        &self.stats
+    }
+
+    /// Axis-aligned bounding box `(min, max)` of the non-degenerate triangles.
+    pub fn bbox(&self) -> (DVec3, DVec3) {
+        (self.lo, self.hi)
+    }
+
+    /// Default sizing: 1/50 of the bounding box diagonal.
+    pub fn suggested_size(&self) -> f64 {
+        (self.hi - self.lo).length() / 50.0
+    }
+
+    /// Generalized winding number at `p` (≈ 1 inside, ≈ 0 outside a closed mesh; the mesh's
+    /// global orientation is normalized so that the inside is positive).
+    pub fn winding_number(&self, p: DVec3) -> f64 {
+        self.orientation * self.bvh.winding_number(p)
+    }
+
+    /// Parameters `t ∈ [0, 1]` (sorted) of every crossing of `[a, b]` with the triangles.
+    pub fn crossing_params(&self, a: DVec3, b: DVec3, out: &mut Vec<f64>) {
+        if a == b || !a.is_finite() || !b.is_finite() {
+            return;
+        }
+        let mut hits = Vec::new();
+        self.bvh.segment_hits(a, b, &mut hits);
+        hits.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        out.extend(hits.iter().map(|h| h.0));
+    }
+
+    /// Closest point on the triangles and the input index of the face it lies on.
+    pub fn closest_point(&self, p: DVec3) -> (DVec3, usize) {
+        let (q, k, _) = self.bvh.closest(p);
+        let f = self.faces[self.bvh.face_ids[k as usize] as usize].1;
+        (q, f as usize)
+    }
+
+    /// Edges whose two incident faces have normals differing by more than `angle_deg` degrees
+    /// (i.e. dihedral angle below 180° − `angle_deg`), in a deterministic order. Boundary and
+    /// non-manifold edges are not included (they are counted in [`PolyhedronStats`]).
+    pub fn sharp_edges(&self, angle_deg: f64) -> Vec<(DVec3, DVec3)> {
+        let cos_t = angle_deg.to_radians().cos();
+        let mut edges: Vec<(u32, u32, u32, bool)> = Vec::with_capacity(self.faces.len() * 3);
+        for (fi, (t, _)) in self.faces.iter().enumerate() {
+            for k in 0..3 {
+                let (u, v) = (t[k], t[(k + 1) % 3]);
+                edges.push((u.min(v), u.max(v), fi as u32, u < v));
+            }
+        }
+        edges.sort_unstable();
+        let normal = |fi: u32| {
+            let t = self.faces[fi as usize].0.map(|i| self.vertices[i as usize]);
+            (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero()
+        };
+        let mut out = Vec::new();
+        for run in edges.chunk_by(|x, y| x.0 == y.0 && x.1 == y.1) {
+            if let [e0, e1] = run {
+                let n0 = normal(e0.2);
+                let mut n1 = normal(e1.2);
+                if e0.3 == e1.3 {
+                    n1 = -n1; // inconsistent orientation: compare unsigned
+                }
+                if n0.dot(n1) < cos_t {
+                    out.push((self.vertices[e0.0 as usize], self.vertices[e0.1 as usize]));
+                }
+            }
+        }
+        out
+    }
+
+    /// Gradient direction: the unit normal of the nearest triangle, outward.
+    fn nearest_normal(&self, p: DVec3) -> DVec3 {
+        let (_, k, _) = self.bvh.closest(p);
+        let t = self.bvh.tris[k as usize];
+        self.orientation * (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero()
+    }
+}
+
+/// Distance from each point to the nearest of the `edges` (infinity if there are none).
+pub fn distance_to_sharp_edges(edges: &[(DVec3, DVec3)], points: &[DVec3]) -> Vec<f64> {
+    points
+        .iter()
+        .map(|&p| {
+            edges
+                .iter()
+                .map(|&(a, b)| (predicates::closest_point_segment(p, a, b) - p).length())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect()
+}
+
+/// Largest distance from the sharp `edges` (sampled every `step` along each edge, end points
+/// included) to the surface `output` (e.g. a [`PolyhedronSurface`] of the remeshed output):
+/// the sharp-edge deviation of a remeshing. 0 if there are no edges.
+pub fn sharp_edge_deviation(
+    edges: &[(DVec3, DVec3)],
+    output: &PolyhedronSurface,
+    step: f64,
+) -> f64 {
+    let mut worst: f64 = 0.0;
+    for &(a, b) in edges {
+        let n = (((b - a).length() / step.max(f64::MIN_POSITIVE)).ceil() as usize).clamp(1, 10_000);
+        for i in 0..=n {
+            let p = a.lerp(b, i as f64 / n as f64);
+            worst = worst.max((output.closest_point(p).0 - p).length());
+        }
+    }
+    worst
+}
+
+impl Surface for PolyhedronSurface {
+    fn bounding_sphere(&self) -> BoundingSphere {
+        let center = 0.5 * (self.lo + self.hi);
+        let half = 0.5 * (self.hi - self.lo).length();
+        BoundingSphere {
+            center,
+            radius: 1.1 * half + 1e-9 * center.abs().max_element().max(1.0),
+        }
+    }
+
+    fn value(&self, p: DVec3) -> f64 {
+        0.5 - self.winding_number(p)
+    }
+
+    fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
+        let mut ts = Vec::new();
+        self.crossing_params(a, b, &mut ts);
+        let at = |t: f64| a + (b - a) * t;
+        match ts.len() {
+            0 => {}
+            1 => return at(ts[0]),
+            n => {
+                // The first exact crossing where the sign of the value changes.
+                let mut prev_neg = fa < 0.0;
+                for k in 0..n {
+                    let next_neg = if k + 1 < n {
+                        self.value(at(0.5 * (ts[k] + ts[k + 1]))) < 0.0
+                    } else {
+                        fb < 0.0
+                    };
+                    if next_neg != prev_neg {
+                        return at(ts[k]);
+                    }
+                    prev_neg = next_neg;
+                }
+            }
+        }
+        bisect(|p| self.value(p), a, fa, b, fb, self.tolerance())
+    }
+
+    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+        let mut ts = Vec::new();
+        self.crossing_params(a, b, &mut ts);
+        out.extend(ts.into_iter().map(|t| a + (b - a) * t));
+    }
+
+    /// One point per connected component (centroid of its largest triangle), plus up to 8
+    /// centroids of random triangles per component (deterministic for a given `seed`).
+    fn seed_points(&self, seed: u64) -> Vec<DVec3> {
+        let ncomp = self.stats.components;
+        let mut best: Vec<(f64, usize)> = vec![(-1.0, 0); ncomp];
+        let mut members: Vec<Vec<usize>> = vec![Vec::new(); ncomp];
+        for (k, t) in self.bvh.tris.iter().enumerate() {
+            let c = self.component[k] as usize;
+            let area = (t[1] - t[0]).cross(t[2] - t[0]).length();
+            if area > best[c].0 {
+                best[c] = (area, k);
+            }
+            members[c].push(k);
+        }
+        let centroid = |k: usize| {
+            let t = self.bvh.tris[k];
+            (t[0] + t[1] + t[2]) / 3.0
+        };
+        let mut rng = SplitMix64(seed ^ 0x9017_5EED);
+        let mut out = Vec::new();
+        for c in 0..ncomp {
+            out.push(centroid(best[c].1));
+            let m = &members[c];
+            for _ in 0..m.len().min(8) {
+                let k = m[(rng.next_u64() % m.len() as u64) as usize];
+                out.push(centroid(k));
+            }
+        }
+        out
+    }
+
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        self.nearest_normal(p)
+    }
+
+    fn project(&self, p: DVec3) -> Option<DVec3> {
+        Some(self.closest_point(p).0)
+    }
+}
