@@ -34,7 +34,10 @@ impl BoundingSphere {
         let d = b - a;
         let (t0, t1) = self.line_params(a, d)?;
         let (t0, t1) = (t0.max(0.0), t1.min(1.0));
-        (t0 <= t1).then(|| (a + d * t0, a + d * t1))
+        // Unclipped ends are returned exactly (a + d * 1 need not round to b).
+        let pa = if t0 <= 0.0 { a } else { a + d * t0 };
+        let pb = if t1 >= 1.0 { b } else { a + d * t1 };
+        (t0 <= t1).then_some((pa, pb))
     }
     /// Clip the ray from `origin` along `dir` to the ball; `None` if it misses the ball.
     pub fn clip_ray(&self, origin: DVec3, dir: DVec3) -> Option<(DVec3, DVec3)> {

@@ -248,6 +248,16 @@ pub fn mesh_with_progress(
     Ok(r.finish())
 }
 
+/// Run, then recompute Del_S(E) from scratch and return how many facets the incremental
+/// update got wrong (must be 0). For tests of the update invariant.
+#[doc(hidden)]
+pub fn audit(surface: &dyn Surface, opts: &MeshOptions) -> Result<usize, MeshError> {
+    validate(opts)?;
+    let mut r = Refiner::new(surface, opts);
+    r.run(&mut |_| {})?;
+    r.audit()
+}
+
 fn validate(opts: &MeshOptions) -> Result<(), MeshError> {
     let c = &opts.criteria;
     if let Some(crate::Sizing::Constant(s)) = &c.size {
@@ -473,6 +483,9 @@ impl<'a> Refiner<'a> {
             return None;
         }
         let (pc, qc) = self.ball.clip_segment(p, q)?;
+        // An end moved by the clipping lies on the ball's boundary, where the value is
+        // positive by the oracle's contract. (`clip_segment` returns unclipped ends exactly,
+        // so both sides of a facet see the same values.)
         let fp = if pc == p { fp } else { f64::INFINITY };
         let fq = if qc == q { fq } else { f64::INFINITY };
         Some((pc, fp, qc, fq))
@@ -480,6 +493,12 @@ impl<'a> Refiner<'a> {
 
     /// (Re)test the facet `f`: remove its old entry, insert the new one if restricted.
     fn test_facet(&mut self, f: Facet) -> Result<(), MeshError> {
+        // Always look from a finite cell: only finite cells' facet orientation is used.
+        let f = if self.tri.is_infinite(f.cell) {
+            self.tri.mirror_facet(f)
+        } else {
+            f
+        };
         let verts = self.tri.facet_vertices(f);
         if verts.contains(&INFINITE_VERTEX) {
             return Ok(());
@@ -787,6 +806,36 @@ impl<'a> Refiner<'a> {
     fn nonmanifold_elements(&self) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
         let tris: Vec<[VertexId; 3]> = self.sorted_facets().into_iter().map(|(k, _)| k).collect();
         crate::topology::nonmanifold_elements(&tris)
+    }
+
+    /// Recompute Del_S(E) from scratch and count the facets on which the incremental
+    /// structure disagrees (0 when the invariants hold). For tests.
+    fn audit(&mut self) -> Result<usize, MeshError> {
+        let before: Vec<([VertexId; 3], RFacet)> = self.sorted_facets();
+        self.restricted.clear();
+        for v in self.vertex_facets.iter_mut() {
+            *v = 0;
+        }
+        self.queue.clear();
+        let cells: Vec<CellId> = self.tri.finite_cells().collect();
+        for &c in &cells {
+            self.update_cell(c)?;
+        }
+        for &c in &cells {
+            for i in 0..4u8 {
+                let f = Facet { cell: c, index: i };
+                let m = self.tri.mirror_facet(f);
+                if self.tri.is_infinite(m.cell) || c < m.cell {
+                    self.test_facet(f)?;
+                }
+            }
+        }
+        let after = self.sorted_facets();
+        let a: Vec<_> = before.iter().map(|x| x.0).collect();
+        let b: Vec<_> = after.iter().map(|x| x.0).collect();
+        let missing = b.iter().filter(|k| a.binary_search(k).is_err()).count();
+        let extra = a.iter().filter(|k| b.binary_search(k).is_err()).count();
+        Ok(missing + extra)
     }
 
     fn finish(mut self) -> MeshResult {

@@ -123,15 +123,19 @@ fn torus_both_oracles_same_topology() {
 
 #[test]
 fn two_disjoint_spheres_are_both_found() {
-    let s = Analytic {
-        f: |p: DVec3| {
+    // The implicit backend seeds every component found by its grid scan (P1).
+    let s = oracle::implicit::ImplicitSurface::from_fn(
+        |p: DVec3| {
             let a = (p - DVec3::X * 1.5).length() - 1.0;
             let b = (p + DVec3::X * 1.5).length() - 0.5;
             a.min(b)
         },
-        center: DVec3::ZERO,
-        radius: 3.5,
-    };
+        BoundingSphere {
+            center: DVec3::ZERO,
+            radius: 3.5,
+        },
+    )
+    .unwrap();
     let opts = MeshOptions {
         criteria: Criteria::uniform(0.1),
         ..Default::default()
@@ -217,5 +221,20 @@ fn invalid_size_is_an_error() {
             ..Default::default()
         };
         assert!(mesh(&sphere(), &opts).is_err());
+    }
+}
+
+#[test]
+fn incremental_update_equals_full_recomputation() {
+    // The invariant of refine.rs: after every insertion only changed Voronoi edges are
+    // re-tested, and the result equals a from-scratch recomputation of Del_S(E).
+    for (sigma, oracle) in [(0.03, OracleKind::Bipolar), (0.08, OracleKind::Intersection)] {
+        let opts = MeshOptions {
+            criteria: Criteria::uniform(sigma),
+            oracle,
+            ..Default::default()
+        };
+        assert_eq!(rdt_mesher::refine::audit(&sphere(), &opts).unwrap(), 0);
+        assert_eq!(rdt_mesher::refine::audit(&torus(), &opts).unwrap(), 0);
     }
 }
