@@ -189,6 +189,8 @@ pub enum ValidationError {
 struct Cell {
     v: [u32; 4],
     n: [u32; 4],
+    /// Visit stamp of the last cavity search (kept next to the cell: one cache miss).
+    mark: u32,
 }
 
 /// A boundary facet of a cavity: its vertices oriented with the normal pointing out of the
@@ -275,7 +277,6 @@ pub struct Triangulation {
     points: Vec<DVec3>,
     vertex_cell: Vec<CellId>,
     cells: Vec<Cell>,
-    mark: Vec<u32>,
     free: Vec<CellId>,
     n_finite: usize,
     n_live: usize,
@@ -343,6 +344,11 @@ impl Triangulation {
         for &p in pts {
             check_point(p)?;
         }
+        // Random points have ~6.7 tetrahedra per vertex; surface samples fewer. Untouched
+        // reserved pages cost no resident memory.
+        self.points.reserve(pts.len());
+        self.vertex_cell.reserve(pts.len());
+        self.cells.reserve(pts.len() * 7);
         let order = sort::brio_order(pts, 0x5eed_0000_0000_0000 ^ pts.len() as u64);
         let mut ids = vec![0; pts.len()];
         for &i in &order {
@@ -679,7 +685,6 @@ impl Triangulation {
         self.points.capacity() * size_of::<DVec3>()
             + self.vertex_cell.capacity() * 4
             + self.cells.capacity() * size_of::<Cell>()
-            + self.mark.capacity() * 4
             + self.free.capacity() * 4
             + self.cavity.capacity() * 4
             + self.stack.capacity() * 4
@@ -731,8 +736,18 @@ impl Triangulation {
                 }
             }
         } else {
-            let q = v.map(|w| self.pt(w));
-            insphere_perturbed(&q, p)
+            let pts = &self.points;
+            let (a, b, d, e) = (
+                pts[v[0] as usize],
+                pts[v[1] as usize],
+                pts[v[2] as usize],
+                pts[v[3] as usize],
+            );
+            match predicates::insphere(a, b, d, e, p) {
+                Sign::Positive => true,
+                Sign::Negative => false,
+                Sign::Zero => insphere_perturbed(&[a, b, d, e], p),
+            }
         }
     }
 
@@ -753,7 +768,6 @@ impl Triangulation {
         }
         'walk: loop {
             let cell = self.cells[c as usize];
-            let q = cell.v.map(|w| self.pt(w));
             let r = (rng.next_u64() >> 62) as usize;
             for t in 0..4 {
                 let i = (r + t) & 3;
@@ -762,7 +776,14 @@ impl Triangulation {
                     continue;
                 }
                 let [a, b, d] = FACET[i];
-                if orient3d(q[a], q[b], q[d], p) == Sign::Negative {
+                let pts = &self.points;
+                if orient3d(
+                    pts[cell.v[a] as usize],
+                    pts[cell.v[b] as usize],
+                    pts[cell.v[d] as usize],
+                    p,
+                ) == Sign::Negative
+                {
                     prev = c;
                     c = n;
                     if self.cells[n as usize].v.contains(&INFINITE_VERTEX) {
@@ -771,8 +792,8 @@ impl Triangulation {
                     continue 'walk;
                 }
             }
-            if let Some(k) = q.iter().position(|&x| x == p) {
-                return Walk::Vertex(cell.v[k]);
+            if let Some(&w) = cell.v.iter().find(|&&w| self.points[w as usize] == p) {
+                return Walk::Vertex(w);
             }
             return Walk::Inside(c);
         }
@@ -785,15 +806,15 @@ impl Triangulation {
             self.cells.push(Cell {
                 v: [DEAD; 4],
                 n: [NO_CELL; 4],
+                mark: 0,
             });
-            self.mark.push(0);
             (self.cells.len() - 1) as CellId
         }
     }
 
     fn next_stamp(&mut self) -> u32 {
         if self.stamp >= u32::MAX - 4 {
-            self.mark.iter_mut().for_each(|m| *m = 0);
+            self.cells.iter_mut().for_each(|c| c.mark = 0);
             self.stamp = 0;
         }
         self.stamp += 2;
@@ -817,6 +838,7 @@ impl Triangulation {
             self.cells[slot as usize] = Cell {
                 v,
                 n: [NO_CELL, NO_CELL, NO_CELL, b.out],
+                mark: 0,
             };
             self.cells[b.out as usize].n[b.j as usize] = slot;
             self.n_live += 1;
@@ -882,24 +904,24 @@ impl Triangulation {
         cavity.clear();
         stack.clear();
         boundary.clear();
-        self.mark[c0 as usize] = inm;
+        self.cells[c0 as usize].mark = inm;
         cavity.push(c0);
         stack.push(c0);
         while let Some(c) = stack.pop() {
             for i in 0..4 {
                 let n = self.cells[c as usize].n[i];
-                let m = self.mark[n as usize];
+                let m = self.cells[n as usize].mark;
                 if m == inm {
                     continue;
                 }
                 if m != outm {
                     if self.in_conflict(n, p) {
-                        self.mark[n as usize] = inm;
+                        self.cells[n as usize].mark = inm;
                         cavity.push(n);
                         stack.push(n);
                         continue;
                     }
-                    self.mark[n as usize] = outm;
+                    self.cells[n as usize].mark = outm;
                 }
                 let cv = self.cells[c as usize].v;
                 let j = self.cells[n as usize]
@@ -988,6 +1010,7 @@ impl Triangulation {
         self.cells[c0 as usize] = Cell {
             v: b,
             n: [NO_CELL; 4],
+            mark: 0,
         };
         self.n_live = 1;
         self.n_finite = 1;

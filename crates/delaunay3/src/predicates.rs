@@ -50,8 +50,30 @@ fn c3(p: DVec3) -> Coord3D<f64> {
 }
 
 /// Exact orientation of `d` with respect to the plane `abc` (see module docs for the sign).
-#[inline]
+/// Shewchuk's static filter inline, then `robust::orient3d` (adaptive, exact).
+#[inline(always)]
 pub fn orient3d(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Sign {
+    let (ad, bd, cd) = (a - d, b - d, c - d);
+    let bdxcdy = bd.x * cd.y;
+    let cdxbdy = cd.x * bd.y;
+    let cdxady = cd.x * ad.y;
+    let adxcdy = ad.x * cd.y;
+    let adxbdy = ad.x * bd.y;
+    let bdxady = bd.x * ad.y;
+    let det = ad.z * (bdxcdy - cdxbdy) + bd.z * (cdxady - adxcdy) + cd.z * (adxbdy - bdxady);
+    let permanent = (bdxcdy.abs() + cdxbdy.abs()) * ad.z.abs()
+        + (cdxady.abs() + adxcdy.abs()) * bd.z.abs()
+        + (adxbdy.abs() + bdxady.abs()) * cd.z.abs();
+    const O3DERRBOUND_A: f64 = (7.0 + 56.0 * f64::EPSILON / 2.0) * f64::EPSILON / 2.0;
+    let errbound = O3DERRBOUND_A * permanent;
+    if det > errbound || -det > errbound {
+        return Sign::of(det);
+    }
+    orient3d_exact(a, b, c, d)
+}
+
+#[inline(never)]
+fn orient3d_exact(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Sign {
     Sign::of(robust::orient3d(c3(a), c3(b), c3(c), c3(d)))
 }
 
@@ -125,6 +147,11 @@ fn insphere_slow(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3, permanent: f6
 /// minors are below 2^63 and the determinant below 2^108.
 fn insphere_int(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Option<Sign> {
     use crate::dd_arith::two_sum;
+    // Quick reject: integer-like inputs have short mantissas (low 32 bits zero).
+    let short = |p: DVec3| (p.x.to_bits() | p.y.to_bits() | p.z.to_bits()) & 0xFFFF_FFFF == 0;
+    if !(short(a) && short(b) && short(c) && short(d) && short(e)) {
+        return None;
+    }
     let mut diffs = [0.0f64; 12];
     let mut max = 0.0f64;
     for (k, p) in [a, b, c, d].into_iter().enumerate() {
