@@ -259,6 +259,12 @@ fn edge_key(a: u32, b: u32) -> u64 {
     ((a as u64) << 32) | b as u64
 }
 
+/// Checks that `p` can be inserted: finite coordinates, each 0 or of magnitude within
+/// `[2^-140, 2^200]` (the range where the exact predicates cannot overflow or underflow).
+pub fn validate_point(p: DVec3) -> Result<(), Error> {
+    check_point(p)
+}
+
 fn check_point(p: DVec3) -> Result<(), Error> {
     const MAX: f64 = 1.606_938_044_258_990_3e60; // 2^200
     const MIN: f64 = 7.174_648_137_343_063e-43; // 2^-140
