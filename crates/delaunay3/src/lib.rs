@@ -852,6 +852,11 @@ impl Triangulation {
                 self.infinite_cell = slot;
             } else {
                 self.n_finite += 1;
+                debug_assert_eq!(
+                    orient3d(self.pt(v[0]), self.pt(v[1]), self.pt(v[2]), self.pt(v[3])),
+                    Sign::Positive,
+                    "new cell {v:?} is not positive"
+                );
             }
             for (f, key) in [
                 edge_key(v[1], v[2]),
@@ -967,17 +972,7 @@ impl Triangulation {
         self.stack = stack;
         self.boundary = boundary;
         self.build_star(v, created);
-        debug_assert!(self.last_new_cells_positive(v));
         Insertion::New(v)
-    }
-
-    fn last_new_cells_positive(&self, v: VertexId) -> bool {
-        let c = self.vertex_cell[v as usize];
-        let cv = self.cells[c as usize].v;
-        cv.contains(&INFINITE_VERTEX) || {
-            let q = cv.map(|w| self.pt(w));
-            orient3d(q[0], q[1], q[2], q[3]) == Sign::Positive
-        }
     }
 
     /// Insertion while fewer than four affinely independent points are known.
