@@ -214,6 +214,12 @@ fn facet_orientation_and_duals() {
         }
     }
     assert!(segs > 0 && rays > 0 && nones > 0);
+    // Each facet with a dual appears twice in the loop above, once in finite_facets().
+    let ff: Vec<Facet> = t.finite_facets().collect();
+    assert_eq!(2 * ff.len(), segs + rays);
+    for f in ff {
+        assert!(t.dual(f).is_some());
+    }
 }
 
 #[test]
