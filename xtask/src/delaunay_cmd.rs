@@ -2,7 +2,9 @@
 //!
 //! - `--input points.xyz --output tets.txt`: input is one `x y z` per line (blank lines and
 //!   `#` comments ignored); output is one finite tetrahedron per line as four 0-based input
-//!   indices (a duplicated point maps to its first occurrence). A JSON summary goes to stdout.
+//!   indices (a duplicated point maps to its first occurrence), positively oriented in
+//!   `delaunay3`'s convention (`robust::orient3d > 0`, i.e. the fourth point lies opposite to
+//!   the normal `(b - a) x (c - a)`). A JSON summary goes to stdout.
 //! - `--random N --seed S --distribution cube|sphere|grid`: prints one JSON object with
 //!   `points`, `finite_cells`, `seconds` (insertion time) and `valid` (`is_valid()` result,
 //!   run when N <= 200000 or with `--validate`, else `null`).
@@ -69,11 +71,13 @@ pub fn random_points(n: usize, seed: u64, dist: Distribution) -> Vec<DVec3> {
             .map(|_| DVec3::new(r.unit(), r.unit(), r.unit()))
             .collect(),
         Distribution::Sphere => (0..n)
-            .map(|_| loop {
-                let p = DVec3::new(r.unit(), r.unit(), r.unit()) * 2.0 - DVec3::ONE;
-                let l = p.length_squared();
-                if l > 1e-6 && l <= 1.0 {
-                    break p / l.sqrt();
+            .map(|_| {
+                loop {
+                    let p = DVec3::new(r.unit(), r.unit(), r.unit()) * 2.0 - DVec3::ONE;
+                    let l = p.length_squared();
+                    if l > 1e-6 && l <= 1.0 {
+                        break p / l.sqrt();
+                    }
                 }
             })
             .collect(),
@@ -114,10 +118,16 @@ pub fn parse_xyz(text: &str, name: &str) -> Result<Vec<DVec3>> {
         let mut c = [0.0; 3];
         for (k, f) in fields.iter().enumerate() {
             c[k] = f.parse::<f64>().map_err(|e| {
-                anyhow::anyhow!("{name}:{}: field {} {f:?} is not a number: {e}", i + 1, k + 1)
+                anyhow::anyhow!(
+                    "{name}:{}: field {} {f:?} is not a number: {e}",
+                    i + 1,
+                    k + 1
+                )
             })?;
         }
-        pts.push(DVec3::from_array(c));
+        let p = DVec3::from_array(c);
+        delaunay3::validate_point(p).map_err(|e| anyhow::anyhow!("{name}:{}: {e}", i + 1))?;
+        pts.push(p);
     }
     Ok(pts)
 }
@@ -215,8 +225,13 @@ mod tests {
         assert!(e.to_string().contains("f.xyz:4"), "{e}");
         let e = parse_xyz("0 0 0\n1 x 2\n", "f.xyz").unwrap_err();
         assert!(e.to_string().contains("f.xyz:2: field 2"), "{e}");
+        let e = parse_xyz("0 0 0\n1 inf 2\n", "f.xyz").unwrap_err();
+        assert!(e.to_string().contains("f.xyz:2: point"), "{e}");
         let p = parse_xyz("1 2 3 # a point\n\n4 5 6\n", "f").unwrap();
-        assert_eq!(p, vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(4.0, 5.0, 6.0)]);
+        assert_eq!(
+            p,
+            vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(4.0, 5.0, 6.0)]
+        );
     }
 
     #[test]

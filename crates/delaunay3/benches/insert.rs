@@ -4,7 +4,10 @@
 //! With `DELAUNAY_BENCH_LARGE=1` it also runs 1e6 uniform points in a cube and 1e6 points on
 //! a sphere (few samples; several minutes). Each group prints bytes/point (Vec capacities).
 //! Reference on this machine (CGAL 5.5 `Delaunay_triangulation_3`, Epick, spatially sorted
-//! range insertion): 0.56 s for 1e5 cube, 6.1 s for 1e6 cube, 12.5 s for 1e6 sphere.
+//! range insertion): 0.56 s for 1e5 cube, 6.1 s for 1e6 cube, 12.5 s for 1e6 sphere (issue 2,
+//! loaded machine). Same-run comparison (`benches/cgal_baseline.sh`, 2026-11-22, load ~3):
+//! 1e5 cube 0.285 s vs CGAL 0.312 s; 1e6 cube 3.15 s vs 3.16 s (peak RSS 298 MB vs 567 MB);
+//! 1e6 sphere 3.05 s vs 5.46 s (237 MB vs 445 MB). 280 bytes/point (Vec capacities).
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use delaunay3::{DVec3, Triangulation};

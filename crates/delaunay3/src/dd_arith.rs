@@ -15,11 +15,12 @@ fn quick(a: f64, b: f64) -> D {
     let s = a + b;
     D(s, b - (s - a))
 }
-/// Exact product `a * b = hi + lo` (no overflow: |a|, |b| < 2^995).
-#[inline]
-pub fn two_prod(a: f64, b: f64) -> D {
+/// Exact product `a * b = hi + lo` (no overflow: |a|, |b| < 2^995), with a hardware FMA (`FMA = true`, only inside code compiled with the `fma`
+/// target feature, otherwise `mul_add` is a slow library call) or Dekker's splitting.
+#[inline(always)]
+pub fn two_prod_with<const FMA: bool>(a: f64, b: f64) -> D {
     let p = a * b;
-    if cfg!(target_feature = "fma") {
+    if FMA {
         D(p, a.mul_add(b, -p))
     } else {
         let (ah, al) = split(a);
@@ -45,12 +46,14 @@ impl std::ops::Add for D {
 }
 impl std::ops::Neg for D {
     type Output = D;
+    #[inline(always)]
     fn neg(self) -> D {
         D(-self.0, -self.1)
     }
 }
 impl std::ops::Sub for D {
     type Output = D;
+    #[inline(always)]
     fn sub(self, o: D) -> D {
         self + (-o)
     }
@@ -59,7 +62,12 @@ impl std::ops::Mul for D {
     type Output = D;
     #[inline]
     fn mul(self, o: D) -> D {
-        let p = two_prod(self.0, o.0);
-        quick(p.0, p.1 + (self.0 * o.1 + self.1 * o.0))
+        mul::<{ cfg!(target_feature = "fma") }>(self, o)
     }
+}
+/// Double-double product (relative error below 8 u^2), see [`two_prod_with`] for `FMA`.
+#[inline(always)]
+pub fn mul<const FMA: bool>(x: D, o: D) -> D {
+    let p = two_prod_with::<FMA>(x.0, o.0);
+    quick(p.0, p.1 + (x.0 * o.1 + x.1 * o.0))
 }

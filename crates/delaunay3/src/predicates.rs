@@ -50,8 +50,30 @@ fn c3(p: DVec3) -> Coord3D<f64> {
 }
 
 /// Exact orientation of `d` with respect to the plane `abc` (see module docs for the sign).
-#[inline]
+/// Shewchuk's static filter inline, then `robust::orient3d` (adaptive, exact).
+#[inline(always)]
 pub fn orient3d(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Sign {
+    let (ad, bd, cd) = (a - d, b - d, c - d);
+    let bdxcdy = bd.x * cd.y;
+    let cdxbdy = cd.x * bd.y;
+    let cdxady = cd.x * ad.y;
+    let adxcdy = ad.x * cd.y;
+    let adxbdy = ad.x * bd.y;
+    let bdxady = bd.x * ad.y;
+    let det = ad.z * (bdxcdy - cdxbdy) + bd.z * (cdxady - adxcdy) + cd.z * (adxbdy - bdxady);
+    let permanent = (bdxcdy.abs() + cdxbdy.abs()) * ad.z.abs()
+        + (cdxady.abs() + adxcdy.abs()) * bd.z.abs()
+        + (adxbdy.abs() + bdxady.abs()) * cd.z.abs();
+    const O3DERRBOUND_A: f64 = (7.0 + 56.0 * f64::EPSILON / 2.0) * f64::EPSILON / 2.0;
+    let errbound = O3DERRBOUND_A * permanent;
+    if det > errbound || -det > errbound {
+        return Sign::of(det);
+    }
+    orient3d_exact(a, b, c, d)
+}
+
+#[inline(never)]
+fn orient3d_exact(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Sign {
     Sign::of(robust::orient3d(c3(a), c3(b), c3(c), c3(d)))
 }
 
@@ -125,6 +147,11 @@ fn insphere_slow(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3, permanent: f6
 /// minors are below 2^63 and the determinant below 2^108.
 fn insphere_int(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Option<Sign> {
     use crate::dd_arith::two_sum;
+    // Quick reject: integer-like inputs have short mantissas (low 32 bits zero).
+    let short = |p: DVec3| (p.x.to_bits() | p.y.to_bits() | p.z.to_bits()) & 0xFFFF_FFFF == 0;
+    if !(short(a) && short(b) && short(c) && short(d) && short(e)) {
+        return None;
+    }
     let mut diffs = [0.0f64; 12];
     let mut max = 0.0f64;
     for (k, p) in [a, b, c, d].into_iter().enumerate() {
@@ -176,12 +203,31 @@ fn insphere_int(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Option<Sign
     })
 }
 
+/// [`insphere_dd_with`], with a hardware FMA when the CPU has one (runtime detection).
 #[inline(never)]
 fn insphere_dd(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> f64 {
-    use crate::dd_arith::{D, two_sum};
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: `insphere_dd_fma` only requires the `fma` CPU feature, detected just above.
+        return unsafe { insphere_dd_fma(a, b, c, d, e) };
+    }
+    insphere_dd_with::<{ cfg!(target_feature = "fma") }>(a, b, c, d, e)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "fma")]
+fn insphere_dd_fma(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> f64 {
+    insphere_dd_with::<true>(a, b, c, d, e)
+}
+
+/// The in-sphere determinant in double-double arithmetic (see the bound in [`insphere`]).
+#[inline(always)]
+fn insphere_dd_with<const FMA: bool>(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> f64 {
+    use crate::dd_arith::{D, mul, two_sum};
     let diff = |p: DVec3| [two_sum(p.x, -e.x), two_sum(p.y, -e.y), two_sum(p.z, -e.z)];
     let (ae, be, ce, de) = (diff(a), diff(b), diff(c), diff(d));
-    let m = |p: &[D; 3], q: &[D; 3]| p[0] * q[1] - q[0] * p[1];
+    let x = |p: D, q: D| mul::<FMA>(p, q);
+    let m = |p: &[D; 3], q: &[D; 3]| x(p[0], q[1]) - x(q[0], p[1]);
     let (ab, bc, cd, da, ac, bd) = (
         m(&ae, &be),
         m(&be, &ce),
@@ -190,12 +236,12 @@ fn insphere_dd(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> f64 {
         m(&ae, &ce),
         m(&be, &de),
     );
-    let abc = ae[2] * bc - be[2] * ac + ce[2] * ab;
-    let bcd = be[2] * cd - ce[2] * bd + de[2] * bc;
-    let cda = ce[2] * da + de[2] * ac + ae[2] * cd;
-    let dab = de[2] * ab + ae[2] * bd + be[2] * da;
-    let lift = |p: &[D; 3]| p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-    let det = (lift(&de) * abc - lift(&ce) * dab) + (lift(&be) * cda - lift(&ae) * bcd);
+    let abc = x(ae[2], bc) - x(be[2], ac) + x(ce[2], ab);
+    let bcd = x(be[2], cd) - x(ce[2], bd) + x(de[2], bc);
+    let cda = x(ce[2], da) + x(de[2], ac) + x(ae[2], cd);
+    let dab = x(de[2], ab) + x(ae[2], bd) + x(be[2], da);
+    let lift = |p: &[D; 3]| x(p[0], p[0]) + x(p[1], p[1]) + x(p[2], p[2]);
+    let det = (x(lift(&de), abc) - x(lift(&ce), dab)) + (x(lift(&be), cda) - x(lift(&ae), bcd));
     det.0 + det.1
 }
 
@@ -389,6 +435,8 @@ mod tests {
             if Sign::of(dd) == exact {
                 decided_by_dd += 1;
             }
+            // Dekker splitting (no FMA) computes the same double-double value.
+            assert_eq!(dd, insphere_dd_with::<false>(q[0], q[1], q[2], q[3], q[4]));
         }
         assert!(decided_by_dd > 19000);
     }

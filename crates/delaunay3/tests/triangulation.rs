@@ -214,6 +214,12 @@ fn facet_orientation_and_duals() {
         }
     }
     assert!(segs > 0 && rays > 0 && nones > 0);
+    // Each facet with a dual appears twice in the loop above, once in finite_facets().
+    let ff: Vec<Facet> = t.finite_facets().collect();
+    assert_eq!(2 * ff.len(), segs + rays);
+    for f in ff {
+        assert!(t.dual(f).is_some());
+    }
 }
 
 #[test]
@@ -374,6 +380,34 @@ fn hull_points_on_hull_planes() {
     assert_eq!(tets_by_points(&t), tets_by_points(&build_checked(&rev)));
 }
 
+#[test]
+fn larger_degenerate_inputs() {
+    // A shuffled 12^3 grid, then exactly cospherical points around a grid point, then the
+    // grid again (all duplicates): valid at the end, order-independent.
+    let mut pts = Vec::new();
+    for x in 0..12 {
+        for y in 0..12 {
+            for z in 0..12 {
+                pts.push(DVec3::new(x as f64, y as f64, z as f64));
+            }
+        }
+    }
+    let mut r = Rng(5);
+    for i in (1..pts.len()).rev() {
+        pts.swap(i, (r.next_u64() % (i as u64 + 1)) as usize);
+    }
+    let sphere = sphere_points(2500, 1.0 / 8.0, DVec3::new(5.0, 5.0, 5.0));
+    assert!(sphere.len() >= 150, "{}", sphere.len());
+    let mut all = pts.clone();
+    all.extend_from_slice(&sphere);
+    all.extend_from_slice(&pts);
+    let t = build_checked(&all);
+    let mut b = Triangulation::new();
+    b.insert_bulk(&all).unwrap();
+    assert!(b.is_valid().is_ok());
+    assert_eq!(tets_by_points(&t), tets_by_points(&b));
+}
+
 fn coord() -> impl Strategy<Value = f64> {
     (-1000i32..1000).prop_map(|i| i as f64 / 64.0)
 }
@@ -383,7 +417,7 @@ fn point() -> impl Strategy<Value = DVec3> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(ProptestConfig::with_cases(256))]
 
     #[test]
     fn prop_random_points(pts in prop::collection::vec(point(), 0..150)) {
