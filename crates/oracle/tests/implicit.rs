@@ -944,3 +944,19 @@ fn resolve_specs_and_bounding_sphere_syntax() {
     let e = catalog::resolve("spere", Some(ball(2.0))).unwrap_err();
     assert!(matches!(e, CatalogError::UnknownName { .. }), "{e}");
 }
+
+#[test]
+fn seeds_stay_inside_the_ball_when_the_surface_comes_close() {
+    // f < 0 again just outside the ball: seeds must come from the
+    // inner sphere only, which nearly touches the bounding sphere.
+    let f = |p: DVec3| {
+        let r = p.length();
+        if r <= 2.0 { r - 1.97 } else { 2.0 + 1e-9 - r }
+    };
+    let s = ImplicitSurface::from_fn(f, ball(2.0)).unwrap();
+    let seeds = s.seed_points(3);
+    assert!(seeds.len() >= 100);
+    for p in seeds {
+        assert!((p.length() - 1.97).abs() <= s.tolerance(), "{}", p.length());
+    }
+}
