@@ -1,5 +1,5 @@
 //! ns per evaluation of the catalog surfaces: native closure vs compiled expression (value, and
-//! value + exact gradient), and the cost of one bipolar-oracle crossing.
+//! value + exact gradient), the cost of one bipolar-oracle crossing, and construction + seeds.
 //!
 //! `cargo bench -p oracle --bench implicit`
 
@@ -80,5 +80,29 @@ fn crossings(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, evals, crossings);
+fn construction(c: &mut Criterion) {
+    let mut g = c.benchmark_group("build");
+    g.sample_size(10);
+    g.warm_up_time(Duration::from_millis(300));
+    g.measurement_time(Duration::from_secs(1));
+    for name in ["torus", "tanglecube", "trefoil"] {
+        g.bench_function(BenchmarkId::new("surface_and_seeds", name), |b| {
+            b.iter(|| catalog::surface(name).unwrap().seed_points(1).len())
+        });
+        g.bench_function(
+            BenchmarkId::new("expression_surface_and_seeds", name),
+            |b| {
+                b.iter(|| {
+                    catalog::surface_from_expression(name)
+                        .unwrap()
+                        .seed_points(1)
+                        .len()
+                })
+            },
+        );
+    }
+    g.finish();
+}
+
+criterion_group!(benches, evals, crossings, construction);
 criterion_main!(benches);

@@ -366,7 +366,20 @@ impl ImplicitSurface {
         let pts: Vec<Option<DVec3>> = cells
             .par_iter()
             .map(|&c| {
-                let (a, fa, b, fb) = g.first_crossing_edge(c)?;
+                let (mut a, mut fa, mut b, mut fb) = g.first_crossing_edge(c)?;
+                // A vertex outside the ball holds +inf (never evaluated): move it to where the
+                // edge leaves the ball, so that the root is searched inside the ball only.
+                if fa == f64::INFINITY {
+                    (a, fa, b, fb) = (b, fb, a, fa);
+                }
+                if fb == f64::INFINITY {
+                    let (_, exit) = self.bs.clip_segment(a, b)?;
+                    b = exit;
+                    fb = f(b);
+                    if fb.is_nan() || (fb < 0.0) == (fa < 0.0) {
+                        return None;
+                    }
+                }
                 roots::try_find_root(f, a, fa, b, fb, tol).ok()
             })
             .collect();

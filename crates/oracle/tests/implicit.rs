@@ -944,3 +944,100 @@ fn resolve_specs_and_bounding_sphere_syntax() {
     let e = catalog::resolve("spere", Some(ball(2.0))).unwrap_err();
     assert!(matches!(e, CatalogError::UnknownName { .. }), "{e}");
 }
+
+#[test]
+fn seeds_stay_inside_the_ball_when_the_surface_comes_close() {
+    // f < 0 again just outside the ball: seeds must come from the
+    // inner sphere only, which nearly touches the bounding sphere.
+    let f = |p: DVec3| {
+        let r = p.length();
+        if r <= 2.0 { r - 1.97 } else { 2.0 + 1e-9 - r }
+    };
+    let s = ImplicitSurface::from_fn(f, ball(2.0)).unwrap();
+    let seeds = s.seed_points(3);
+    assert!(seeds.len() >= 100);
+    for p in seeds {
+        assert!((p.length() - 1.97).abs() <= s.tolerance(), "{}", p.length());
+    }
+}
+
+/// Euler characteristic of the union of the closed voxels (step `h`, over the box `lo..hi`)
+/// whose centers have f < 0.
+fn voxel_euler(f: fn(DVec3) -> f64, lo: DVec3, hi: DVec3, h: f64) -> i64 {
+    use rayon::prelude::*;
+    let n = ((hi - lo) / h).ceil().as_uvec3();
+    let (nx, ny, nz) = (n.x as usize, n.y as usize, n.z as usize);
+    let inside: Vec<bool> = (0..nx * ny * nz)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+            f(lo + (DVec3::new(x as f64, y as f64, z as f64) + 0.5) * h) < 0.0
+        })
+        .collect();
+    let vox = |x: i64, y: i64, z: i64| {
+        x >= 0
+            && y >= 0
+            && z >= 0
+            && (x as usize) < nx
+            && (y as usize) < ny
+            && (z as usize) < nz
+            && inside[x as usize + nx * (y as usize + ny * z as usize)]
+    };
+    // Lattice point (x, y, z) is the corner shared by voxels (x-1..x, y-1..y, z-1..z). A cell of
+    // the cubical complex is present if one of the voxels around it is.
+    let mut chi = 0i64;
+    for z in 0..=nz as i64 {
+        for y in 0..=ny as i64 {
+            for x in 0..=nx as i64 {
+                let any = |dx: &[i64], dy: &[i64], dz: &[i64]| {
+                    dx.iter().any(|&a| {
+                        dy.iter()
+                            .any(|&b| dz.iter().any(|&c| vox(x + a, y + b, z + c)))
+                    })
+                };
+                let (both, zero) = (&[-1, 0][..], &[0][..]);
+                chi += any(both, both, both) as i64; // vertex
+                chi -= any(zero, both, both) as i64
+                    + any(both, zero, both) as i64
+                    + any(both, both, zero) as i64; // edges along x, y, z
+                chi += any(zero, zero, both) as i64
+                    + any(zero, both, zero) as i64
+                    + any(both, zero, zero) as i64; // faces
+                chi -= vox(x, y, z) as i64; // cube
+            }
+        }
+    }
+    chi
+}
+
+/// The catalog's genus and component counts agree with the topology of the solid f < 0:
+/// a solid bounded by c closed surfaces of genus g_i has Euler characteristic sum(1 - g_i).
+#[test]
+fn catalog_topology_matches_voxel_euler_characteristic() {
+    for e in catalog::entries() {
+        let (Some(g), Some(c)) = (e.genus, e.components) else {
+            continue;
+        };
+        let f = catalog::native_fn(e.name).unwrap();
+        let bs = e.bounding_sphere;
+        let h = if e.name == "trefoil" {
+            0.012
+        } else {
+            bs.radius / 64.0
+        };
+        let lo = bs.center - DVec3::splat(bs.radius);
+        let hi = bs.center + DVec3::splat(bs.radius);
+        let (lo, hi) = if e.name == "trefoil" {
+            (DVec3::new(-2.5, -2.5, -1.2), DVec3::new(2.5, 2.5, 1.2))
+        } else {
+            (lo, hi)
+        };
+        let chi = voxel_euler(f, lo, hi, h);
+        assert_eq!(
+            chi,
+            c as i64 - g as i64,
+            "{}: chi = {chi}, genus {g}, {c} component(s)",
+            e.name
+        );
+    }
+}
