@@ -611,10 +611,10 @@ fn against(r: &mut Report, mesh: &TriMesh, bvh: &bvh::Bvh, surface: &dyn Surface
                 "loose-epsilon",
                 pass_fail(cert.passed()),
                 format!(
-                    "achieved eps {:.4} (max r/d_M(c), facet {:?}){}; {} balls, {} facets \
+                    "achieved eps {:.4} (max r/d_M(c), at facet {}){}; {} balls, {} facets \
                      without ball, d_M: {}",
                     cert.eps_achieved,
-                    cert.worst_facet,
+                    cert.worst_facet.map_or("-".to_string(), |f| f.to_string()),
                     match cert.requested_eps {
                         Some(e) =>
                             format!(", requested {e}: {} facets exceed", cert.exceeding_total),

@@ -275,3 +275,40 @@ fn pole_estimate_rejects_bad_input() {
         "{e}"
     );
 }
+
+#[test]
+fn summary_of_a_sphere_check() {
+    let m = uv_sphere(DVec3::ZERO, 1.0, 24, 48);
+    let r = check_against(
+        &m,
+        &UnitSphere,
+        &Options {
+            epsilon: Some(0.09),
+            ..Options::default()
+        },
+    );
+    let s = r.summary();
+    eprintln!("{s}");
+    for name in [
+        "input",
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "components",
+        "self-intersections",
+        "angles",
+        "hausdorff",
+        "normals",
+        "loose-epsilon",
+        "components-sampled",
+        "theorem-4.7",
+    ] {
+        assert!(s.contains(name), "{name} missing from the summary");
+    }
+    assert_eq!(
+        r.status("loose-epsilon"),
+        Some(Status::Fail),
+        "this UV sphere's largest balls have r = 0.0924 > 0.09"
+    );
+}
