@@ -3,6 +3,7 @@ mod common;
 use common::*;
 use glam::DVec3;
 use meshio::TriMesh;
+use oracle::Surface;
 use verify::distance::closest_point_on_triangle;
 use verify::{DmSource, Options, Status, check_against};
 
@@ -311,4 +312,55 @@ fn summary_of_a_sphere_check() {
         Some(Status::Fail),
         "this UV sphere's largest balls have r = 0.0924 > 0.09"
     );
+}
+
+#[test]
+fn torus_against_its_analytic_surface() {
+    let s = Torus {
+        big: 2.0,
+        small: 0.5,
+    };
+    let m = torus(2.0, 0.5, 64, 24);
+    let r = check_against(&m, &s, &sphere_opts_dm(0.5));
+    let g = r.geometry.as_ref().unwrap();
+    // Reference: a much denser barycentric grid of exact distances | |p - core| - r |.
+    let mut exact: f64 = 0.0;
+    let mut pts = Vec::new();
+    for t in &m.triangles {
+        let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+        pts.clear();
+        verify::distance::triangle_samples(a, b, c, 40, &mut pts);
+        for p in &pts {
+            exact = exact.max(s.value(*p).abs());
+        }
+    }
+    assert!(
+        g.mesh_to_surface.max <= exact * (1.0 + 1e-9) && g.mesh_to_surface.max >= 0.95 * exact,
+        "{} vs {exact}",
+        g.mesh_to_surface.max
+    );
+    assert!(
+        (g.hausdorff - exact).abs() <= 0.05 * exact,
+        "{} vs {exact}",
+        g.hausdorff
+    );
+    assert_eq!(r.topology.as_ref().unwrap().genera(), vec![Some(1)]);
+    assert_eq!(r.status("normals"), Some(Status::Pass));
+    assert_eq!(
+        r.status("components-sampled"),
+        Some(Status::Pass),
+        "{}",
+        r.summary()
+    );
+    let c = r.certificate.as_ref().unwrap();
+    assert_eq!(c.facets_without_ball, 0, "{}", r.summary());
+    assert!(c.eps_achieved > 0.0 && c.eps_achieved < 1.0);
+}
+
+fn sphere_opts_dm(dm: f64) -> Options {
+    Options {
+        samples_per_edge: 8,
+        dm: DmSource::Constant(dm),
+        ..Options::default()
+    }
 }
