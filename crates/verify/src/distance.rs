@@ -81,6 +81,7 @@ pub struct MeshDistance<'a> {
 }
 
 impl<'a> MeshDistance<'a> {
+    /// Queries on `mesh` through `bvh` (built by [`crate::intersect::triangle_bvh`]).
     pub fn new(mesh: &'a TriMesh, bvh: &'a Bvh) -> Self {
         MeshDistance { mesh, bvh }
     }
