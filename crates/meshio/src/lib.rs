@@ -87,9 +87,12 @@ pub enum MeshIoError {
          (or call read_with/write_with with an explicit Format)"
     )]
     UnknownExtension { path: PathBuf, ext: String },
-    #[error("{path}: the file is empty; expected a {format} mesh")]
+    #[error("{path}: the file is empty; expected a {format} mesh: re-export or re-download it")]
     Empty { path: PathBuf, format: Format },
-    #[error("{path}: not a {format} mesh: {reason}")]
+    #[error(
+        "{path}: not a {format} mesh: {reason}; check that the file really is {format} \
+         (the format is chosen from the extension)"
+    )]
     NotAMesh {
         path: PathBuf,
         format: Format,

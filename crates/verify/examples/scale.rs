@@ -79,4 +79,40 @@ fn main() {
     let t5 = Instant::now();
     let r = verify::check(&mesh, &verify::Options::default());
     println!("check total {:.2?}; passed {}", t5.elapsed(), r.passed());
+    let t6 = Instant::now();
+    let opts = verify::Options {
+        self_intersections: false,
+        samples_per_edge: 2,
+        ..Default::default()
+    };
+    let r = verify::check_against(&mesh, &UnitSphere, &opts);
+    let g = r.geometry.as_ref().unwrap();
+    println!(
+        "check_against (6 samples/triangle, no self-intersection pass) {:.2?}: hausdorff {:.3e}, eps {:.4}",
+        t6.elapsed(),
+        g.hausdorff,
+        r.certificate.as_ref().map_or(f64::NAN, |c| c.eps_achieved)
+    );
+}
+
+struct UnitSphere;
+impl oracle::Surface for UnitSphere {
+    fn bounding_sphere(&self) -> oracle::BoundingSphere {
+        oracle::BoundingSphere {
+            center: DVec3::ZERO,
+            radius: 2.0,
+        }
+    }
+    fn value(&self, p: DVec3) -> f64 {
+        p.length() - 1.0
+    }
+    fn project(&self, p: DVec3) -> Option<DVec3> {
+        Some(p.normalize_or_zero())
+    }
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        p.normalize_or_zero()
+    }
+    fn dm_inf_hint(&self) -> Option<f64> {
+        Some(1.0)
+    }
 }

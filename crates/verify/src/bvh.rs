@@ -15,20 +15,24 @@ pub struct Aabb {
 }
 
 impl Aabb {
+    /// The empty box (min = +inf, max = -inf); the identity of `union`.
     pub const EMPTY: Aabb = Aabb {
         min: DVec3::INFINITY,
         max: DVec3::NEG_INFINITY,
     };
 
+    /// Smallest box holding the points.
     pub fn from_points(pts: &[DVec3]) -> Aabb {
         pts.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p))
     }
+    /// The box extended to hold `p`.
     pub fn grow(self, p: DVec3) -> Aabb {
         Aabb {
             min: self.min.min(p),
             max: self.max.max(p),
         }
     }
+    /// Smallest box holding both boxes.
     pub fn union(self, o: Aabb) -> Aabb {
         Aabb {
             min: self.min.min(o.min),
@@ -44,6 +48,7 @@ impl Aabb {
         let d = (self.min - p).max(p - self.max).max(DVec3::ZERO);
         d.length_squared()
     }
+    /// Centre of the box.
     pub fn center(&self) -> DVec3 {
         0.5 * (self.min + self.max)
     }
@@ -87,12 +92,15 @@ impl Bvh {
         }
     }
 
+    /// Number of items.
     pub fn len(&self) -> usize {
         self.boxes.len()
     }
+    /// No items.
     pub fn is_empty(&self) -> bool {
         self.boxes.is_empty()
     }
+    /// Box of item `i`.
     pub fn item_box(&self, i: u32) -> Aabb {
         self.boxes[i as usize]
     }

@@ -236,6 +236,7 @@ pub struct HausdorffBound {
 /// Epsilon_1 of theorem 4.4 (approximately 0.096).
 pub const EPSILON_1: f64 = 0.096;
 
+/// Compare the measured Hausdorff distance with theorem 4.7's bound 4.5 eps^2 d_M^sup.
 pub fn hausdorff_bound(eps: f64, dm_sup: f64, hausdorff: f64) -> HausdorffBound {
     let bound = 4.5 * eps * eps * dm_sup;
     HausdorffBound {

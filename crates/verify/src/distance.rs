@@ -81,6 +81,7 @@ pub struct MeshDistance<'a> {
 }
 
 impl<'a> MeshDistance<'a> {
+    /// Queries on `mesh` through `bvh` (built by [`crate::intersect::triangle_bvh`]).
     pub fn new(mesh: &'a TriMesh, bvh: &'a Bvh) -> Self {
         MeshDistance { mesh, bvh }
     }
@@ -107,28 +108,47 @@ pub struct DistanceStats {
     pub argmax: Option<[f64; 3]>,
 }
 
-impl DistanceStats {
-    fn from(values: &[(DVec3, f64)]) -> Self {
-        let mut s = DistanceStats {
-            samples: values.len(),
-            max: 0.0,
-            mean: 0.0,
-            rms: 0.0,
-            argmax: None,
-        };
-        for &(p, d) in values {
-            if d > s.max || s.argmax.is_none() {
-                s.max = d;
-                s.argmax = Some(p.to_array());
-            }
-            s.mean += d;
-            s.rms += d * d;
+/// Running statistics; merged in a fixed order so results do not depend on threads.
+#[derive(Clone, Copy, Debug, Default)]
+struct Acc {
+    n: usize,
+    max: f64,
+    argmax: Option<DVec3>,
+    sum: f64,
+    sumsq: f64,
+}
+
+impl Acc {
+    fn add(&mut self, p: DVec3, d: f64) {
+        if self.argmax.is_none() || d > self.max {
+            self.max = d;
+            self.argmax = Some(p);
         }
-        if !values.is_empty() {
-            s.mean /= values.len() as f64;
-            s.rms = (s.rms / values.len() as f64).sqrt();
+        self.n += 1;
+        self.sum += d;
+        self.sumsq += d * d;
+    }
+    /// Append `o` (which comes after `self` in sample order).
+    fn merge(&mut self, o: &Acc) {
+        if let Some(p) = o.argmax
+            && (self.argmax.is_none() || o.max > self.max)
+        {
+            self.max = o.max;
+            self.argmax = Some(p);
         }
-        s
+        self.n += o.n;
+        self.sum += o.sum;
+        self.sumsq += o.sumsq;
+    }
+    fn stats(&self) -> DistanceStats {
+        let n = self.n.max(1) as f64;
+        DistanceStats {
+            samples: self.n,
+            max: self.max,
+            mean: self.sum / n,
+            rms: (self.sumsq / n).sqrt(),
+            argmax: self.argmax.map(|p| p.to_array()),
+        }
     }
 }
 
@@ -173,53 +193,77 @@ pub fn triangle_samples(a: DVec3, b: DVec3, c: DVec3, n: usize, out: &mut Vec<DV
     }
 }
 
-/// Mesh -> S distances of samples on the triangles: `(sample, |p - project(p)|)`, in triangle
-/// order, and the number of samples whose projection failed.
+/// Mesh -> S statistics of samples on the triangles (distance `|p - project(p)|`), the
+/// number of samples whose projection failed and, when `dist` is given, S -> mesh statistics
+/// of the projected points. Memory is O(number of triangles).
+fn mesh_samples(
+    mesh: &TriMesh,
+    surface: &dyn Surface,
+    per_edge: usize,
+    dist: Option<&MeshDistance<'_>>,
+) -> (Acc, Acc, usize) {
+    const CHUNK: usize = 1024;
+    let per_chunk: Vec<(Acc, Acc, usize)> = mesh
+        .triangles
+        .par_chunks(CHUNK)
+        .map(|tris| {
+            let (mut m2s, mut s2m, mut fails) = (Acc::default(), Acc::default(), 0);
+            let mut pts = Vec::new();
+            for t in tris {
+                let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+                pts.clear();
+                triangle_samples(a, b, c, per_edge, &mut pts);
+                for &p in &pts {
+                    match surface.project(p) {
+                        Some(q) if q.is_finite() => {
+                            m2s.add(p, (p - q).length());
+                            if let Some(d) = dist {
+                                s2m.add(q, d.nearest(q).map_or(f64::INFINITY, |x| x.1));
+                            }
+                        }
+                        _ => fails += 1,
+                    }
+                }
+            }
+            (m2s, s2m, fails)
+        })
+        .collect();
+    let (mut m2s, mut s2m, mut fails) = (Acc::default(), Acc::default(), 0);
+    for (a, b, f) in &per_chunk {
+        m2s.merge(a);
+        s2m.merge(b);
+        fails += f;
+    }
+    (m2s, s2m, fails)
+}
+
+/// S -> mesh statistics of the given samples of S (exact nearest triangle).
+pub fn surface_to_mesh(dist: &MeshDistance<'_>, samples: &[DVec3]) -> DistanceStats {
+    let per_chunk: Vec<Acc> = samples
+        .par_chunks(4096)
+        .map(|ps| {
+            let mut acc = Acc::default();
+            for &p in ps {
+                acc.add(p, dist.nearest(p).map_or(f64::INFINITY, |x| x.1));
+            }
+            acc
+        })
+        .collect();
+    let mut acc = Acc::default();
+    for a in &per_chunk {
+        acc.merge(a);
+    }
+    acc.stats()
+}
+
+/// Mesh -> S statistics of samples on the triangles and the number of failed projections.
 pub fn mesh_to_surface(
     mesh: &TriMesh,
     surface: &dyn Surface,
     per_edge: usize,
-) -> (Vec<(DVec3, f64)>, Vec<DVec3>, usize) {
-    type PerTriangle = (Vec<(DVec3, f64)>, Vec<DVec3>, usize);
-    let per_tri: Vec<PerTriangle> = mesh
-        .triangles
-        .par_iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-            let mut pts = Vec::new();
-            triangle_samples(a, b, c, per_edge, &mut pts);
-            let mut d = Vec::with_capacity(pts.len());
-            let mut proj = Vec::with_capacity(pts.len());
-            let mut fail = 0;
-            for p in pts {
-                match surface.project(p) {
-                    Some(q) if q.is_finite() => {
-                        d.push((p, (p - q).length()));
-                        proj.push(q);
-                    }
-                    _ => fail += 1,
-                }
-            }
-            (d, proj, fail)
-        })
-        .collect();
-    let mut all = Vec::new();
-    let mut projected = Vec::new();
-    let mut fails = 0;
-    for (d, p, f) in per_tri {
-        all.extend(d);
-        projected.extend(p);
-        fails += f;
-    }
-    (all, projected, fails)
-}
-
-/// S -> mesh distances of the given samples to their nearest triangle.
-pub fn surface_to_mesh(dist: &MeshDistance<'_>, samples: &[DVec3]) -> Vec<(DVec3, f64)> {
-    samples
-        .par_iter()
-        .map(|&p| (p, dist.nearest(p).map_or(f64::INFINITY, |x| x.1)))
-        .collect()
+) -> (DistanceStats, usize) {
+    let (m2s, _, fails) = mesh_samples(mesh, surface, per_edge, None);
+    (m2s.stats(), fails)
 }
 
 /// Normal deviation of the facets against the surface gradient.
@@ -279,20 +323,28 @@ pub fn geometry(
     per_edge: usize,
     surface_samples: Option<&[DVec3]>,
 ) -> Geometry {
-    let (m2s, projected, fails) = mesh_to_surface(mesh, surface, per_edge);
     let dist = MeshDistance::new(mesh, bvh);
-    let (s2m, source) = match surface_samples {
-        Some(s) => (
-            surface_to_mesh(&dist, s),
-            format!("{} given samples", s.len()),
-        ),
-        None => (
-            surface_to_mesh(&dist, &projected),
-            format!("{} projections of the mesh samples onto S", projected.len()),
-        ),
+    let (mesh_to_surface, surface_to_mesh, fails, source) = match surface_samples {
+        Some(s) => {
+            let (m2s, _, fails) = mesh_samples(mesh, surface, per_edge, None);
+            (
+                m2s.stats(),
+                surface_to_mesh(&dist, s),
+                fails,
+                format!("{} given samples", s.len()),
+            )
+        }
+        None => {
+            let (m2s, s2m, fails) = mesh_samples(mesh, surface, per_edge, Some(&dist));
+            let n = s2m.n;
+            (
+                m2s.stats(),
+                s2m.stats(),
+                fails,
+                format!("{n} projections of the mesh samples onto S"),
+            )
+        }
     };
-    let mesh_to_surface = DistanceStats::from(&m2s);
-    let surface_to_mesh = DistanceStats::from(&s2m);
     let hausdorff = mesh_to_surface.max.max(surface_to_mesh.max);
     let bounding_radius = surface.bounding_sphere().radius;
     Geometry {

@@ -317,6 +317,14 @@ pub fn check_against(mesh: &TriMesh, surface: &dyn Surface, opts: &Options) -> R
     run(mesh, Some(surface), opts)
 }
 
+/// Read a mesh file (any format [`meshio`] reads) and [`check`] it.
+pub fn check_file(
+    path: impl AsRef<std::path::Path>,
+    opts: &Options,
+) -> Result<Report, meshio::MeshIoError> {
+    Ok(check(&meshio::read(path)?, opts))
+}
+
 fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report {
     let mut r = Report {
         vertices: mesh.vertices.len(),
@@ -341,10 +349,27 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
         r.push("input", Status::Fail, "the mesh has no triangles".into());
         return r;
     }
+    // Shewchuk's predicates are exact only if no intermediate product overflows or
+    // underflows (the range Spade also enforces).
+    let (hi, lo) = (2f64.powi(200), 2f64.powi(-140));
+    if let Some((i, v)) = mesh.vertices.iter().enumerate().find(|(_, v)| {
+        v.to_array()
+            .iter()
+            .any(|c| c.abs() > hi || (*c != 0.0 && c.abs() < lo))
+    }) {
+        let e = format!(
+            "vertex {i} has a coordinate outside the range of exact predicates \
+             (|x| in [2^-140, 2^200] or 0): ({}, {}, {}); rescale or translate the mesh",
+            v.x, v.y, v.z
+        );
+        r.input_error = Some(e.clone());
+        r.push("input", Status::Fail, e);
+        return r;
+    }
     r.push(
         "input",
         Status::Pass,
-        "indices in range, coordinates finite".into(),
+        "indices in range, coordinates finite and in range".into(),
     );
     let ml = opts.max_listed;
 
@@ -611,10 +636,10 @@ fn against(r: &mut Report, mesh: &TriMesh, bvh: &bvh::Bvh, surface: &dyn Surface
                 "loose-epsilon",
                 pass_fail(cert.passed()),
                 format!(
-                    "achieved eps {:.4} (max r/d_M(c), facet {:?}){}; {} balls, {} facets \
+                    "achieved eps {:.4} (max r/d_M(c), at facet {}){}; {} balls, {} facets \
                      without ball, d_M: {}",
                     cert.eps_achieved,
-                    cert.worst_facet,
+                    cert.worst_facet.map_or("-".to_string(), |f| f.to_string()),
                     match cert.requested_eps {
                         Some(e) =>
                             format!(", requested {e}: {} facets exceed", cert.exceeding_total),

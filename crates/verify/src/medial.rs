@@ -9,6 +9,7 @@ use thiserror::Error;
 use crate::bvh::{Aabb, Bvh};
 
 #[derive(Debug, Error, Clone, PartialEq)]
+/// Why d_M could not be estimated.
 pub enum MedialError {
     #[error("d_M estimate: sample {index} is not a valid point ({source}); remove it")]
     BadSample {

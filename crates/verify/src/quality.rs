@@ -43,6 +43,8 @@ pub fn triangle_shape(a: DVec3, b: DVec3, c: DVec3) -> Option<([f64; 3], f64, f6
     Some((angles, r / la.min(lb).min(lc), 0.5 * twice_area))
 }
 
+/// Quality statistics of a valid mesh; `bin_deg` is the histogram bin width (default 10
+/// when not in (0, 180]).
 pub fn analyze(mesh: &TriMesh, bin_deg: f64) -> Quality {
     let bin_deg = if bin_deg > 0.0 && bin_deg <= 180.0 {
         bin_deg

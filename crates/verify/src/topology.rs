@@ -58,15 +58,19 @@ pub struct Topology {
 }
 
 impl Topology {
+    /// No boundary edge.
     pub fn is_closed(&self) -> bool {
         self.boundary_edges_total == 0
     }
+    /// No edge with more than two triangles.
     pub fn is_edge_manifold(&self) -> bool {
         self.non_manifold_edges_total == 0
     }
+    /// Every vertex has a single umbrella.
     pub fn is_vertex_manifold(&self) -> bool {
         self.non_manifold_vertices_total == 0
     }
+    /// Every interior edge is used once in each direction.
     pub fn is_consistently_oriented(&self) -> bool {
         self.inconsistent_edges_total == 0
     }

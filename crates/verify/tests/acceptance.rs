@@ -248,6 +248,17 @@ fn duplicate_unreferenced_degenerate_and_bad_input() {
         triangles: vec![[0, 1, 2]],
     };
     assert_eq!(check(&nan, &opts()).status("input"), Some(Status::Fail));
+    let huge = TriMesh {
+        vertices: vec![DVec3::ZERO, DVec3::X * 1e300, DVec3::Y],
+        triangles: vec![[0, 1, 2]],
+    };
+    let r = check(&huge, &opts());
+    assert_eq!(r.status("input"), Some(Status::Fail));
+    assert!(
+        r.input_error
+            .unwrap()
+            .contains("vertex 1 has a coordinate outside the range")
+    );
 }
 
 #[test]

@@ -137,3 +137,49 @@ pub fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
         })
         .collect()
 }
+
+/// The torus with major radius `big` and minor `small` around the z axis, with its exact
+/// closest-point projection; d_M = `small` on S when big >= 2 small.
+pub struct Torus {
+    pub big: f64,
+    pub small: f64,
+}
+
+impl Torus {
+    fn core_point(&self, p: DVec3) -> DVec3 {
+        let q = DVec3::new(p.x, p.y, 0.0);
+        let l = q.length();
+        let dir = if l > 0.0 { q / l } else { DVec3::X };
+        dir * self.big
+    }
+}
+
+impl Surface for Torus {
+    fn bounding_sphere(&self) -> BoundingSphere {
+        BoundingSphere {
+            center: DVec3::ZERO,
+            radius: 1.5 * (self.big + self.small),
+        }
+    }
+    fn value(&self, p: DVec3) -> f64 {
+        (p - self.core_point(p)).length() - self.small
+    }
+    fn project(&self, p: DVec3) -> Option<DVec3> {
+        let c = self.core_point(p);
+        let d = p - c;
+        let l = d.length();
+        (l > 0.0).then(|| c + d / l * self.small)
+    }
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        (p - self.core_point(p)).normalize_or_zero()
+    }
+    fn seed_points(&self, _seed: u64) -> Vec<DVec3> {
+        vec![
+            DVec3::X * (self.big + self.small),
+            DVec3::Y * (self.big - self.small),
+        ]
+    }
+    fn dm_inf_hint(&self) -> Option<f64> {
+        Some(self.small)
+    }
+}

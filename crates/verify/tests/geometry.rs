@@ -3,6 +3,7 @@ mod common;
 use common::*;
 use glam::DVec3;
 use meshio::TriMesh;
+use oracle::Surface;
 use verify::distance::closest_point_on_triangle;
 use verify::{DmSource, Options, Status, check_against};
 
@@ -274,4 +275,92 @@ fn pole_estimate_rejects_bad_input() {
             .contains("normals has 1 entries for 2 samples"),
         "{e}"
     );
+}
+
+#[test]
+fn summary_of_a_sphere_check() {
+    let m = uv_sphere(DVec3::ZERO, 1.0, 24, 48);
+    let r = check_against(
+        &m,
+        &UnitSphere,
+        &Options {
+            epsilon: Some(0.09),
+            ..Options::default()
+        },
+    );
+    let s = r.summary();
+    eprintln!("{s}");
+    for name in [
+        "input",
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "components",
+        "self-intersections",
+        "angles",
+        "hausdorff",
+        "normals",
+        "loose-epsilon",
+        "components-sampled",
+        "theorem-4.7",
+    ] {
+        assert!(s.contains(name), "{name} missing from the summary");
+    }
+    assert_eq!(
+        r.status("loose-epsilon"),
+        Some(Status::Fail),
+        "this UV sphere's largest balls have r = 0.0924 > 0.09"
+    );
+}
+
+#[test]
+fn torus_against_its_analytic_surface() {
+    let s = Torus {
+        big: 2.0,
+        small: 0.5,
+    };
+    let m = torus(2.0, 0.5, 64, 24);
+    let r = check_against(&m, &s, &sphere_opts_dm(0.5));
+    let g = r.geometry.as_ref().unwrap();
+    // Reference: a much denser barycentric grid of exact distances | |p - core| - r |.
+    let mut exact: f64 = 0.0;
+    let mut pts = Vec::new();
+    for t in &m.triangles {
+        let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+        pts.clear();
+        verify::distance::triangle_samples(a, b, c, 40, &mut pts);
+        for p in &pts {
+            exact = exact.max(s.value(*p).abs());
+        }
+    }
+    assert!(
+        g.mesh_to_surface.max <= exact * (1.0 + 1e-9) && g.mesh_to_surface.max >= 0.95 * exact,
+        "{} vs {exact}",
+        g.mesh_to_surface.max
+    );
+    assert!(
+        (g.hausdorff - exact).abs() <= 0.05 * exact,
+        "{} vs {exact}",
+        g.hausdorff
+    );
+    assert_eq!(r.topology.as_ref().unwrap().genera(), vec![Some(1)]);
+    assert_eq!(r.status("normals"), Some(Status::Pass));
+    assert_eq!(
+        r.status("components-sampled"),
+        Some(Status::Pass),
+        "{}",
+        r.summary()
+    );
+    let c = r.certificate.as_ref().unwrap();
+    assert_eq!(c.facets_without_ball, 0, "{}", r.summary());
+    assert!(c.eps_achieved > 0.0 && c.eps_achieved < 1.0);
+}
+
+fn sphere_opts_dm(dm: f64) -> Options {
+    Options {
+        samples_per_edge: 8,
+        dm: DmSource::Constant(dm),
+        ..Options::default()
+    }
 }

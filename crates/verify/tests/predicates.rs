@@ -136,3 +136,39 @@ fn sat_segment(a: I64Vec3, b: I64Vec3, x: [I64Vec3; 3]) -> bool {
     }
     true
 }
+
+#[test]
+fn many_grid_pairs_agree_with_separating_axes_and_cover_both_answers() {
+    let mut s: u64 = 12345;
+    let mut next = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 33) % 5) as i64 - 2
+    };
+    let mut tri = || loop {
+        let t = [0; 3].map(|_| I64Vec3::new(next(), next(), next()));
+        if (t[1] - t[0]).cross(t[2] - t[0]) != I64Vec3::ZERO {
+            return t;
+        }
+    };
+    let (mut yes, mut no, mut coplanar) = (0, 0, 0);
+    for _ in 0..50_000 {
+        let (t, u) = (tri(), tri());
+        let want = sat(t, u);
+        assert_eq!(triangles_intersect(f(t), f(u)), want, "{t:?} {u:?}");
+        if want {
+            yes += 1
+        } else {
+            no += 1
+        }
+        let n = (t[1] - t[0]).cross(t[2] - t[0]);
+        if u.iter().all(|p| (*p - t[0]).dot(n) == 0) {
+            coplanar += 1;
+        }
+    }
+    assert!(
+        yes > 5000 && no > 5000 && coplanar > 50,
+        "{yes} {no} {coplanar}"
+    );
+}
