@@ -775,3 +775,139 @@ fn results_do_not_depend_on_thread_count() {
     };
     assert_eq!(run(1), run(3));
 }
+
+/// Memory check: a 512^3 u16 volume (256 MiB of voxels). Run with
+/// `/usr/bin/time -v cargo test -p oracle --release --test image -- --ignored large_512`
+/// and read "Maximum resident set size".
+#[test]
+#[ignore = "large: 512^3 volume, run by hand for the memory figure"]
+fn large_512_u16_volume() {
+    use rayon::prelude::*;
+    let n = 512;
+    let c = (n as f64 - 1.0) / 2.0;
+    let v: Vec<u16> = (0..n * n * n)
+        .into_par_iter()
+        .map(|p| {
+            let q = DVec3::new((p % n) as f64, ((p / n) % n) as f64, (p / (n * n)) as f64);
+            let r = (q - DVec3::splat(c)).length();
+            (1000.0 + 2000.0 * (1.0 - r / 200.0).clamp(0.0, 1.0) + 0.5) as u16
+        })
+        .collect();
+    let vol = Volume::new(
+        [n; 3],
+        Voxels::U16(v),
+        DAffine3::from_scale(DVec3::splat(0.5)),
+    )
+    .unwrap();
+    let s = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(2000.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let t0 = std::time::Instant::now();
+    assert_eq!(s.component_count(), 1);
+    eprintln!("topology: {:?}", t0.elapsed());
+    let t0 = std::time::Instant::now();
+    let dm = s.dm_inf_hint().unwrap();
+    eprintln!(
+        "dm_inf_hint = {dm} (ball radius 50 world units): {:?}",
+        t0.elapsed()
+    );
+    assert!(dm > 45.0 && dm < 51.0);
+}
+
+/// Inspect a real NIfTI file: `ORACLE_NIFTI=path [ORACLE_ISO=v] cargo test -p oracle --release
+/// --test image -- --ignored real_nifti --nocapture`. Prints dims, type, transform, range,
+/// components, the d_M^inf estimate and timings. Not run by default (needs a file outside the repo).
+#[test]
+#[ignore = "needs ORACLE_NIFTI=path"]
+fn real_nifti_from_env() {
+    let Ok(path) = std::env::var("ORACLE_NIFTI") else {
+        return;
+    };
+    let t0 = std::time::Instant::now();
+    let vol = read_nifti(&path).unwrap();
+    eprintln!(
+        "{path}: dims {:?} {} scaling {:?} read in {:?}",
+        vol.dims(),
+        vol.dtype(),
+        vol.scaling(),
+        t0.elapsed()
+    );
+    eprintln!(
+        "affine {:?} det {}",
+        vol.affine(),
+        vol.affine().matrix3.determinant()
+    );
+    let st = vol.stats().unwrap();
+    eprintln!("range [{}, {}], binary {:?}", st.min, st.max, st.binary);
+    let iso = std::env::var("ORACLE_ISO")
+        .ok()
+        .map(|v| v.parse().unwrap())
+        .unwrap_or(0.5 * (st.min + st.max));
+    let s = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(iso),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let t0 = std::time::Instant::now();
+    let t = s.topology();
+    eprintln!(
+        "iso {iso}: {} surface components ({} inside, {} outside), {} crossing edges, {:?}",
+        t.surface_components,
+        t.inside_components,
+        t.outside_components,
+        t.crossing_edges,
+        t0.elapsed()
+    );
+    let t0 = std::time::Instant::now();
+    eprintln!("dm_inf_hint {:?} in {:?}", s.dm_inf_hint(), t0.elapsed());
+    for p in s.seed_points(0).iter().take(2000) {
+        assert!(s.value(*p).abs() < 1e-6 * (st.max - st.min));
+    }
+}
+
+#[test]
+fn real_statistical_map_from_nilearn() {
+    let vol = read_nifti(fixtures().join("nilearn_motor_10426.nii.gz")).unwrap();
+    assert_eq!(vol.dims(), [53, 63, 46]);
+    assert_eq!(vol.dtype(), Dtype::F32);
+    assert_eq!(vol.affine().matrix3.determinant(), -27.0);
+    // The voxel of the largest t value is inside the iso-3 surface, in world space.
+    let Voxels::F32(d) = vol.voxels() else {
+        panic!()
+    };
+    let (imax, _) = d
+        .iter()
+        .enumerate()
+        .fold((0, f32::MIN), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
+    let ijk = vol.unindex(imax);
+    let world_max = vol.to_world(DVec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64));
+    let s = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(3.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(s.value(world_max) < 0.0);
+    assert!(s.value(s.bounding_sphere().center + DVec3::X * s.bounding_sphere().radius) > 0.0);
+    let n = s.component_count();
+    assert!(n >= 2, "several activation blobs, found {n}");
+    let seeds = s.seed_points(0);
+    assert!(seeds.len() >= n);
+    for p in &seeds {
+        assert!(s.value(*p).abs() < 1e-6, "{p}");
+    }
+    // The gradient at a seed points outward (towards lower t values).
+    let p = s.topology().component_seeds[0];
+    let g = s.gradient(p);
+    assert!(s.value(p + g.normalize() * 0.5) > s.value(p - g.normalize() * 0.5));
+}
