@@ -911,3 +911,93 @@ fn real_statistical_map_from_nilearn() {
     let g = s.gradient(p);
     assert!(s.value(p + g.normalize() * 0.5) > s.value(p - g.normalize() * 0.5));
 }
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn affine_strategy() -> impl Strategy<Value = DAffine3> {
+        (
+            prop::array::uniform3(-1.0f64..1.0),
+            0.0f64..3.0,
+            prop::array::uniform3(0.3f64..2.0),
+            prop::bool::ANY,
+            prop::array::uniform3(-20.0f64..20.0),
+        )
+            .prop_map(|(axis, angle, sc, flip, t)| {
+                let axis = DVec3::from(axis);
+                let axis = if axis.length() > 1e-3 {
+                    axis.normalize()
+                } else {
+                    DVec3::Z
+                };
+                let mut s = DVec3::from(sc);
+                if flip {
+                    s.y = -s.y;
+                }
+                DAffine3::from_mat3_translation(
+                    DMat3::from_quat(DQuat::from_axis_angle(axis, angle)) * DMat3::from_diagonal(s),
+                    DVec3::from(t),
+                )
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// At voxel centres the value is exactly -(intensity - iso); between them it is bounded
+        /// by the cell's corner values; far outside it is the background. Any affine.
+        #[test]
+        fn value_interpolates_in_world_space(
+            aff in affine_strategy(),
+            data in prop::collection::vec(0u16..1000, 4 * 5 * 3),
+            q in prop::array::uniform3(-1.5f64..5.5),
+        ) {
+            prop_assume!(data.iter().min() != data.iter().max());
+            let vol = Volume::new([4, 5, 3], Voxels::U16(data.clone()), aff).unwrap();
+            let s = ImageSurface::new(vol.clone(), &ImageOptions { iso: Some(500.5), ..Default::default() });
+            prop_assume!(s.is_ok());
+            let s = s.unwrap();
+            for k in 0..3 { for j in 0..5 { for i in 0..4 {
+                let p = aff.transform_point3(DVec3::new(i as f64, j as f64, k as f64));
+                let v = s.value(p);
+                let expect = -(vol.get(i, j, k) - 500.5);
+                prop_assert!((v - expect).abs() < 1e-6, "{v} vs {expect}");
+            }}}
+            let q = DVec3::from(q);
+            let v = s.value(aff.transform_point3(q));
+            let (lo, hi) = (-(999.0 - 500.5), 500.5);
+            prop_assert!(v >= lo - 1e-9 && v <= hi + 1e-9);
+            let bs = s.bounding_sphere();
+            prop_assert!(s.value(bs.center + DVec3::new(0.6, -0.3, 0.74).normalize() * bs.radius) > 0.0);
+        }
+
+        /// The crossing lies on the segment, within tolerance of a sign change.
+        #[test]
+        fn crossing_brackets_a_sign_change(
+            aff in affine_strategy(),
+            a in prop::array::uniform3(-1.0f64..16.0),
+            b in prop::array::uniform3(-1.0f64..16.0),
+        ) {
+            let vol = synthetic::sample_implicit(
+                |p| (aff.inverse().transform_point3(p) - DVec3::splat(7.0)).length() - 5.0,
+                [15, 15, 15],
+                aff,
+            );
+            let s = ImageSurface::new(vol, &dark(0.0)).unwrap();
+            let (a, b) = (aff.transform_point3(DVec3::from(a)), aff.transform_point3(DVec3::from(b)));
+            let (fa, fb) = (s.value(a), s.value(b));
+            prop_assume!((fa < 0.0) != (fb < 0.0));
+            let p = s.crossing(a, fa, b, fb);
+            let d = (b - a).normalize();
+            let tol = s.tolerance();
+            let t = (p - a).dot(d);
+            prop_assert!(t >= -tol && t <= (b - a).length() + tol);
+            prop_assert!((a + d * t - p).length() < 1e-9 * (1.0 + p.length()));
+            let (u, w) = (a + d * (t - tol).max(0.0), a + d * (t + tol).min((b - a).length()));
+            let (fu, fw) = (s.value(u), s.value(w));
+            prop_assert!((fu < 0.0) != (fw < 0.0) || fu.abs() < 1e-9 || fw.abs() < 1e-9,
+                "no sign change around the crossing: {fu} {fw}");
+        }
+    }
+}
