@@ -30,9 +30,23 @@ fn bench(c: &mut Criterion) {
             black_box(s.value(black_box(pts[i])))
         })
     });
+    // Points in a 6-voxel box near the surface (cache-resident): the arithmetic cost.
+    let h = 5.2 / 127.0;
+    let local: Vec<DVec3> = (0..4096)
+        .map(|_| {
+            DVec3::new(1.58, 1.58, 1.0)
+                + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5) * 6.0 * h
+        })
+        .collect();
+    c.bench_function("image128/value_local", |b| {
+        let mut i = 0;
+        b.iter(|| {
+            i = (i + 1) & 4095;
+            black_box(s.value(black_box(local[i])))
+        })
+    });
     // Sign-changing segments about 2 voxels long straddling the surface (like Voronoi edges of
     // a fine mesh), and 1/4 of the box long (coarse mesh).
-    let h = 5.2 / 127.0;
     let seeds = s.seed_points(0);
     let mut segs = Vec::new();
     for len in [2.0 * h, 1.3] {

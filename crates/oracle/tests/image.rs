@@ -1001,3 +1001,57 @@ mod props {
         }
     }
 }
+
+/// CPU-time measurement helper (the machine may be loaded, so wall-clock benches mislead):
+/// `/usr/bin/time -f %U target/release/deps/image-* --ignored cpu_loop` with ORACLE_LOOP=value
+/// or crossing; divide the user time by the printed number of calls.
+#[test]
+#[ignore = "manual CPU-time measurement"]
+fn cpu_loop() {
+    let what = std::env::var("ORACLE_LOOP").unwrap_or_default();
+    let s = ImageSurface::new(synthetic::tanglecube_volume(128), &dark(0.0)).unwrap();
+    let mut rng = oracle::roots::SplitMix64(1);
+    let t0 = std::time::Instant::now();
+    let seeds = s.seed_points(0);
+    let mut segs = Vec::new();
+    for p in seeds.iter().cycle().take(100_000) {
+        let d = rng.unit_vector() * (2.0 * 5.2 / 127.0);
+        let (a, b) = (*p - d * rng.next_f64(), *p + d);
+        let (fa, fb) = (s.value(a), s.value(b));
+        if (fa < 0.0) != (fb < 0.0) {
+            segs.push((a, fa, b, fb));
+        }
+        if segs.len() == 1000 {
+            break;
+        }
+    }
+    let pts: Vec<DVec3> = (0..4096)
+        .map(|_| (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5) * 5.0)
+        .collect();
+    eprintln!("setup {:?}", t0.elapsed());
+    let mut acc = 0.0;
+    let n = 20_000_000usize;
+    match what.as_str() {
+        "value" => {
+            for i in 0..n {
+                acc += s.value(std::hint::black_box(pts[i & 4095]));
+            }
+        }
+        "crossing" | "bisection" => {
+            for i in 0..n / 10 {
+                let (a, fa, b, fb) = segs[i % segs.len()];
+                let p = if what == "crossing" {
+                    s.crossing(a, fa, b, fb)
+                } else {
+                    oracle::roots::bisect(|x| s.value(x), a, fa, b, fb, s.tolerance())
+                };
+                acc += p.x;
+            }
+        }
+        _ => return,
+    }
+    eprintln!(
+        "{what}: {} calls, acc {acc}",
+        if what == "value" { n } else { n / 10 }
+    );
+}

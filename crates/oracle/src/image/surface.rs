@@ -276,9 +276,12 @@ impl ImageSurface {
         {
             return if v.is_nan() { f64::NAN } else { bg };
         }
-        let cell = v.floor();
-        let c = self.corners(d, cell, fetch, bg);
-        trilinear(&c, v - cell)
+        // floor by truncation (x > -1 here): avoids a libm call on baseline x86-64.
+        let i = (x + 1.0) as isize - 1;
+        let j = (y + 1.0) as isize - 1;
+        let k = (z + 1.0) as isize - 1;
+        let c = self.corners(d, [i, j, k], fetch, bg);
+        trilinear(&c, v - DVec3::new(i as f64, j as f64, k as f64))
     }
 
     /// Raw (or indicator) values at the corners of `cell`, `bg` outside the grid.
@@ -286,11 +289,10 @@ impl ImageSurface {
     fn corners<T: Voxel>(
         &self,
         d: &[T],
-        cell: DVec3,
+        [i, j, k]: [isize; 3],
         fetch: impl Fn(T) -> f64,
         bg: f64,
     ) -> [f64; 8] {
-        let (i, j, k) = (cell.x as isize, cell.y as isize, cell.z as isize);
         let [nx, ny, nz] = self.n;
         if i >= 0 && j >= 0 && k >= 0 && i + 1 < nx && j + 1 < ny && k + 1 < nz {
             let sx = 1usize;
@@ -346,6 +348,7 @@ impl ImageSurface {
     /// coordinates, background outside the grid), x fastest.
     #[inline]
     fn cell_corners(&self, cell: DVec3) -> [f64; 8] {
+        let cell = [cell.x as isize, cell.y as isize, cell.z as isize];
         match self.mode {
             Mode::Intensity { a, b } => {
                 let r = with_voxels!(self.vol.voxels(), d => self.corners(d, cell, |x| x.to_f64(), self.bg_raw));
