@@ -183,6 +183,34 @@ impl ImageSurface {
         })
     }
 
+    /// Load `path` with [`load_volume`](super::load_volume) (NIfTI, slice folder, multi-page
+    /// TIFF, raw) and build the oracle: the one-call entry point for the CLI.
+    ///
+    /// ```no_run
+    /// use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
+    /// // A segmentation: mesh label 3.
+    /// let seg = ImageSurface::open(
+    ///     "labels.nii.gz",
+    ///     &LoadOptions::default(),
+    ///     &ImageOptions { label: Some(3), ..Default::default() },
+    /// )?;
+    /// // A stack of 16-bit PNG slices, 0.5 x 0.5 x 2 mm, iso 1200.
+    /// let stack = ImageSurface::open(
+    ///     "slices/",
+    ///     &LoadOptions { spacing: Some([0.5, 0.5, 2.0]), ..Default::default() },
+    ///     &ImageOptions { iso: Some(1200.0), ..Default::default() },
+    /// )?;
+    /// println!("{} components", stack.component_count());
+    /// # Ok::<(), oracle::image::ImageError>(())
+    /// ```
+    pub fn open(
+        path: impl AsRef<std::path::Path>,
+        load: &super::LoadOptions,
+        opts: &ImageOptions,
+    ) -> Result<ImageSurface, ImageError> {
+        ImageSurface::new(super::load_volume(path.as_ref(), load)?, opts)
+    }
+
     /// The image.
     pub fn volume(&self) -> &Volume {
         &self.vol
@@ -266,6 +294,43 @@ impl ImageSurface {
         }
         let f = |x: f64| self.map_raw(x);
         with_voxels!(self.vol.voxels(), d => fill(d, &mut bits, &f));
+        bits
+    }
+
+    /// Inside bits row by row: row `r = j + ny * k` occupies words `r * W .. (r + 1) * W` with
+    /// `W = ceil(nx / 64)`, bit `x % 64` of word `x / 64` (unused high bits are 0).
+    pub(crate) fn inside_bits_rows(&self) -> Vec<u64> {
+        use rayon::prelude::*;
+        let nx = self.n[0] as usize;
+        let w = nx.div_ceil(64);
+        let rows = self.vol.len() / nx;
+        let mut bits = vec![0u64; rows * w];
+        fn fill<T: Voxel>(
+            d: &[T],
+            nx: usize,
+            w: usize,
+            bits: &mut [u64],
+            f: &(impl Fn(f64) -> f64 + Sync),
+        ) {
+            bits.par_chunks_mut(w * 64)
+                .enumerate()
+                .for_each(|(c, chunk)| {
+                    for (rr, row) in chunk.chunks_mut(w).enumerate() {
+                        let r = c * 64 + rr;
+                        let vals = &d[r * nx..(r + 1) * nx];
+                        for (wi, word) in row.iter_mut().enumerate() {
+                            let mut acc = 0u64;
+                            for (b, &x) in vals[wi * 64..((wi + 1) * 64).min(nx)].iter().enumerate()
+                            {
+                                acc |= ((f(x.to_f64()) < 0.0) as u64) << b;
+                            }
+                            *word = acc;
+                        }
+                    }
+                });
+        }
+        let f = |x: f64| self.map_raw(x);
+        with_voxels!(self.vol.voxels(), d => fill(d, nx, w, &mut bits, &f));
         bits
     }
 
