@@ -258,6 +258,8 @@ type Edge = (usize, isize, usize);
 
 /// Run-based implementation: the grid rows (along x) are cut into runs of equal sign, the
 /// union-find works on runs, and sign changes between rows are found 64 nodes at a time.
+// Run indices are union-find ids and index several arrays: plain index loops are clearer.
+#[allow(clippy::needless_range_loop)]
 pub(crate) fn compute(s: &ImageSurface) -> Topology {
     let [nx, ny, nz] = s.dims_isize().map(|v| v as usize);
     let w = nx.div_ceil(64);
