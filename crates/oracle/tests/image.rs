@@ -1055,3 +1055,21 @@ fn cpu_loop() {
         if what == "value" { n } else { n / 10 }
     );
 }
+
+#[test]
+fn crossings_finds_both_sides_of_a_shell() {
+    // Shell 6 < |p| < 9: a diameter crosses it 4 times.
+    let n = 24;
+    let aff = DAffine3::from_translation(DVec3::splat(-(n as f64 - 1.0) / 2.0));
+    let f = |p: DVec3| (p.length() - 9.0).max(6.0 - p.length());
+    let s = ImageSurface::new(synthetic::sample_implicit(f, [n; 3], aff), &dark(0.0)).unwrap();
+    let mut out = Vec::new();
+    let (a, b) = (DVec3::new(-15.0, 0.3, 0.2), DVec3::new(15.0, 0.3, 0.2));
+    s.crossings(a, b, &mut out);
+    assert_eq!(out.len(), 4, "{out:?}");
+    let xs: Vec<f64> = out.iter().map(|p| p.x).collect();
+    assert!(xs.windows(2).all(|w| w[0] < w[1]));
+    for (x, e) in xs.iter().zip([-9.0f64, -6.0, 6.0, 9.0]) {
+        assert!((x.abs() - e.abs()).abs() < 0.1, "{xs:?}");
+    }
+}

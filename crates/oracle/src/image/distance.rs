@@ -147,28 +147,35 @@ pub(crate) fn distance_map(s: &ImageSurface) -> Option<Vec<f32>> {
         },
     );
     if nz > 1 {
-        // z pass: process blocks of rows (fixed j) in parallel into a side buffer per j.
-        let cols: Vec<Vec<f32>> = (0..ny)
-            .into_par_iter()
-            .map(|j| {
-                let (mut v, mut z, mut o, mut col) =
-                    (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-                let mut res = vec![0f32; nx * nz];
+        // z pass, a block of 8 y-rows at a time: columns transformed in parallel into a small
+        // buffer (8 * nx * nz), then copied back, so no full-size second buffer is needed.
+        const B: usize = 8;
+        let mut buf = vec![0f32; B * nx * nz];
+        for j0 in (0..ny).step_by(B) {
+            let nb = B.min(ny - j0);
+            let dd = &d;
+            buf[..nb * nx * nz]
+                .par_chunks_mut(nz)
+                .enumerate()
+                .for_each_init(
+                    || (Vec::new(), Vec::new(), Vec::new()),
+                    |(v, z, o), (c, col)| {
+                        let (jj, i) = (c / nx, c % nx);
+                        let base = i + (j0 + jj) * sy;
+                        for (k, x) in col.iter_mut().enumerate() {
+                            *x = dd[base + k * sz];
+                        }
+                        edt_1d(col, h[2], v, z, o);
+                    },
+                );
+            for jj in 0..nb {
                 for i in 0..nx {
-                    col.clear();
-                    col.extend((0..nz).map(|k| d[i + j * sy + k * sz]));
-                    edt_1d(&mut col, h[2], &mut v, &mut z, &mut o);
-                    for k in 0..nz {
-                        res[i + k * nx] = col[k];
+                    let col = &buf[(jj * nx + i) * nz..(jj * nx + i + 1) * nz];
+                    let base = i + (j0 + jj) * sy;
+                    for (k, &x) in col.iter().enumerate() {
+                        d[base + k * sz] = x;
                     }
                 }
-                res
-            })
-            .collect();
-        for (j, res) in cols.into_iter().enumerate() {
-            for k in 0..nz {
-                d[j * sy + k * sz..j * sy + k * sz + nx]
-                    .copy_from_slice(&res[k * nx..(k + 1) * nx]);
             }
         }
     }

@@ -523,6 +523,24 @@ impl Surface for ImageSurface {
         a + d * (0.5 * (br.t0 + br.t1))
     }
 
+    /// Samples the segment every [`Surface::crossing_step`] (a quarter voxel) and refines each
+    /// sign change with [`Surface::crossing`] (cell-wise); sorted from `a`.
+    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+        let len = (b - a).length();
+        let n = ((len / self.crossing_step()).ceil() as usize).clamp(1, 1 << 24);
+        let mut p0 = a;
+        let mut f0 = self.value(a);
+        for i in 1..=n {
+            let p1 = a + (b - a) * (i as f64 / n as f64);
+            let f1 = self.value(p1);
+            if (f0 < 0.0) != (f1 < 0.0) {
+                out.push(self.crossing(p0, f0, p1, f1));
+            }
+            p0 = p1;
+            f0 = f1;
+        }
+    }
+
     /// A quarter of the smallest voxel size: the trilinear interpolant has at most two
     /// crossings per cell along a line, usually one.
     fn crossing_step(&self) -> f64 {
