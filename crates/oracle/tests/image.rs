@@ -1073,3 +1073,22 @@ fn crossings_finds_both_sides_of_a_shell() {
         assert!((x.abs() - e.abs()).abs() < 0.1, "{xs:?}");
     }
 }
+
+#[test]
+fn dm_inf_of_an_ellipsoid_is_bounded_by_curvature() {
+    // Semi-axes 9, 6, 5: the smallest radius of curvature is 5²/9 ≈ 2.78 (ends of the long
+    // axis), smaller than the thickness part of the medial axis.
+    let n = 28;
+    let aff = DAffine3::from_translation(DVec3::splat(-(n as f64 - 1.0) / 2.0));
+    let f = |p: DVec3| {
+        let q = p / DVec3::new(9.0, 6.0, 5.0);
+        // A signed distance-like function (exact on the axes).
+        (q.length() - 1.0) * 5.0
+    };
+    let s = ImageSurface::new(synthetic::sample_implicit(f, [n; 3], aff), &dark(0.0)).unwrap();
+    let dm = s.dm_inf_hint().unwrap();
+    assert!(
+        dm > 2.0 && dm < 3.2,
+        "ellipsoid dm_inf estimate {dm}, true 2.78"
+    );
+}

@@ -431,6 +431,11 @@ impl ImageSurface {
         }
     }
 
+    /// Whether the oracle meshes one label (indicator function).
+    pub fn is_label(&self) -> bool {
+        matches!(self.mode, Mode::Label { .. })
+    }
+
     pub(crate) fn dims_isize(&self) -> [isize; 3] {
         self.n
     }
