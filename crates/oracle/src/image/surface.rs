@@ -38,7 +38,7 @@ enum Mode {
 /// The value is thus negative inside, positive outside, and positive on and outside the
 /// bounding sphere (the grid box enlarged by 2 voxels, where the image is background).
 pub struct ImageSurface {
-    vol: Volume,
+    vol: std::sync::Arc<Volume>,
     inv: DAffine3,
     inv_t: DMat3,
     n: [isize; 3],
@@ -69,6 +69,30 @@ impl ImageSurface {
     /// image, an iso outside the data range (no surface), an absent label, a background on the
     /// foreground side.
     pub fn new(vol: Volume, opts: &ImageOptions) -> Result<ImageSurface, ImageError> {
+        ImageSurface::new_shared(std::sync::Arc::new(vol), opts)
+    }
+
+    /// Same as [`ImageSurface::new`] on a shared volume: mesh several labels or iso values of
+    /// one image without copying the voxels.
+    ///
+    /// ```
+    /// use oracle::image::{ImageOptions, ImageSurface, Volume, Voxels};
+    /// use glam::DAffine3;
+    /// use std::sync::Arc;
+    /// let mut v = vec![0u8; 6 * 6 * 6];
+    /// v[2 + 6 * (2 + 6 * 2)] = 1;
+    /// v[3 + 6 * (3 + 6 * 3)] = 2;
+    /// let vol = Arc::new(Volume::new([6, 6, 6], Voxels::U8(v), DAffine3::IDENTITY).unwrap());
+    /// for (label, _count) in vol.labels().unwrap().into_iter().filter(|l| l.0 != 0) {
+    ///     let opts = ImageOptions { label: Some(label), ..Default::default() };
+    ///     let s = ImageSurface::new_shared(vol.clone(), &opts).unwrap();
+    ///     assert_eq!(s.component_count(), 1);
+    /// }
+    /// ```
+    pub fn new_shared(
+        vol: std::sync::Arc<Volume>,
+        opts: &ImageOptions,
+    ) -> Result<ImageSurface, ImageError> {
         let stats = vol.stats()?;
         if stats.min == stats.max {
             return Err(ImageError::Constant {
