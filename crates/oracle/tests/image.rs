@@ -1092,3 +1092,22 @@ fn dm_inf_of_an_ellipsoid_is_bounded_by_curvature() {
         "ellipsoid dm_inf estimate {dm}, true 2.78"
     );
 }
+
+#[test]
+fn stats_over_many_chunks() {
+    // 80^3 = 512 000 voxels (two parallel chunks): binary detection and the first NaN index.
+    let n = 80;
+    let mut v = vec![3.0f32; n * n * n];
+    v[400_000] = 7.0;
+    let vol = Volume::new([n; 3], Voxels::F32(v.clone()), DAffine3::IDENTITY).unwrap();
+    let st = vol.stats().unwrap();
+    assert_eq!((st.min, st.max, st.binary), (3.0, 7.0, Some((3.0, 7.0))));
+    v[10] = 5.0;
+    let vol = Volume::new([n; 3], Voxels::F32(v.clone()), DAffine3::IDENTITY).unwrap();
+    assert_eq!(vol.stats().unwrap().binary, None);
+    v[300_001] = f32::NAN;
+    v[500_000] = f32::INFINITY;
+    let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+    let e = vol.stats().unwrap_err();
+    assert!(matches!(e, ImageError::NaN { index, .. } if index == vol.unindex(300_001)));
+}
