@@ -346,9 +346,7 @@ fn all_dtype_volumes() -> Vec<Volume> {
         )),
         mk(Voxels::U32((0..n).map(|i| i as u32 * 70_000_000).collect())),
         mk(Voxels::I32(
-            (0..n)
-                .map(|i| i * 30_000_000 - 900_000_000)
-                .collect(),
+            (0..n).map(|i| i * 30_000_000 - 900_000_000).collect(),
         )),
         mk(Voxels::F32((0..n).map(|i| i as f32 * 0.25 - 3.0).collect())),
         mk(Voxels::F64(
