@@ -346,9 +346,7 @@ fn all_dtype_volumes() -> Vec<Volume> {
         )),
         mk(Voxels::U32((0..n).map(|i| i as u32 * 70_000_000).collect())),
         mk(Voxels::I32(
-            (0..n)
-                .map(|i| i as i32 * 30_000_000 - 900_000_000)
-                .collect(),
+            (0..n).map(|i| i * 30_000_000 - 900_000_000).collect(),
         )),
         mk(Voxels::F32((0..n).map(|i| i as f32 * 0.25 - 3.0).collect())),
         mk(Voxels::F64(
@@ -774,4 +772,340 @@ fn results_do_not_depend_on_thread_count() {
         })
     };
     assert_eq!(run(1), run(3));
+}
+
+/// Memory check: a 512^3 u16 volume (256 MiB of voxels). Run with
+/// `/usr/bin/time -v cargo test -p oracle --release --test image -- --ignored large_512`
+/// and read "Maximum resident set size".
+#[test]
+#[ignore = "large: 512^3 volume, run by hand for the memory figure"]
+fn large_512_u16_volume() {
+    use rayon::prelude::*;
+    let n = 512;
+    let c = (n as f64 - 1.0) / 2.0;
+    let v: Vec<u16> = (0..n * n * n)
+        .into_par_iter()
+        .map(|p| {
+            let q = DVec3::new((p % n) as f64, ((p / n) % n) as f64, (p / (n * n)) as f64);
+            let r = (q - DVec3::splat(c)).length();
+            (1000.0 + 2000.0 * (1.0 - r / 200.0).clamp(0.0, 1.0) + 0.5) as u16
+        })
+        .collect();
+    let vol = Volume::new(
+        [n; 3],
+        Voxels::U16(v),
+        DAffine3::from_scale(DVec3::splat(0.5)),
+    )
+    .unwrap();
+    let s = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(2000.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let t0 = std::time::Instant::now();
+    assert_eq!(s.component_count(), 1);
+    eprintln!("topology: {:?}", t0.elapsed());
+    let t0 = std::time::Instant::now();
+    let dm = s.dm_inf_hint().unwrap();
+    eprintln!(
+        "dm_inf_hint = {dm} (ball radius 50 world units): {:?}",
+        t0.elapsed()
+    );
+    assert!(dm > 45.0 && dm < 51.0);
+}
+
+/// Inspect a real NIfTI file: `ORACLE_NIFTI=path [ORACLE_ISO=v] cargo test -p oracle --release
+/// --test image -- --ignored real_nifti --nocapture`. Prints dims, type, transform, range,
+/// components, the d_M^inf estimate and timings. Not run by default (needs a file outside the repo).
+#[test]
+#[ignore = "needs ORACLE_NIFTI=path"]
+fn real_nifti_from_env() {
+    let Ok(path) = std::env::var("ORACLE_NIFTI") else {
+        return;
+    };
+    let t0 = std::time::Instant::now();
+    let vol = read_nifti(&path).unwrap();
+    eprintln!(
+        "{path}: dims {:?} {} scaling {:?} read in {:?}",
+        vol.dims(),
+        vol.dtype(),
+        vol.scaling(),
+        t0.elapsed()
+    );
+    eprintln!(
+        "affine {:?} det {}",
+        vol.affine(),
+        vol.affine().matrix3.determinant()
+    );
+    let st = vol.stats().unwrap();
+    eprintln!("range [{}, {}], binary {:?}", st.min, st.max, st.binary);
+    let iso = std::env::var("ORACLE_ISO")
+        .ok()
+        .map(|v| v.parse().unwrap())
+        .unwrap_or(0.5 * (st.min + st.max));
+    let s = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(iso),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let t0 = std::time::Instant::now();
+    let t = s.topology();
+    eprintln!(
+        "iso {iso}: {} surface components ({} inside, {} outside), {} crossing edges, {:?}",
+        t.surface_components,
+        t.inside_components,
+        t.outside_components,
+        t.crossing_edges,
+        t0.elapsed()
+    );
+    let t0 = std::time::Instant::now();
+    eprintln!("dm_inf_hint {:?} in {:?}", s.dm_inf_hint(), t0.elapsed());
+    for p in s.seed_points(0).iter().take(2000) {
+        assert!(s.value(*p).abs() < 1e-6 * (st.max - st.min));
+    }
+}
+
+#[test]
+fn real_statistical_map_from_nilearn() {
+    let vol = read_nifti(fixtures().join("nilearn_motor_10426.nii.gz")).unwrap();
+    assert_eq!(vol.dims(), [53, 63, 46]);
+    assert_eq!(vol.dtype(), Dtype::F32);
+    assert_eq!(vol.affine().matrix3.determinant(), -27.0);
+    // The voxel of the largest t value is inside the iso-3 surface, in world space.
+    let Voxels::F32(d) = vol.voxels() else {
+        panic!()
+    };
+    let (imax, _) = d
+        .iter()
+        .enumerate()
+        .fold((0, f32::MIN), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
+    let ijk = vol.unindex(imax);
+    let world_max = vol.to_world(DVec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64));
+    let s = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(3.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(s.value(world_max) < 0.0);
+    assert!(s.value(s.bounding_sphere().center + DVec3::X * s.bounding_sphere().radius) > 0.0);
+    let n = s.component_count();
+    assert!(n >= 2, "several activation blobs, found {n}");
+    let seeds = s.seed_points(0);
+    assert!(seeds.len() >= n);
+    for p in &seeds {
+        assert!(s.value(*p).abs() < 1e-6, "{p}");
+    }
+    // The gradient at a seed points outward (towards lower t values).
+    let p = s.topology().component_seeds[0];
+    let g = s.gradient(p);
+    assert!(s.value(p + g.normalize() * 0.5) > s.value(p - g.normalize() * 0.5));
+}
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn affine_strategy() -> impl Strategy<Value = DAffine3> {
+        (
+            prop::array::uniform3(-1.0f64..1.0),
+            0.0f64..3.0,
+            prop::array::uniform3(0.3f64..2.0),
+            prop::bool::ANY,
+            prop::array::uniform3(-20.0f64..20.0),
+        )
+            .prop_map(|(axis, angle, sc, flip, t)| {
+                let axis = DVec3::from(axis);
+                let axis = if axis.length() > 1e-3 {
+                    axis.normalize()
+                } else {
+                    DVec3::Z
+                };
+                let mut s = DVec3::from(sc);
+                if flip {
+                    s.y = -s.y;
+                }
+                DAffine3::from_mat3_translation(
+                    DMat3::from_quat(DQuat::from_axis_angle(axis, angle)) * DMat3::from_diagonal(s),
+                    DVec3::from(t),
+                )
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// At voxel centres the value is exactly -(intensity - iso); between them it is bounded
+        /// by the cell's corner values; far outside it is the background. Any affine.
+        #[test]
+        fn value_interpolates_in_world_space(
+            aff in affine_strategy(),
+            data in prop::collection::vec(0u16..1000, 4 * 5 * 3),
+            q in prop::array::uniform3(-1.5f64..5.5),
+        ) {
+            prop_assume!(data.iter().min() != data.iter().max());
+            let vol = Volume::new([4, 5, 3], Voxels::U16(data.clone()), aff).unwrap();
+            let s = ImageSurface::new(vol.clone(), &ImageOptions { iso: Some(500.5), ..Default::default() });
+            prop_assume!(s.is_ok());
+            let s = s.unwrap();
+            for k in 0..3 { for j in 0..5 { for i in 0..4 {
+                let p = aff.transform_point3(DVec3::new(i as f64, j as f64, k as f64));
+                let v = s.value(p);
+                let expect = -(vol.get(i, j, k) - 500.5);
+                prop_assert!((v - expect).abs() < 1e-6, "{v} vs {expect}");
+            }}}
+            let q = DVec3::from(q);
+            let v = s.value(aff.transform_point3(q));
+            let (lo, hi) = (-(999.0 - 500.5), 500.5);
+            prop_assert!(v >= lo - 1e-9 && v <= hi + 1e-9);
+            let bs = s.bounding_sphere();
+            prop_assert!(s.value(bs.center + DVec3::new(0.6, -0.3, 0.74).normalize() * bs.radius) > 0.0);
+        }
+
+        /// The crossing lies on the segment, within tolerance of a sign change.
+        #[test]
+        fn crossing_brackets_a_sign_change(
+            aff in affine_strategy(),
+            a in prop::array::uniform3(-1.0f64..16.0),
+            b in prop::array::uniform3(-1.0f64..16.0),
+        ) {
+            let vol = synthetic::sample_implicit(
+                |p| (aff.inverse().transform_point3(p) - DVec3::splat(7.0)).length() - 5.0,
+                [15, 15, 15],
+                aff,
+            );
+            let s = ImageSurface::new(vol, &dark(0.0)).unwrap();
+            let (a, b) = (aff.transform_point3(DVec3::from(a)), aff.transform_point3(DVec3::from(b)));
+            let (fa, fb) = (s.value(a), s.value(b));
+            prop_assume!((fa < 0.0) != (fb < 0.0));
+            let p = s.crossing(a, fa, b, fb);
+            let d = (b - a).normalize();
+            let tol = s.tolerance();
+            let t = (p - a).dot(d);
+            prop_assert!(t >= -tol && t <= (b - a).length() + tol);
+            prop_assert!((a + d * t - p).length() < 1e-9 * (1.0 + p.length()));
+            let (u, w) = (a + d * (t - tol).max(0.0), a + d * (t + tol).min((b - a).length()));
+            let (fu, fw) = (s.value(u), s.value(w));
+            prop_assert!((fu < 0.0) != (fw < 0.0) || fu.abs() < 1e-9 || fw.abs() < 1e-9,
+                "no sign change around the crossing: {fu} {fw}");
+        }
+    }
+}
+
+/// CPU-time measurement helper (the machine may be loaded, so wall-clock benches mislead):
+/// `/usr/bin/time -f %U target/release/deps/image-* --ignored cpu_loop` with ORACLE_LOOP=value
+/// or crossing; divide the user time by the printed number of calls.
+#[test]
+#[ignore = "manual CPU-time measurement"]
+fn cpu_loop() {
+    let what = std::env::var("ORACLE_LOOP").unwrap_or_default();
+    let s = ImageSurface::new(synthetic::tanglecube_volume(128), &dark(0.0)).unwrap();
+    let mut rng = oracle::roots::SplitMix64(1);
+    let t0 = std::time::Instant::now();
+    let seeds = s.seed_points(0);
+    let mut segs = Vec::new();
+    for p in seeds.iter().cycle().take(100_000) {
+        let d = rng.unit_vector() * (2.0 * 5.2 / 127.0);
+        let (a, b) = (*p - d * rng.next_f64(), *p + d);
+        let (fa, fb) = (s.value(a), s.value(b));
+        if (fa < 0.0) != (fb < 0.0) {
+            segs.push((a, fa, b, fb));
+        }
+        if segs.len() == 1000 {
+            break;
+        }
+    }
+    let pts: Vec<DVec3> = (0..4096)
+        .map(|_| (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5) * 5.0)
+        .collect();
+    eprintln!("setup {:?}", t0.elapsed());
+    let mut acc = 0.0;
+    let n = 20_000_000usize;
+    match what.as_str() {
+        "value" => {
+            for i in 0..n {
+                acc += s.value(std::hint::black_box(pts[i & 4095]));
+            }
+        }
+        "crossing" | "bisection" => {
+            for i in 0..n / 10 {
+                let (a, fa, b, fb) = segs[i % segs.len()];
+                let p = if what == "crossing" {
+                    s.crossing(a, fa, b, fb)
+                } else {
+                    oracle::roots::bisect(|x| s.value(x), a, fa, b, fb, s.tolerance())
+                };
+                acc += p.x;
+            }
+        }
+        _ => return,
+    }
+    eprintln!(
+        "{what}: {} calls, acc {acc}",
+        if what == "value" { n } else { n / 10 }
+    );
+}
+
+#[test]
+fn crossings_finds_both_sides_of_a_shell() {
+    // Shell 6 < |p| < 9: a diameter crosses it 4 times.
+    let n = 24;
+    let aff = DAffine3::from_translation(DVec3::splat(-(n as f64 - 1.0) / 2.0));
+    let f = |p: DVec3| (p.length() - 9.0).max(6.0 - p.length());
+    let s = ImageSurface::new(synthetic::sample_implicit(f, [n; 3], aff), &dark(0.0)).unwrap();
+    let mut out = Vec::new();
+    let (a, b) = (DVec3::new(-15.0, 0.3, 0.2), DVec3::new(15.0, 0.3, 0.2));
+    s.crossings(a, b, &mut out);
+    assert_eq!(out.len(), 4, "{out:?}");
+    let xs: Vec<f64> = out.iter().map(|p| p.x).collect();
+    assert!(xs.windows(2).all(|w| w[0] < w[1]));
+    for (x, e) in xs.iter().zip([-9.0f64, -6.0, 6.0, 9.0]) {
+        assert!((x.abs() - e.abs()).abs() < 0.1, "{xs:?}");
+    }
+}
+
+#[test]
+fn dm_inf_of_an_ellipsoid_is_bounded_by_curvature() {
+    // Semi-axes 9, 6, 5: the smallest radius of curvature is 5²/9 ≈ 2.78 (ends of the long
+    // axis), smaller than the thickness part of the medial axis.
+    let n = 28;
+    let aff = DAffine3::from_translation(DVec3::splat(-(n as f64 - 1.0) / 2.0));
+    let f = |p: DVec3| {
+        let q = p / DVec3::new(9.0, 6.0, 5.0);
+        // A signed distance-like function (exact on the axes).
+        (q.length() - 1.0) * 5.0
+    };
+    let s = ImageSurface::new(synthetic::sample_implicit(f, [n; 3], aff), &dark(0.0)).unwrap();
+    let dm = s.dm_inf_hint().unwrap();
+    assert!(
+        dm > 2.0 && dm < 3.2,
+        "ellipsoid dm_inf estimate {dm}, true 2.78"
+    );
+}
+
+#[test]
+fn stats_over_many_chunks() {
+    // 80^3 = 512 000 voxels (two parallel chunks): binary detection and the first NaN index.
+    let n = 80;
+    let mut v = vec![3.0f32; n * n * n];
+    v[400_000] = 7.0;
+    let vol = Volume::new([n; 3], Voxels::F32(v.clone()), DAffine3::IDENTITY).unwrap();
+    let st = vol.stats().unwrap();
+    assert_eq!((st.min, st.max, st.binary), (3.0, 7.0, Some((3.0, 7.0))));
+    v[10] = 5.0;
+    let vol = Volume::new([n; 3], Voxels::F32(v.clone()), DAffine3::IDENTITY).unwrap();
+    assert_eq!(vol.stats().unwrap().binary, None);
+    v[300_001] = f32::NAN;
+    v[500_000] = f32::INFINITY;
+    let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+    let e = vol.stats().unwrap_err();
+    assert!(matches!(e, ImageError::NaN { index, .. } if index == vol.unindex(300_001)));
 }

@@ -9,6 +9,16 @@
 //!   value (or of one label), in **world** coordinates.
 //! - [`synthetic`]: volumes sampled from implicit functions, and [`write_nifti`] for tests.
 //!
+//! P1: [`ImageSurface::topology`] scans the voxel grid (run-length rows, 64 nodes per word,
+//! union-find with the asymptotic decider on ambiguous faces) and gives one seed per surface
+//! component and [`ImageSurface::component_count`]; see [`Topology`]. P2:
+//! [`Surface::dm_inf_hint`](crate::Surface::dm_inf_hint) estimates d_M^inf from a Euclidean
+//! distance transform (ridges) and, for greyscale images, the curvature at the seeds.
+//!
+//! Cost (128³ f32 tanglecube, one core): `value()` ≈ 17 ns, `crossing()` on a 2-voxel segment
+//! ≈ 90 ns (bisection: 470 ns), topology ≈ 10 ms, d_M^inf ≈ 120 ms. Memory: the voxels in their
+//! native type; a 512³ u16 volume (256 MiB) with topology and d_M^inf peaks at 0.8 GB RSS.
+//!
 //! Conventions: the value is negative inside, where the intensity is **above** the iso value
 //! (bright foreground) unless [`ImageOptions::dark_foreground`] is set. Outside the voxel grid
 //! the image is continued by the background value, so a surface touching the border is closed.

@@ -168,7 +168,19 @@ fn decode_slice(path: &Path) -> Result<(u32, u32, Slice), ImageError> {
         D::ImageLumaA16(_) | D::ImageRgb16(_) | D::ImageRgba16(_) => {
             Slice::U16(img.to_luma16().into_raw())
         }
-        _ => Slice::U8(img.to_luma8().into_raw()),
+        D::ImageLumaA8(_) | D::ImageRgb8(_) | D::ImageRgba8(_) => {
+            Slice::U8(img.to_luma8().into_raw())
+        }
+        // Float (or future) pixel types: never quantise silently.
+        other => {
+            return Err(ImageError::UnsupportedType {
+                path: path.to_path_buf(),
+                field: format!(
+                    "slice pixel type {:?} (float or unknown; use a multi-page TIFF, which keeps f32)",
+                    other.color()
+                ),
+            });
+        }
     };
     Ok((w, h, s))
 }

@@ -38,7 +38,7 @@ enum Mode {
 /// The value is thus negative inside, positive outside, and positive on and outside the
 /// bounding sphere (the grid box enlarged by 2 voxels, where the image is background).
 pub struct ImageSurface {
-    vol: Volume,
+    vol: std::sync::Arc<Volume>,
     inv: DAffine3,
     inv_t: DMat3,
     n: [isize; 3],
@@ -69,6 +69,30 @@ impl ImageSurface {
     /// image, an iso outside the data range (no surface), an absent label, a background on the
     /// foreground side.
     pub fn new(vol: Volume, opts: &ImageOptions) -> Result<ImageSurface, ImageError> {
+        ImageSurface::new_shared(std::sync::Arc::new(vol), opts)
+    }
+
+    /// Same as [`ImageSurface::new`] on a shared volume: mesh several labels or iso values of
+    /// one image without copying the voxels.
+    ///
+    /// ```
+    /// use oracle::image::{ImageOptions, ImageSurface, Volume, Voxels};
+    /// use glam::DAffine3;
+    /// use std::sync::Arc;
+    /// let mut v = vec![0u8; 6 * 6 * 6];
+    /// v[2 + 6 * (2 + 6 * 2)] = 1;
+    /// v[3 + 6 * (3 + 6 * 3)] = 2;
+    /// let vol = Arc::new(Volume::new([6, 6, 6], Voxels::U8(v), DAffine3::IDENTITY).unwrap());
+    /// for (label, _count) in vol.labels().unwrap().into_iter().filter(|l| l.0 != 0) {
+    ///     let opts = ImageOptions { label: Some(label), ..Default::default() };
+    ///     let s = ImageSurface::new_shared(vol.clone(), &opts).unwrap();
+    ///     assert_eq!(s.component_count(), 1);
+    /// }
+    /// ```
+    pub fn new_shared(
+        vol: std::sync::Arc<Volume>,
+        opts: &ImageOptions,
+    ) -> Result<ImageSurface, ImageError> {
         let stats = vol.stats()?;
         if stats.min == stats.max {
             return Err(ImageError::Constant {
@@ -183,6 +207,34 @@ impl ImageSurface {
         })
     }
 
+    /// Load `path` with [`load_volume`](super::load_volume) (NIfTI, slice folder, multi-page
+    /// TIFF, raw) and build the oracle: the one-call entry point for the CLI.
+    ///
+    /// ```no_run
+    /// use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
+    /// // A segmentation: mesh label 3.
+    /// let seg = ImageSurface::open(
+    ///     "labels.nii.gz",
+    ///     &LoadOptions::default(),
+    ///     &ImageOptions { label: Some(3), ..Default::default() },
+    /// )?;
+    /// // A stack of 16-bit PNG slices, 0.5 x 0.5 x 2 mm, iso 1200.
+    /// let stack = ImageSurface::open(
+    ///     "slices/",
+    ///     &LoadOptions { spacing: Some([0.5, 0.5, 2.0]), ..Default::default() },
+    ///     &ImageOptions { iso: Some(1200.0), ..Default::default() },
+    /// )?;
+    /// println!("{} components", stack.component_count());
+    /// # Ok::<(), oracle::image::ImageError>(())
+    /// ```
+    pub fn open(
+        path: impl AsRef<std::path::Path>,
+        load: &super::LoadOptions,
+        opts: &ImageOptions,
+    ) -> Result<ImageSurface, ImageError> {
+        ImageSurface::new(super::load_volume(path.as_ref(), load)?, opts)
+    }
+
     /// The image.
     pub fn volume(&self) -> &Volume {
         &self.vol
@@ -269,6 +321,43 @@ impl ImageSurface {
         bits
     }
 
+    /// Inside bits row by row: row `r = j + ny * k` occupies words `r * W .. (r + 1) * W` with
+    /// `W = ceil(nx / 64)`, bit `x % 64` of word `x / 64` (unused high bits are 0).
+    pub(crate) fn inside_bits_rows(&self) -> Vec<u64> {
+        use rayon::prelude::*;
+        let nx = self.n[0] as usize;
+        let w = nx.div_ceil(64);
+        let rows = self.vol.len() / nx;
+        let mut bits = vec![0u64; rows * w];
+        fn fill<T: Voxel>(
+            d: &[T],
+            nx: usize,
+            w: usize,
+            bits: &mut [u64],
+            f: &(impl Fn(f64) -> f64 + Sync),
+        ) {
+            bits.par_chunks_mut(w * 64)
+                .enumerate()
+                .for_each(|(c, chunk)| {
+                    for (rr, row) in chunk.chunks_mut(w).enumerate() {
+                        let r = c * 64 + rr;
+                        let vals = &d[r * nx..(r + 1) * nx];
+                        for (wi, word) in row.iter_mut().enumerate() {
+                            let mut acc = 0u64;
+                            for (b, &x) in vals[wi * 64..((wi + 1) * 64).min(nx)].iter().enumerate()
+                            {
+                                acc |= ((f(x.to_f64()) < 0.0) as u64) << b;
+                            }
+                            *word = acc;
+                        }
+                    }
+                });
+        }
+        let f = |x: f64| self.map_raw(x);
+        with_voxels!(self.vol.voxels(), d => fill(d, nx, w, &mut bits, &f));
+        bits
+    }
+
     #[inline(always)]
     fn interp<T: Voxel>(&self, d: &[T], v: DVec3, fetch: impl Fn(T) -> f64, bg: f64) -> f64 {
         let (x, y, z) = (v.x, v.y, v.z);
@@ -276,11 +365,25 @@ impl ImageSurface {
         {
             return if v.is_nan() { f64::NAN } else { bg };
         }
-        let (fx, fy, fz) = (x.floor(), y.floor(), z.floor());
-        let (tx, ty, tz) = (x - fx, y - fy, z - fz);
-        let (i, j, k) = (fx as isize, fy as isize, fz as isize);
+        // floor by truncation (x > -1 here): avoids a libm call on baseline x86-64.
+        let i = (x + 1.0) as isize - 1;
+        let j = (y + 1.0) as isize - 1;
+        let k = (z + 1.0) as isize - 1;
+        let c = self.corners(d, [i, j, k], fetch, bg);
+        trilinear(&c, v - DVec3::new(i as f64, j as f64, k as f64))
+    }
+
+    /// Raw (or indicator) values at the corners of `cell`, `bg` outside the grid.
+    #[inline(always)]
+    fn corners<T: Voxel>(
+        &self,
+        d: &[T],
+        [i, j, k]: [isize; 3],
+        fetch: impl Fn(T) -> f64,
+        bg: f64,
+    ) -> [f64; 8] {
         let [nx, ny, nz] = self.n;
-        let c = if i >= 0 && j >= 0 && k >= 0 && i + 1 < nx && j + 1 < ny && k + 1 < nz {
+        if i >= 0 && j >= 0 && k >= 0 && i + 1 < nx && j + 1 < ny && k + 1 < nz {
             let sx = 1usize;
             let sy = nx as usize;
             let sz = (nx * ny) as usize;
@@ -315,14 +418,7 @@ impl ImageSurface {
                 at(i, j + 1, k + 1),
                 at(i + 1, j + 1, k + 1),
             ]
-        };
-        let x00 = c[0] + tx * (c[1] - c[0]);
-        let x10 = c[2] + tx * (c[3] - c[2]);
-        let x01 = c[4] + tx * (c[5] - c[4]);
-        let x11 = c[6] + tx * (c[7] - c[6]);
-        let y0 = x00 + ty * (x10 - x00);
-        let y1 = x01 + ty * (x11 - x01);
-        y0 + tz * (y1 - y0)
+        }
     }
 
     /// Topology of the level set from the voxel grid (computed once, then cached): see
@@ -335,6 +431,33 @@ impl ImageSurface {
     /// ([`Topology::surface_components`]). The mesh should have exactly this many.
     pub fn component_count(&self) -> usize {
         self.topology().surface_components
+    }
+
+    /// Signed values at the 8 corners of the cell whose lowest corner is `cell` (integer voxel
+    /// coordinates, background outside the grid), x fastest.
+    #[inline]
+    fn cell_corners(&self, cell: DVec3) -> [f64; 8] {
+        let cell = [cell.x as isize, cell.y as isize, cell.z as isize];
+        match self.mode {
+            Mode::Intensity { a, b } => {
+                let r = with_voxels!(self.vol.voxels(), d => self.corners(d, cell, |x| x.to_f64(), self.bg_raw));
+                r.map(|x| a * x + b)
+            }
+            Mode::Label {
+                label,
+                slope,
+                inter,
+            } => {
+                let ind = |x: f64| ((slope * x + inter) == label) as u8 as f64;
+                let r = with_voxels!(self.vol.voxels(), d => self.corners(d, cell, |x| ind(x.to_f64()), 0.0));
+                r.map(|x| 0.5 - x)
+            }
+        }
+    }
+
+    /// Whether the oracle meshes one label (indicator function).
+    pub fn is_label(&self) -> bool {
+        matches!(self.mode, Mode::Label { .. })
     }
 
     pub(crate) fn dims_isize(&self) -> [isize; 3] {
@@ -352,10 +475,13 @@ impl Surface for ImageSurface {
         self.value_voxel(self.inv.transform_point3(p))
     }
 
-    /// Safeguarded Illinois (modified false position) on the segment: the bracket always keeps
-    /// opposite signs (by `value < 0`), each step lands at least tolerance/4 inside it, and a
-    /// bisection step is forced when two steps did not halve it. Ends when the bracket is
-    /// shorter than the tolerance; returns its midpoint.
+    /// Cell-wise root finding on the segment. The bracket `[t0, t1]` always keeps opposite
+    /// signs (by `value < 0`). Each round picks a candidate (false position, or the midpoint
+    /// when the bracket did not halve in two rounds), fetches the 8 corners of the voxel cell
+    /// holding it, and evaluates the cell's trilinear polynomial where the segment enters and
+    /// leaves the cell: if the signs differ there, the root is solved on that polynomial
+    /// (Illinois, no more fetches) to the tolerance; otherwise the whole cell piece is cut off
+    /// the bracket. Returns the midpoint of a final bracket shorter than the tolerance.
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
         let tol = self.tolerance();
         let d = b - a;
@@ -364,56 +490,84 @@ impl Surface for ImageSurface {
             return crate::roots::bisect(|p| self.value(p), a, fa, b, fb, tol);
         }
         let ttol = tol / len;
-        let a_neg = fa < 0.0;
-        let (mut t0, mut f0, mut t1, mut f1) = (0.0f64, fa, 1.0f64, fb);
-        let mut last_side = 0i8;
+        let va = self.inv.transform_point3(a);
+        let dv = self.inv.transform_vector3(d);
+        let at = |t: f64| va + dv * t;
+        let mut br = Bracket::new(fa, fb);
         let mut width_two_ago = f64::INFINITY;
         let mut width_one_ago = 1.0;
-        for _ in 0..200 {
-            let w = t1 - t0;
+        for _ in 0..256 {
+            let w = br.t1 - br.t0;
             if w <= ttol {
                 break;
             }
-            let m = 0.25 * ttol;
-            let mut t = if w > 0.5 * width_two_ago {
-                0.5 * (t0 + t1)
+            let denom = br.f1 - br.f0;
+            let mut t = if w > 0.5 * width_two_ago || !(denom != 0.0 && denom.is_finite()) {
+                0.5 * (br.t0 + br.t1)
             } else {
-                let denom = f1 - f0;
-                if denom != 0.0 && denom.is_finite() {
-                    t0 - f0 * w / denom
-                } else {
-                    0.5 * (t0 + t1)
-                }
+                br.t0 - br.f0 * w / denom
             };
-            if !(t > t0 + m) {
-                t = t0 + m;
+            if !(t > br.t0 && t < br.t1) {
+                t = 0.5 * (br.t0 + br.t1);
             }
-            if !(t < t1 - m) {
-                t = t1 - m;
-            }
-            let f = self.value(a + d * t);
-            if f.is_nan() {
-                return crate::roots::bisect(|p| self.value(p), a, fa, b, fb, tol);
-            }
-            if (f < 0.0) == a_neg {
-                t0 = t;
-                f0 = f;
-                if last_side == -1 {
-                    f1 *= 0.5;
+            let cell = at(t).floor();
+            // Parameter range of the segment inside the cell, within the bracket.
+            let (mut u0, mut u1) = (br.t0, br.t1);
+            for ax in 0..3 {
+                if dv[ax] != 0.0 {
+                    let e0 = (cell[ax] - va[ax]) / dv[ax];
+                    let e1 = (cell[ax] + 1.0 - va[ax]) / dv[ax];
+                    u0 = u0.max(e0.min(e1));
+                    u1 = u1.min(e0.max(e1));
                 }
-                last_side = -1;
+            }
+            let (u0, u1) = (u0.min(t), u1.max(t));
+            let c = self.cell_corners(cell);
+            if c.iter().any(|v| v.is_nan()) {
+                break;
+            }
+            let poly = |u: f64| trilinear(&c, at(u) - cell);
+            let (g0, g1) = (poly(u0), poly(u1));
+            if (g0 < 0.0) != (g1 < 0.0) {
+                let sub = Bracket {
+                    t0: u0,
+                    f0: g0,
+                    t1: u1,
+                    f1: g1,
+                    neg0: g0 < 0.0,
+                };
+                br = sub.solve(poly, ttol);
+                break;
+            }
+            if (g0 < 0.0) == br.neg0 {
+                br.t0 = u1;
+                br.f0 = g1;
             } else {
-                t1 = t;
-                f1 = f;
-                if last_side == 1 {
-                    f0 *= 0.5;
-                }
-                last_side = 1;
+                br.t1 = u0;
+                br.f1 = g0;
             }
             width_two_ago = width_one_ago;
             width_one_ago = w;
         }
-        a + d * (0.5 * (t0 + t1))
+        a + d * (0.5 * (br.t0 + br.t1))
+    }
+
+    /// Samples the segment every [`Surface::crossing_step`] (a quarter voxel) and refines each
+    /// sign change with [`Surface::crossing`] (cell-wise); sorted from `a`.
+    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+        let len = (b - a).length();
+        let n = ((len / self.crossing_step()).ceil() as usize).clamp(1, 1 << 24);
+        let mut p0 = a;
+        let mut f0 = self.value(a);
+        for i in 1..=n {
+            let p1 = a + (b - a) * (i as f64 / n as f64);
+            let f1 = self.value(p1);
+            if (f0 < 0.0) != (f1 < 0.0) {
+                out.push(self.crossing(p0, f0, p1, f1));
+            }
+            p0 = p1;
+            f0 = f1;
+        }
     }
 
     /// A quarter of the smallest voxel size: the trilinear interpolant has at most two
@@ -454,5 +608,89 @@ impl ImageSurface {
     /// Euclidean distance transform (see the `distance` module docs), clamped below by one voxel.
     pub fn dm_inf_estimate(&self) -> Option<f64> {
         self.dm_inf_hint()
+    }
+}
+
+/// Trilinear interpolation of the 8 corner values `c` (x fastest) at local coordinates `t`.
+#[inline(always)]
+fn trilinear(c: &[f64; 8], t: DVec3) -> f64 {
+    let x00 = c[0] + t.x * (c[1] - c[0]);
+    let x10 = c[2] + t.x * (c[3] - c[2]);
+    let x01 = c[4] + t.x * (c[5] - c[4]);
+    let x11 = c[6] + t.x * (c[7] - c[6]);
+    let y0 = x00 + t.y * (x10 - x00);
+    let y1 = x01 + t.y * (x11 - x01);
+    y0 + t.z * (y1 - y0)
+}
+
+/// A sign-change bracket `[t0, t1]` for the Illinois iteration.
+#[derive(Clone, Copy, Debug)]
+struct Bracket {
+    t0: f64,
+    f0: f64,
+    t1: f64,
+    f1: f64,
+    neg0: bool,
+}
+
+impl Bracket {
+    fn new(fa: f64, fb: f64) -> Bracket {
+        Bracket {
+            t0: 0.0,
+            f0: fa,
+            t1: 1.0,
+            f1: fb,
+            neg0: fa < 0.0,
+        }
+    }
+
+    /// Illinois (modified false position) until the bracket is shorter than `ttol`: each step
+    /// lands at least `ttol / 4` inside the bracket, and bisects when two steps did not halve
+    /// it. Stops early on NaN.
+    fn solve(mut self, f: impl Fn(f64) -> f64, ttol: f64) -> Bracket {
+        let mut last_side = 0i8;
+        let mut width_two_ago = f64::INFINITY;
+        let mut width_one_ago = self.t1 - self.t0;
+        for _ in 0..200 {
+            let w = self.t1 - self.t0;
+            if w <= ttol {
+                break;
+            }
+            let m = 0.25 * ttol;
+            let denom = self.f1 - self.f0;
+            let mut t = if w > 0.5 * width_two_ago || !(denom != 0.0 && denom.is_finite()) {
+                0.5 * (self.t0 + self.t1)
+            } else {
+                self.t0 - self.f0 * w / denom
+            };
+            if !(t > self.t0 + m) {
+                t = self.t0 + m;
+            }
+            if !(t < self.t1 - m) {
+                t = self.t1 - m;
+            }
+            let v = f(t);
+            if v.is_nan() {
+                break;
+            }
+            if (v < 0.0) == self.neg0 {
+                self.t0 = t;
+                self.f0 = v;
+                if last_side == -1 {
+                    self.f1 *= 0.5;
+                }
+                last_side = -1;
+            } else {
+                self.t1 = t;
+                self.f1 = v;
+                if last_side == 1 {
+                    self.f0 *= 0.5;
+                }
+                last_side = 1;
+            }
+            width_two_ago = width_one_ago;
+            width_one_ago = w;
+        }
+        self
     }
 }

@@ -86,12 +86,15 @@ impl Dsu {
     }
 }
 
+#[cfg(test)]
 #[inline]
 fn bit(bits: &[u64], i: usize) -> bool {
     (bits[i >> 6] >> (i & 63)) & 1 == 1
 }
 
-pub(crate) fn compute(s: &ImageSurface) -> Topology {
+/// Node-by-node reference implementation (tests cross-check the run-based one against it).
+#[cfg(test)]
+pub(crate) fn compute_reference(s: &ImageSurface) -> Topology {
     let [nx, ny, nz] = s.dims_isize().map(|v| v as usize);
     let n = nx * ny * nz;
     let bits = s.inside_bits();
@@ -246,5 +249,326 @@ pub(crate) fn compute(s: &ImageSurface) -> Topology {
         crossing_edges: edges,
         component_seeds,
         extra_seeds,
+    }
+}
+
+/// An edge with a sign change: node `p`, axis and direction `axd` (±1, ±2, ±3 for x, y, z),
+/// the other node `q` (or `usize::MAX` for the padding), and the runs of `p` and `q`.
+type Edge = (usize, isize, usize);
+
+/// Run-based implementation: the grid rows (along x) are cut into runs of equal sign, the
+/// union-find works on runs, and sign changes between rows are found 64 nodes at a time.
+// Run indices are union-find ids and index several arrays: plain index loops are clearer.
+#[allow(clippy::needless_range_loop)]
+pub(crate) fn compute(s: &ImageSurface) -> Topology {
+    let [nx, ny, nz] = s.dims_isize().map(|v| v as usize);
+    let w = nx.div_ceil(64);
+    let rows = ny * nz;
+    let bits = s.inside_bits_rows();
+    let word = |r: usize, wi: usize| bits[r * w + wi];
+    let get = |r: usize, x: usize| (bits[r * w + (x >> 6)] >> (x & 63)) & 1 == 1;
+    // Valid node positions (x < nx) and transition positions (x < nx - 1) in word wi.
+    let mask_below = |wi: usize, lim: usize| -> u64 {
+        let lo = wi * 64;
+        if lim >= lo + 64 {
+            !0
+        } else if lim <= lo {
+            0
+        } else {
+            (1u64 << (lim - lo)) - 1
+        }
+    };
+    let trans = |r: usize, wi: usize| -> u64 {
+        let a = word(r, wi);
+        let next = if wi + 1 < w { word(r, wi + 1) << 63 } else { 0 };
+        (a ^ ((a >> 1) | next)) & mask_below(wi, nx - 1)
+    };
+    // Runs: start x of each run, its sign, first run of each row.
+    let mut run_x: Vec<u32> = Vec::new();
+    let mut run_ins: Vec<bool> = Vec::new();
+    let mut row_first: Vec<usize> = Vec::with_capacity(rows + 1);
+    for r in 0..rows {
+        row_first.push(run_x.len());
+        run_x.push(0);
+        run_ins.push(get(r, 0));
+        for wi in 0..w {
+            let mut t = trans(r, wi);
+            while t != 0 {
+                let x = wi * 64 + t.trailing_zeros() as usize + 1;
+                run_x.push(x as u32);
+                run_ins.push(get(r, x));
+                t &= t - 1;
+            }
+        }
+    }
+    row_first.push(run_x.len());
+    let nruns = run_x.len();
+    let ext = nruns as u32;
+    let run_of = |r: usize, x: usize| -> u32 {
+        let (lo, hi) = (row_first[r], row_first[r + 1]);
+        let k = run_x[lo..hi].partition_point(|&s| s as usize <= x);
+        (lo + k - 1) as u32
+    };
+    let run_end = |t: usize, r: usize| -> usize {
+        if t + 1 < row_first[r + 1] {
+            run_x[t + 1] as usize - 1
+        } else {
+            nx - 1
+        }
+    };
+    let node = |r: usize, x: usize| r * nx + x;
+    let mut dsu = Dsu((0..=ext).collect());
+    // Asymptotic decider on a face with corners p00, p10, p01, p11 (p00 ~ p11 and p10 ~ p01
+    // are the diagonals); returns whether the diagonal p00-p11 is joined.
+    let decide = |p00: usize, p10: usize, p01: usize, p11: usize, a: bool| -> bool {
+        let (f00, f10, f01, f11) = (
+            s.node_value(p00),
+            s.node_value(p10),
+            s.node_value(p01),
+            s.node_value(p11),
+        );
+        let den = f00 + f11 - f10 - f01;
+        let saddle = if den != 0.0 {
+            (f00 * f11 - f10 * f01) / den
+        } else {
+            0.0
+        };
+        (saddle < 0.0) == a
+    };
+    let link_rows = |dsu: &mut Dsu, a: usize, b: usize| {
+        // 6-neighbours across rows: overlapping runs of equal sign.
+        let (mut i, ie) = (row_first[a], row_first[a + 1]);
+        let (mut k, ke) = (row_first[b], row_first[b + 1]);
+        while i < ie && k < ke {
+            if run_ins[i] == run_ins[k] {
+                dsu.union(i as u32, k as u32);
+            }
+            let (ei, ek) = (run_end(i, a), run_end(k, b));
+            if ei <= ek {
+                i += 1;
+            }
+            if ek <= ei {
+                k += 1;
+            }
+        }
+        // Face diagonals in the plane of the two rows: both rows change sign between x and
+        // x + 1, with opposite signs.
+        for wi in 0..w {
+            let mut c = trans(a, wi) & trans(b, wi) & (word(a, wi) ^ word(b, wi));
+            while c != 0 {
+                let x = wi * 64 + c.trailing_zeros() as usize;
+                c &= c - 1;
+                let (p00, p10, p01, p11) = (node(a, x), node(a, x + 1), node(b, x), node(b, x + 1));
+                if decide(p00, p10, p01, p11, get(a, x)) {
+                    dsu.union(run_of(a, x), run_of(b, x + 1));
+                } else {
+                    dsu.union(run_of(a, x + 1), run_of(b, x));
+                }
+            }
+        }
+    };
+    for r in 0..rows {
+        let (j, k) = (r % ny, r / ny);
+        let border_row = j == 0 || k == 0 || j + 1 == ny || k + 1 == nz;
+        let (lo, hi) = (row_first[r], row_first[r + 1]);
+        for t in lo..hi {
+            if !run_ins[t] && (border_row || t == lo || t + 1 == hi) {
+                dsu.union(t as u32, ext);
+            }
+        }
+        if j + 1 < ny {
+            link_rows(&mut dsu, r, r + 1);
+        }
+        if k + 1 < nz {
+            link_rows(&mut dsu, r, r + ny);
+        }
+        if j + 1 < ny && k + 1 < nz {
+            // yz faces: rows A = (j, k), B = (j+1, k), C = (j, k+1), D = (j+1, k+1).
+            let (ra, rb, rc, rd) = (r, r + 1, r + ny, r + ny + 1);
+            for wi in 0..w {
+                let (a, b, c, d) = (word(ra, wi), word(rb, wi), word(rc, wi), word(rd, wi));
+                let mut amb = !(a ^ d) & !(b ^ c) & (a ^ b) & mask_below(wi, nx);
+                while amb != 0 {
+                    let x = wi * 64 + amb.trailing_zeros() as usize;
+                    amb &= amb - 1;
+                    let (p00, p10, p01, p11) = (node(ra, x), node(rb, x), node(rc, x), node(rd, x));
+                    if decide(p00, p10, p01, p11, get(ra, x)) {
+                        dsu.union(run_of(ra, x), run_of(rd, x));
+                    } else {
+                        dsu.union(run_of(rb, x), run_of(rc, x));
+                    }
+                }
+            }
+        }
+    }
+    let mut inside_components = 0;
+    let mut outside_components = 0;
+    for t in 0..=nruns {
+        if dsu.find(t as u32) == t as u32 {
+            if t < nruns && run_ins[t] {
+                inside_components += 1;
+            } else {
+                outside_components += 1;
+            }
+        }
+    }
+    // Sign-changing edges, in a fixed order: per row, x edges, y edges, z edges, padding.
+    let for_each_edge = |f: &mut dyn FnMut(Edge, u32, u32)| {
+        let pad = usize::MAX;
+        for r in 0..rows {
+            let (j, k) = (r % ny, r / ny);
+            for t in row_first[r] + 1..row_first[r + 1] {
+                let x = run_x[t] as usize - 1;
+                f((node(r, x), 1, node(r, x + 1)), t as u32 - 1, t as u32);
+            }
+            for (dr, ok, axd) in [(1usize, j + 1 < ny, 2isize), (ny, k + 1 < nz, 3)] {
+                if !ok {
+                    continue;
+                }
+                for wi in 0..w {
+                    let mut c = (word(r, wi) ^ word(r + dr, wi)) & mask_below(wi, nx);
+                    while c != 0 {
+                        let x = wi * 64 + c.trailing_zeros() as usize;
+                        c &= c - 1;
+                        let e = (node(r, x), axd, node(r + dr, x));
+                        f(e, run_of(r, x), run_of(r + dr, x));
+                    }
+                }
+            }
+            let (lo, hi) = (row_first[r], row_first[r + 1]);
+            if run_ins[lo] {
+                f((node(r, 0), -1, pad), lo as u32, ext);
+            }
+            if run_ins[hi - 1] {
+                f((node(r, nx - 1), 1, pad), hi as u32 - 1, ext);
+            }
+            for (on, axd) in [
+                (j == 0, -2isize),
+                (j + 1 == ny, 2),
+                (k == 0, -3),
+                (k + 1 == nz, 3),
+            ] {
+                if !on {
+                    continue;
+                }
+                for t in lo..hi {
+                    if run_ins[t] {
+                        for x in run_x[t] as usize..=run_end(t, r) {
+                            f((node(r, x), axd, pad), t as u32, ext);
+                        }
+                    }
+                }
+            }
+        }
+    };
+    let mut edges = 0usize;
+    for_each_edge(&mut |_, _, _| edges += 1);
+    let stride = edges.div_ceil(4096).max(1);
+    let mut pairs: BTreeMap<(u32, u32), Edge> = BTreeMap::new();
+    let mut last_key = (u32::MAX, u32::MAX);
+    let mut extra_edges = Vec::new();
+    let mut count = 0usize;
+    for_each_edge(&mut |e, tp, tq| {
+        let (rp, rq) = (dsu.find(tp), dsu.find(tq));
+        let key = if run_ins[tp as usize] {
+            (rp, rq)
+        } else {
+            (rq, rp)
+        };
+        if key != last_key {
+            pairs.entry(key).or_insert(e);
+            last_key = key;
+        }
+        if count.is_multiple_of(stride) {
+            extra_edges.push(e);
+        }
+        count += 1;
+    });
+    let bg = s.background_value();
+    let aff = s.volume().affine();
+    let point = |(p, axd, q): Edge| -> DVec3 {
+        let fp = s.node_value(p);
+        let fq = if q == usize::MAX { bg } else { s.node_value(q) };
+        let t = if fp != fq {
+            (fp / (fp - fq)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let ax = axd.unsigned_abs() - 1;
+        let mut dir = DVec3::ZERO;
+        dir[ax] = axd.signum() as f64;
+        let c = DVec3::new(
+            (p % nx) as f64,
+            ((p / nx) % ny) as f64,
+            (p / (nx * ny)) as f64,
+        );
+        aff.transform_point3(c + dir * t)
+    };
+    Topology {
+        inside_components,
+        outside_components,
+        surface_components: (inside_components + outside_components).saturating_sub(1),
+        crossing_edges: edges,
+        component_seeds: pairs.into_values().map(point).collect(),
+        extra_seeds: extra_edges.into_iter().map(point).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::image::{ImageOptions, Volume, Voxels};
+    use crate::roots::SplitMix64;
+    use glam::DAffine3;
+
+    fn check(dims: [usize; 3], data: Vec<f32>, iso: f64) -> usize {
+        let vol = Volume::new(dims, Voxels::F32(data), DAffine3::IDENTITY).unwrap();
+        let Ok(s) = ImageSurface::new(
+            vol,
+            &ImageOptions {
+                iso: Some(iso),
+                ..Default::default()
+            },
+        ) else {
+            return 0;
+        };
+        let (a, b) = (compute(&s), compute_reference(&s));
+        assert_eq!(
+            (a.inside_components, a.outside_components, a.crossing_edges),
+            (b.inside_components, b.outside_components, b.crossing_edges),
+            "dims {dims:?}"
+        );
+        assert_eq!(a.component_seeds.len(), b.component_seeds.len());
+        for p in a.component_seeds.iter().chain(&a.extra_seeds) {
+            assert!(crate::Surface::value(&s, *p).abs() < 1e-9);
+        }
+        a.surface_components
+    }
+
+    #[test]
+    fn run_based_matches_node_based() {
+        let mut rng = SplitMix64(77);
+        let mut many = 0;
+        for case in 0..300 {
+            let dims = [
+                1 + (rng.next_u64() % 70) as usize,
+                1 + (rng.next_u64() % 6) as usize,
+                1 + (rng.next_u64() % 6) as usize,
+            ];
+            let n = dims[0] * dims[1] * dims[2];
+            // Sparse or dense random binary-ish data with random values (ambiguous faces).
+            let density = [0.1, 0.3, 0.5, 0.8][case % 4];
+            let data: Vec<f32> = (0..n)
+                .map(|_| {
+                    if rng.next_f64() < density {
+                        0.5 + rng.next_f64() as f32
+                    } else {
+                        rng.next_f64() as f32 * 0.5
+                    }
+                })
+                .collect();
+            many += (check(dims, data, 0.5) > 3) as usize;
+        }
+        assert!(many > 100, "too few cases with several components: {many}");
     }
 }

@@ -316,31 +316,45 @@ impl Volume {
     /// voxel index), so that they are never silently read as a sign.
     pub fn stats(&self) -> Result<Stats, ImageError> {
         type Scan = (f64, f64, Option<(f64, f64)>);
-        fn scan<T: Voxel>(d: &[T]) -> Result<Scan, usize> {
+        /// Per chunk: (min, max, up to 3 distinct values) or the index of a non-finite voxel.
+        fn chunk<T: Voxel>(d: &[T], base: usize) -> Result<(f64, f64, Vec<T>), usize> {
             let mut lo = f64::INFINITY;
             let mut hi = f64::NEG_INFINITY;
-            let mut distinct: [Option<T>; 2] = [None, None];
-            let mut more = false;
+            let mut distinct: Vec<T> = Vec::with_capacity(3);
             for (i, &v) in d.iter().enumerate() {
                 let x = v.to_f64();
                 if !x.is_finite() {
-                    return Err(i);
+                    return Err(base + i);
                 }
                 lo = lo.min(x);
                 hi = hi.max(x);
-                if !more {
-                    match distinct {
-                        [None, _] => distinct[0] = Some(v),
-                        [Some(a), None] if a != v => distinct[1] = Some(v),
-                        [Some(a), Some(b)] if a != v && b != v => more = true,
-                        _ => {}
+                if distinct.len() < 3 && !distinct.contains(&v) {
+                    distinct.push(v);
+                }
+            }
+            Ok((lo, hi, distinct))
+        }
+        /// Parallel over chunks, merged in chunk order (deterministic: the first bad voxel).
+        fn scan<T: Voxel>(d: &[T]) -> Result<Scan, usize> {
+            use rayon::prelude::*;
+            const C: usize = 1 << 18;
+            let parts: Vec<_> = d
+                .par_chunks(C)
+                .enumerate()
+                .map(|(c, part)| chunk(part, c * C))
+                .collect();
+            let (mut lo, mut hi, mut distinct) = (f64::INFINITY, f64::NEG_INFINITY, Vec::new());
+            for p in parts {
+                let (l, h, dv) = p?;
+                lo = lo.min(l);
+                hi = hi.max(h);
+                for v in dv {
+                    if distinct.len() < 3 && !distinct.contains(&v) {
+                        distinct.push(v);
                     }
                 }
             }
-            let bin = match (more, distinct) {
-                (false, [Some(a), Some(b)]) => Some((a.to_f64(), b.to_f64())),
-                _ => None,
-            };
+            let bin = (distinct.len() == 2).then(|| (distinct[0].to_f64(), distinct[1].to_f64()));
             Ok((lo, hi, bin))
         }
         let r = with_voxels!(&self.voxels, d => scan(d));
