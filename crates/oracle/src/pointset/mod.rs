@@ -287,11 +287,12 @@ impl PointSetSurface {
         if med_spacing.is_nan() || med_spacing <= 0.0 {
             return Err(PointSetError::Coplanar { ratio: 0.0 });
         }
-        // Support radius: bandwidth × spacing, clamped to [0.5, 2] × the median (bounded cost,
-        // no empty support at isolated points).
+        // Support radius: bandwidth × spacing, clamped to [0.5, 1.5] × the median (the query
+        // radius is the largest support, so this bounds the cost; no empty support at
+        // isolated points).
         let radius: Vec<f64> = spacing
             .iter()
-            .map(|&s| params.bandwidth * s.clamp(0.5 * med_spacing, 2.0 * med_spacing))
+            .map(|&s| params.bandwidth * s.clamp(0.5 * med_spacing, 1.5 * med_spacing))
             .collect();
         let max_radius = radius.iter().copied().fold(0.0, f64::max);
         let estimated = normals.is_none();
@@ -405,7 +406,7 @@ impl PointSetSurface {
     }
 
     /// Local feature size (distance to the medial axis) estimated near `x`: the smaller
-    /// shrinking-ball radius at the nearest point of a subsample (≤ 4096 points) of the input.
+    /// shrinking-ball radius at the nearest point of a subsample (≤ 2048 points) of the input.
     /// Computed once (in parallel) on first use.
     pub fn estimate_local_feature_size(&self, x: DVec3) -> f64 {
         let s = self.lfs_sample();
@@ -420,7 +421,7 @@ impl PointSetSurface {
     fn lfs_sample(&self) -> &LfsSample {
         self.lfs.get_or_init(|| {
             let n = self.points.len();
-            let step = n.div_ceil(4096).max(1);
+            let step = n.div_ceil(2048).max(1);
             let idx: Vec<usize> = (0..n).step_by(step).collect();
             // Neighbours within twice the kernel radius are noise-level: ignored.
             let rho = 2.0 * self.stats.median_radius;
