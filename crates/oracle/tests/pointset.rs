@@ -9,6 +9,7 @@ use oracle::pointset::{
 };
 use oracle::polyhedron::PolyhedronSurface;
 use oracle::roots::SplitMix64;
+use proptest::prelude::*;
 
 fn gauss(rng: &mut SplitMix64) -> f64 {
     // Box-Muller.
@@ -353,4 +354,34 @@ fn xyz_reader() {
     std::fs::write(&path, body).unwrap();
     assert_eq!(read_xyz(&path).unwrap().points, pts);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    /// Any finite points (and normals) written with `{}` read back bit-exactly.
+    #[test]
+    fn xyz_round_trip(pts in prop::collection::vec(prop::array::uniform6(-1e300f64..1e300), 1..40), with_normals: bool) {
+        let body: String = pts
+            .iter()
+            .map(|v| if with_normals {
+                format!("{} {} {} {} {} {}\n", v[0], v[1], v[2], v[3], v[4], v[5])
+            } else {
+                format!("{}\t{}\t{}\n", v[0], v[1], v[2])
+            })
+            .collect();
+        let c = read_xyz_from(body.as_bytes(), "p.xyz").unwrap();
+        let want: Vec<DVec3> = pts.iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect();
+        prop_assert_eq!(c.points, want);
+        prop_assert_eq!(c.normals.is_some(), with_normals);
+    }
+
+    /// Non-finite query points give NaN or None, never a panic.
+    #[test]
+    fn nan_queries_do_not_panic(i in 0usize..3) {
+        let pts = noisy_sphere(200, DVec3::ZERO, 1.0, 0.0, 1);
+        let s = PointSetSurface::new(&pts, None, &PointSetParams::default()).unwrap();
+        let q = [DVec3::NAN, DVec3::new(f64::INFINITY, 0.0, 0.0), DVec3::new(0.0, f64::NEG_INFINITY, 1.0)][i];
+        prop_assert!(s.value(q).is_nan());
+        prop_assert!(s.project(q).is_none());
+    }
 }

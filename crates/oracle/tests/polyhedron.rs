@@ -460,3 +460,44 @@ fn bunny_seeds_are_on_it_and_its_inside_is_inside() {
     }
     assert!(s.suggested_size() > 0.0 && s.suggested_size() < 0.01);
 }
+
+#[test]
+fn bunny_as_a_soup_with_a_hole_still_classifies_inside_and_outside() {
+    let m = bunny();
+    // Soup: every triangle has its own three vertices.
+    let mut soup = TriMesh::default();
+    for t in &m.triangles {
+        let n = soup.vertices.len() as u32;
+        soup.vertices.extend(t.map(|i| m.vertices[i as usize]));
+        soup.triangles.push([n, n + 1, n + 2]);
+    }
+    // A hole: drop every triangle around vertex 100 (a one-ring).
+    let ring: Vec<usize> = (0..m.triangles.len())
+        .filter(|&f| m.triangles[f].contains(&100))
+        .collect();
+    assert!(ring.len() >= 3);
+    let mut holed = soup.clone();
+    for &f in ring.iter().rev() {
+        holed.triangles.remove(f);
+    }
+    let s = PolyhedronSurface::new(&soup).unwrap();
+    let h = PolyhedronSurface::new(&holed).unwrap();
+    let exact = PolyhedronSurface::new(&m).unwrap();
+    assert_eq!(s.stats().duplicate_vertices, 3 * 6966 - 3485);
+    assert_eq!(s.stats().components, 1);
+    assert_eq!(h.stats().boundary_edges, ring.len());
+    let (lo, hi) = exact.bbox();
+    let mut rng = oracle::roots::SplitMix64(2);
+    let mut agree = 0;
+    for _ in 0..400 {
+        let q = lo + (hi - lo) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let truth = exact.value(q) < 0.0;
+        assert_eq!(s.value(q) < 0.0, truth, "soup at {q}");
+        // Exact parity of crossings from outside the bounding sphere agrees with the sign.
+        let far = exact.bounding_sphere().center + DVec3::X * exact.bounding_sphere().radius;
+        assert_eq!(count(&s, far, q) % 2 == 1, truth, "parity at {q}");
+        agree += usize::from((h.value(q) < 0.0) == truth);
+    }
+    // With the hole, the winding number is still right everywhere but next to the hole.
+    assert!(agree >= 398, "{agree} of 400");
+}

@@ -409,6 +409,9 @@ impl PointSetSurface {
     /// shrinking-ball radius at the nearest point of a subsample (≤ 2048 points) of the input.
     /// Computed once (in parallel) on first use.
     pub fn estimate_local_feature_size(&self, x: DVec3) -> f64 {
+        if !x.is_finite() {
+            return f64::NAN;
+        }
         let s = self.lfs_sample();
         let r = s
             .tree
@@ -600,6 +603,9 @@ impl Surface for PointSetSurface {
     }
 
     fn value(&self, x: DVec3) -> f64 {
+        if !x.is_finite() {
+            return f64::NAN;
+        }
         let dc = (x - self.sphere.center).length();
         if dc >= self.sphere.radius {
             // Positive on and outside the bounding sphere (far from every point).
@@ -642,6 +648,9 @@ impl Surface for PointSetSurface {
     }
 
     fn gradient(&self, x: DVec3) -> DVec3 {
+        if !x.is_finite() {
+            return DVec3::NAN;
+        }
         let (_, den, nsum) = self.sums(x);
         if den > 0.0 {
             nsum.normalize_or_zero()
@@ -654,6 +663,9 @@ impl Surface for PointSetSurface {
 
     /// Newton-like projection along the averaged normal: `x ← x − f(x) n̄(x)`, checked.
     fn project(&self, p: DVec3) -> Option<DVec3> {
+        if !p.is_finite() {
+            return None;
+        }
         let tol = self.tolerance();
         let mut x = p;
         for _ in 0..50 {
