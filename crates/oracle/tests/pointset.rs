@@ -89,6 +89,9 @@ fn noisy_sphere_without_normals() {
         s.crossings(a, b, &mut xs);
         assert_eq!(xs.len(), 1, "ray {u}");
         assert!((xs[0].length() - 1.0).abs() < 3.0 * sigma);
+        assert!(s.value(xs[0]).abs() < 1e-6);
+        let x = s.crossing(a, s.value(a), b, s.value(b));
+        assert!(s.value(x).abs() < 1e-6 && (x - xs[0]).length() < 1e-5);
     }
     // Seeds on the surface, deterministic.
     let seeds = s.seed_points(5);

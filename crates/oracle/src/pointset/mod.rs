@@ -691,6 +691,38 @@ impl Surface for PointSetSurface {
         None
     }
 
+    /// Bipolar oracle: Illinois (modified regula falsi) on the IMLS value, which is close to a
+    /// signed distance near the surface, so a few evaluations suffice; stops when the bracket
+    /// or |f| is below the tolerance.
+    fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
+        illinois(|x| self.value(x), a, fa, b, fb, self.tolerance())
+    }
+
+    /// Intersection oracle: sign changes of the value sampled at [`Surface::crossing_step`],
+    /// each refined by [`Surface::crossing`].
+    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+        let len = (b - a).length();
+        if !len.is_finite() {
+            return;
+        }
+        let n = ((len / self.crossing_step()).ceil() as usize).clamp(1, 1 << 20);
+        let (mut p0, mut f0) = (a, self.value(a));
+        for i in 1..=n {
+            let p1 = a.lerp(b, i as f64 / n as f64);
+            let f1 = self.value(p1);
+            if (f0 < 0.0) != (f1 < 0.0) {
+                out.push(self.crossing(p0, f0, p1, f1));
+            }
+            (p0, f0) = (p1, f1);
+        }
+    }
+
+    /// Half the median kernel radius: the IMLS surface does not oscillate at smaller scales,
+    /// so two crossings closer than this are not expected (and may be missed).
+    fn crossing_step(&self) -> f64 {
+        0.5 * self.stats.median_radius
+    }
+
     fn dm_inf_hint(&self) -> Option<f64> {
         let s = self.lfs_sample();
         let mut v = s.lfs.clone();
@@ -702,5 +734,76 @@ impl Surface for PointSetSurface {
         let x = *v.select_nth_unstable_by(k, f64::total_cmp).1;
         let _ = &s.points;
         (x > 0.0).then_some(x)
+    }
+}
+
+/// Illinois root finding on `[a, b]` (`fa`, `fb` of opposite signs), safeguarded by bisection
+/// steps when the bracket shrinks slowly. Returns a point within `tol` of a sign change (or
+/// where `|f| < tol`, for functions close to a distance).
+fn illinois(f: impl Fn(DVec3) -> f64, a: DVec3, fa: f64, b: DVec3, fb: f64, tol: f64) -> DVec3 {
+    let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
+    let mut side = 0i8;
+    let mut prev_len = (b - a).length();
+    for it in 0..200 {
+        let len = (b - a).length();
+        if len <= tol {
+            break;
+        }
+        // Every third step, bisect if the last steps did not halve the bracket.
+        let t = if it % 3 == 2 && len > 0.5 * prev_len {
+            0.5
+        } else {
+            let t = fa / (fa - fb);
+            if t.is_finite() {
+                t.clamp(0.0, 1.0)
+            } else {
+                0.5
+            }
+        };
+        if it % 3 == 2 {
+            prev_len = len;
+        }
+        let m = a.lerp(b, t);
+        let fm = f(m);
+        if fm.is_nan() || fm.abs() < tol {
+            return m;
+        }
+        if (fm < 0.0) == (fa < 0.0) {
+            (a, fa) = (m, fm);
+            if side == -1 {
+                fb *= 0.5;
+            }
+            side = -1;
+        } else {
+            (b, fb) = (m, fm);
+            if side == 1 {
+                fa *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    a.lerp(b, 0.5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::cell::Cell;
+
+    #[test]
+    fn illinois_converges_on_smooth_and_sign_only_functions() {
+        let (a, b) = (DVec3::new(-1.0, 0.2, 0.0), DVec3::new(2.0, 0.2, 0.0));
+        let calls = Cell::new(0);
+        let smooth = |x: DVec3| {
+            calls.set(calls.get() + 1);
+            x.length() - 1.0
+        };
+        let x = illinois(smooth, a, smooth(a), b, smooth(b), 1e-12);
+        assert!((x.length() - 1.0).abs() < 1e-12);
+        assert!(calls.get() < 20, "{} evaluations", calls.get());
+        // A sign-only function: the bisection safeguard still closes the bracket.
+        let step = |x: DVec3| if x.x < 0.3 { -1.0 } else { 1.0 };
+        let x = illinois(step, a, -1.0, b, 1.0, 1e-9);
+        assert!((x.x - 0.3).abs() < 1e-8, "{x}");
     }
 }
