@@ -8,9 +8,11 @@
 //!   supported weight `φ_i(x) = (1 − |x − p_i|²/R_i²)⁴` and a support radius `R_i` proportional
 //!   to the local spacing (mean distance to the nearest neighbours), so it adapts to density and
 //!   averages noise over a few rings of neighbours.
-//! - Far from the points (total weight below a threshold) the value blends into the signed
-//!   distance to the nearest input point, signed by that point's normal: negative deep inside,
-//!   positive outside. On and outside the bounding sphere it is positive by construction.
+//! - Far from the points (total weight below a threshold) the value blends into the distance
+//!   to the nearest input point, signed by the point-cloud generalized winding number (Barill
+//!   et al. 2018: each oriented point a tiny triangle of its share of the area, evaluated
+//!   through the polyhedron backend's BVH): negative deep inside, positive outside, robust in
+//!   concave regions. On and outside the bounding sphere it is positive by construction.
 //! - P1: a few well-spread input points (and the top and bottom of each component, where the
 //!   tangent plane is horizontal, as in the paper) projected onto the MLS surface.
 //! - P2 ([`Surface::dm_inf_hint`], [`PointSetSurface::estimate_local_feature_size`]): a
@@ -25,6 +27,7 @@ mod xyz;
 
 pub use xyz::{PointCloud, XyzError, read_xyz, read_xyz_from};
 
+use crate::polyhedron::bvh::Bvh;
 use crate::roots::SplitMix64;
 use crate::{BoundingSphere, Surface};
 use glam::DVec3;
@@ -152,6 +155,9 @@ pub struct PointSetSurface {
     stats: PointSetStats,
     /// Root point of each kNN component (highest point).
     roots: Vec<usize>,
+    /// Each point as a tiny oriented triangle (area ≈ its share of the surface), for the
+    /// point-cloud generalized winding number (Barill et al. 2018) that signs the far field.
+    gwn: Bvh,
     lfs: OnceLock<LfsSample>,
 }
 
@@ -298,11 +304,28 @@ impl PointSetSurface {
         let estimated = normals.is_none();
         let (normals, roots) = match normals {
             Some(ns) => {
-                let roots = components_roots(points, &knn, params.k_normals);
+                let roots = components_roots(points, &knn, params.k_normals.min(K_GRAPH));
                 (ns.iter().map(|v| v.normalize()).collect(), roots)
             }
             None => estimate_normals(points, &knn, params.k_normals),
         };
+        // Point-cloud winding number: each point becomes an equilateral triangle of area
+        // ≈ 0.9 × spacing² (the share of the surface of a point whose k nearest neighbours are
+        // at mean distance `spacing`) in its tangent plane, counter-clockwise about its normal.
+        let gwn_tris: Vec<[DVec3; 3]> = points
+            .iter()
+            .zip(&normals)
+            .zip(&spacing)
+            .map(|((p, n), s)| {
+                let (u, v) = n.any_orthonormal_pair();
+                let area = 0.9 * s.max(0.25 * med_spacing).powi(2);
+                let rho = (area / (0.75 * 3f64.sqrt())).sqrt();
+                let c = |t: f64| *p + rho * (t.cos() * u + t.sin() * v);
+                let third = 2.0 * std::f64::consts::FRAC_PI_3;
+                [c(0.0), c(third), c(2.0 * third)]
+            })
+            .collect();
+        let gwn = Bvh::build(gwn_tris, (0..n as u32).collect(), 0.0);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for p in points {
             lo = lo.min(*p);
@@ -331,6 +354,7 @@ impl PointSetSurface {
             sphere,
             stats,
             roots,
+            gwn,
             lfs: OnceLock::new(),
         })
     }
@@ -394,19 +418,22 @@ impl PointSetSurface {
         (num, den, nsum)
     }
 
-    /// Signed distance to the nearest input point, signed by its normal.
+    /// Distance to the nearest input point, negative where the point-cloud winding number
+    /// is above 1/2 (inside).
     fn far_value(&self, x: DVec3) -> f64 {
-        let (j, d2) = self.nearest(x);
+        let (_, d2) = self.nearest(x);
         let d = d2.sqrt();
-        if self.normals[j].dot(x - self.points[j]) < 0.0 {
-            -d
-        } else {
-            d
-        }
+        if self.winding_number(x) > 0.5 { -d } else { d }
+    }
+
+    /// Generalized winding number of the oriented point cloud at `x` (≈ 1 inside, ≈ 0
+    /// outside; meaningful at distances above the spacing).
+    pub fn winding_number(&self, x: DVec3) -> f64 {
+        self.gwn.winding_number(x)
     }
 
     /// Local feature size (distance to the medial axis) estimated near `x`: the smaller
-    /// shrinking-ball radius at the nearest point of a subsample (≤ 2048 points) of the input.
+    /// shrinking-ball radius at the nearest point of a subsample (≤ 1024 points) of the input.
     /// Computed once (in parallel) on first use.
     pub fn estimate_local_feature_size(&self, x: DVec3) -> f64 {
         if !x.is_finite() {
@@ -424,7 +451,7 @@ impl PointSetSurface {
     fn lfs_sample(&self) -> &LfsSample {
         self.lfs.get_or_init(|| {
             let n = self.points.len();
-            let step = n.div_ceil(2048).max(1);
+            let step = n.div_ceil(1024).max(1);
             let idx: Vec<usize> = (0..n).step_by(step).collect();
             // Neighbours within twice the kernel radius are noise-level: ignored.
             let rho = 2.0 * self.stats.median_radius;
@@ -456,16 +483,19 @@ impl PointSetSurface {
         let kq = NonZeroUsize::new(32.min(self.points.len())).expect("nonzero");
         for _ in 0..40 {
             let c = p + n * r;
-            let res = self
-                .tree
-                .query(&c.to_array())
-                .nearest_n::<SquaredEuclidean<f64>>(kq)
-                .execute();
-            // The nearest point to c that is not a near neighbour of p.
-            let q = res
-                .iter()
-                .map(|x| self.points[x.item as usize])
-                .find(|q| (*q - p).length_squared() > rho * rho);
+            // The nearest point to c that is not a near neighbour of p (usually the nearest).
+            let (j, _) = self.nearest(c);
+            let q = if (self.points[j] - p).length_squared() > rho * rho {
+                Some(self.points[j])
+            } else {
+                self.tree
+                    .query(&c.to_array())
+                    .nearest_n::<SquaredEuclidean<f64>>(kq)
+                    .execute()
+                    .iter()
+                    .map(|x| self.points[x.item as usize])
+                    .find(|q| (*q - p).length_squared() > rho * rho)
+            };
             let Some(q) = q else { break };
             if (q - c).length() >= r * (1.0 - 1e-9) {
                 break;
@@ -508,28 +538,52 @@ fn estimate_normals(points: &[DVec3], knn: &[Vec<u32>], k: usize) -> (Vec<DVec3>
             vecs[0]
         })
         .collect();
-    let roots = propagate(points, knn, k, &mut normals, true);
+    let roots = propagate(points, knn, k.min(K_GRAPH), &mut normals);
     (normals, roots)
 }
 
-/// Components of the kNN graph (roots = highest point of each), without changing normals.
+/// Components of the kNN graph (its first `k` neighbours, symmetrized), as the highest point
+/// (largest z, then smallest index) of each, in decreasing z order.
 fn components_roots(points: &[DVec3], knn: &[Vec<u32>], k: usize) -> Vec<usize> {
-    let mut dummy = vec![DVec3::Z; points.len()];
-    propagate(points, knn, k, &mut dummy, false)
+    let n = points.len();
+    let mut uf: Vec<u32> = (0..n as u32).collect();
+    fn find(uf: &mut [u32], mut x: u32) -> u32 {
+        while uf[x as usize] != x {
+            uf[x as usize] = uf[uf[x as usize] as usize];
+            x = uf[x as usize];
+        }
+        x
+    }
+    for (i, nb) in knn.iter().enumerate() {
+        for &j in &nb[..k.min(nb.len())] {
+            let (a, b) = (find(&mut uf, i as u32), find(&mut uf, j));
+            if a != b {
+                uf[a.max(b) as usize] = a.min(b);
+            }
+        }
+    }
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| points[b].z.total_cmp(&points[a].z).then(a.cmp(&b)));
+    let mut seen = vec![false; n];
+    let mut roots = Vec::new();
+    for i in order {
+        let r = find(&mut uf, i as u32) as usize;
+        if !seen[r] {
+            seen[r] = true;
+            roots.push(i);
+        }
+    }
+    roots
 }
 
-/// Prim's minimum spanning tree over the symmetric kNN graph with weights `1 − |n_i·n_j|`,
+/// Neighbours per point in the orientation graph (Hoppe et al. use about 8).
+const K_GRAPH: usize = 8;
+
+/// Prim's (approximate) minimum spanning tree over the symmetric kNN graph with weights
+/// `1 − |n_i·n_j|` (plus a penalty for edges along the normals),
 /// flipping each normal to agree with its parent. Components are started from their highest
 /// point (largest z, then smallest index), whose normal is oriented to +z.
-fn propagate(
-    points: &[DVec3],
-    knn: &[Vec<u32>],
-    k: usize,
-    normals: &mut [DVec3],
-    orient: bool,
-) -> Vec<usize> {
-    use std::cmp::Reverse;
-    use std::collections::BinaryHeap;
+fn propagate(points: &[DVec3], knn: &[Vec<u32>], k: usize, normals: &mut [DVec3]) -> Vec<usize> {
     let n = points.len();
     // Symmetric adjacency (CSR).
     let mut deg = vec![0u32; n + 1];
@@ -557,17 +611,25 @@ fn propagate(
     order.sort_by(|&a, &b| points[b].z.total_cmp(&points[a].z).then(a.cmp(&b)));
     let mut visited = vec![false; n];
     let mut roots = Vec::new();
-    let mut heap: BinaryHeap<Reverse<(u64, u32, u32)>> = BinaryHeap::new();
+    // Prim's algorithm with a bucket queue (weights in [0, 2] quantized to 1/128): an
+    // approximate minimum spanning tree, enough for orientation and O(1) per edge. Buckets are
+    // stacks, so the order is deterministic.
+    const BUCKETS: usize = 257;
+    let mut buckets: Vec<Vec<(u32, u32)>> = vec![Vec::new(); BUCKETS];
     for &root in &order {
         if visited[root] {
             continue;
         }
         roots.push(root);
         visited[root] = true;
-        if orient && normals[root].z < 0.0 {
+        if normals[root].z < 0.0 {
             normals[root] = -normals[root];
         }
-        let push = |heap: &mut BinaryHeap<_>, i: usize, normals: &[DVec3], visited: &[bool]| {
+        let push = |buckets: &mut [Vec<(u32, u32)>],
+                    i: usize,
+                    normals: &[DVec3],
+                    visited: &[bool],
+                    cur: &mut usize| {
             for &j in &adj[start[i]..start[i + 1]] {
                 if !visited[j as usize] {
                     // Hoppe's 1 − |n_i·n_j|, plus a penalty for edges along the normals: those
@@ -576,22 +638,31 @@ fn propagate(
                     let (ni, nj) = (normals[i], normals[j as usize]);
                     let d = (points[j as usize] - points[i]).normalize_or_zero();
                     let w = 1.0 - ni.dot(nj).abs() + 0.5 * (ni.dot(d).abs() + nj.dot(d).abs());
-                    // Non-negative f64 order = bit order.
-                    heap.push(Reverse((w.max(0.0).to_bits(), j, i as u32)));
+                    let b = ((w * 128.0) as usize).min(BUCKETS - 1);
+                    buckets[b].push((j, i as u32));
+                    *cur = (*cur).min(b);
                 }
             }
         };
-        push(&mut heap, root, normals, &visited);
-        while let Some(Reverse((_, j, i))) = heap.pop() {
+        let mut cur = BUCKETS;
+        push(&mut buckets, root, normals, &visited, &mut cur);
+        loop {
+            while cur < BUCKETS && buckets[cur].is_empty() {
+                cur += 1;
+            }
+            if cur == BUCKETS {
+                break;
+            }
+            let (j, i) = buckets[cur].pop().expect("non-empty bucket");
             let j = j as usize;
             if visited[j] {
                 continue;
             }
             visited[j] = true;
-            if orient && normals[i as usize].dot(normals[j]) < 0.0 {
+            if normals[i as usize].dot(normals[j]) < 0.0 {
                 normals[j] = -normals[j];
             }
-            push(&mut heap, j, normals, &visited);
+            push(&mut buckets, j, normals, &visited, &mut cur);
         }
     }
     roots

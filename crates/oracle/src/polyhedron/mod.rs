@@ -16,7 +16,7 @@
 //! Invariants kept by [`PolyhedronSurface`]: every stored triangle is non-degenerate (exactly)
 //! and has finite vertices within the exact range of the predicates.
 
-mod bvh;
+pub(crate) mod bvh;
 mod predicates;
 
 use crate::roots::{SplitMix64, bisect};
