@@ -501,3 +501,52 @@ fn bunny_as_a_soup_with_a_hole_still_classifies_inside_and_outside() {
     // With the hole, the winding number is still right everywhere but next to the hole.
     assert!(agree >= 398, "{agree} of 400");
 }
+
+#[test]
+fn watertight_meshes_give_a_signed_distance() {
+    let s = PolyhedronSurface::new(&cube()).unwrap();
+    assert!(s.is_watertight());
+    let d = DVec3::new;
+    let r3 = 3f64.sqrt();
+    for (p, want) in [
+        (d(0.5, 0.5, 0.5), -0.5),
+        (d(2.0, 0.5, 0.5), 1.0),
+        (d(0.9, 0.9, 0.9), -0.1),
+        (d(1.1, 1.1, 0.5), 0.1 * 2f64.sqrt()), // edge region
+        (d(1.1, 1.1, 1.1), 0.1 * r3),          // vertex region
+        (d(-0.1, -0.1, -0.1), 0.1 * r3),
+        (d(0.5, 0.5, 0.0), 0.0),
+    ] {
+        assert!(
+            (s.value(p) - want).abs() < 1e-12,
+            "{p}: {} vs {want}",
+            s.value(p)
+        );
+    }
+    // Sign agrees with the winding number, for the bunny, its soup and an inverted copy.
+    let m = bunny();
+    let mut inv = m.clone();
+    for t in &mut inv.triangles {
+        t.swap(1, 2);
+    }
+    let b = PolyhedronSurface::new(&m).unwrap();
+    let bi = PolyhedronSurface::new(&inv).unwrap();
+    assert!(b.is_watertight() && bi.is_watertight());
+    let (lo, hi) = b.bbox();
+    let mut rng = oracle::roots::SplitMix64(8);
+    for _ in 0..2000 {
+        let q = lo + (hi - lo) * 1.2 * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64())
+            - (hi - lo) * 0.1;
+        let w = b.winding_number(q);
+        let sd = b.value(q);
+        assert_eq!(sd < 0.0, w > 0.5, "{q}: sd {sd} w {w}");
+        assert!((bi.value(q) - sd).abs() < 1e-12);
+        assert!((sd.abs() - (b.closest_point(q).0 - q).length()).abs() < 1e-15);
+    }
+    // A mesh with a hole is not watertight: the winding number decides.
+    let mut h = icosphere(2);
+    h.triangles.pop();
+    let sh = PolyhedronSurface::new(&h).unwrap();
+    assert!(!sh.is_watertight() && sh.signed_distance(DVec3::ZERO).is_none());
+    assert!((sh.value(DVec3::ZERO) - (0.5 - sh.winding_number(DVec3::ZERO))).abs() < 1e-15);
+}

@@ -2,7 +2,7 @@
 //! centroid box), with per-node dipole data for the fast generalized winding number
 //! (Barill et al. 2018, first order).
 
-use super::predicates::{closest_point_triangle, segment_triangle, solid_angle};
+use super::predicates::{closest_point_triangle_feature, segment_triangle, solid_angle};
 use glam::{DMat3, DVec3};
 
 /// Triangles per leaf (at most).
@@ -256,22 +256,23 @@ impl Bvh {
         }
     }
 
-    /// Closest point on the triangles to `p`: `(point, leaf-order index, squared distance)`.
-    pub fn closest(&self, p: DVec3) -> (DVec3, u32, f64) {
-        let mut best = (self.tris[0][0], 0u32, f64::INFINITY);
+    /// Closest point on the triangles to `p`: `(point, leaf-order index, squared distance,
+    /// feature)` (feature as in `closest_point_triangle_feature`).
+    pub fn closest(&self, p: DVec3) -> (DVec3, u32, f64, u8) {
+        let mut best = (self.tris[0][0], 0u32, f64::INFINITY, 1u8);
         self.closest_rec(0, p, &mut best);
         best
     }
 
-    fn closest_rec(&self, ni: usize, p: DVec3, best: &mut (DVec3, u32, f64)) {
+    fn closest_rec(&self, ni: usize, p: DVec3, best: &mut (DVec3, u32, f64, u8)) {
         let node = &self.nodes[ni];
         if node.count > 0 {
             let s = node.first as usize;
             for (k, t) in self.tris[s..s + node.count as usize].iter().enumerate() {
-                let q = closest_point_triangle(p, t[0], t[1], t[2]);
+                let (q, f) = closest_point_triangle_feature(p, t[0], t[1], t[2]);
                 let d2 = (q - p).length_squared();
                 if d2 < best.2 {
-                    *best = (q, (s + k) as u32, d2);
+                    *best = (q, (s + k) as u32, d2, f);
                 }
             }
             return;
