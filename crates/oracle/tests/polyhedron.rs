@@ -510,6 +510,7 @@ fn watertight_meshes_give_a_signed_distance() {
     let r3 = 3f64.sqrt();
     for (p, want) in [
         (d(0.5, 0.5, 0.5), -0.5),
+        (d(1.01, 0.5, 0.5), 0.01),
         (d(2.0, 0.5, 0.5), 1.0),
         (d(0.9, 0.9, 0.9), -0.1),
         (d(1.1, 1.1, 0.5), 0.1 * 2f64.sqrt()), // edge region
@@ -517,10 +518,13 @@ fn watertight_meshes_give_a_signed_distance() {
         (d(-0.1, -0.1, -0.1), 0.1 * r3),
         (d(0.5, 0.5, 0.0), 0.0),
     ] {
+        let sd = s.signed_distance(p).unwrap();
+        assert!((sd - want).abs() < 1e-12, "{p}: {sd} vs {want}");
+        // value: the same near the surface, the sign (and a constant) farther.
+        let v = s.value(p);
         assert!(
-            (s.value(p) - want).abs() < 1e-12,
-            "{p}: {} vs {want}",
-            s.value(p)
+            v == sd || (sd.abs() > s.suggested_size() && v * sd > 0.0),
+            "{p}: {v}"
         );
     }
     // Sign agrees with the winding number, for the bunny, its soup and an inverted copy.
@@ -538,10 +542,16 @@ fn watertight_meshes_give_a_signed_distance() {
         let q = lo + (hi - lo) * 1.2 * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64())
             - (hi - lo) * 0.1;
         let w = b.winding_number(q);
-        let sd = b.value(q);
-        assert_eq!(sd < 0.0, w > 0.5, "{q}: sd {sd} w {w}");
-        assert!((bi.value(q) - sd).abs() < 1e-12);
-        assert!((sd.abs() - (b.closest_point(q).0 - q).length()).abs() < 1e-15);
+        let v = b.value(q);
+        assert_eq!(v < 0.0, w > 0.5, "{q}: value {v} w {w}");
+        assert!((bi.value(q) - v).abs() < 1e-12);
+        let sd = b.signed_distance(q).unwrap();
+        assert_eq!(sd < 0.0, v < 0.0);
+        let dist = (b.closest_point(q).0 - q).length();
+        assert!((sd.abs() - dist).abs() < 1e-15);
+        if dist < b.suggested_size() {
+            assert_eq!(v, sd);
+        }
     }
     // A mesh with a hole is not watertight: the winding number decides.
     let mut h = icosphere(2);

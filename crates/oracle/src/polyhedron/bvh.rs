@@ -264,6 +264,45 @@ impl Bvh {
         best
     }
 
+    /// Like [`Bvh::closest`], restricted to triangles closer than `sqrt(r2)`.
+    pub fn closest_within(&self, p: DVec3, r2: f64) -> Option<(DVec3, u32, f64, u8)> {
+        let mut best = (self.tris[0][0], u32::MAX, r2, 1u8);
+        if box_dist2(p, &self.nodes[0]) < r2 {
+            self.closest_rec(0, p, &mut best);
+        }
+        (best.1 != u32::MAX).then_some(best)
+    }
+
+    /// Number of crossings of `[a, b]` with the triangles (exact, perturbed predicates).
+    pub fn count_hits(&self, a: DVec3, b: DVec3) -> usize {
+        let d = b - a;
+        let mut stack = [0u32; 64];
+        let mut sp = 1;
+        let mut n = 0;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if !segment_box(a, d, node.lo - self.pad, node.hi + self.pad) {
+                continue;
+            }
+            if node.count > 0 {
+                let s = node.first as usize;
+                for t in &self.tris[s..s + node.count as usize] {
+                    n += usize::from(segment_triangle(a, b, t[0], t[1], t[2]).is_some());
+                }
+            } else if sp + 2 <= stack.len() {
+                stack[sp] = node.first;
+                stack[sp + 1] = node.first + 1;
+                sp += 2;
+            } else {
+                let mut v = Vec::new();
+                self.segment_hits(a, b, &mut v);
+                return v.len();
+            }
+        }
+        n
+    }
+
     fn closest_rec(&self, ni: usize, p: DVec3, best: &mut (DVec3, u32, f64, u8)) {
         let node = &self.nodes[ni];
         if node.count > 0 {

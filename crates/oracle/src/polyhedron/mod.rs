@@ -5,8 +5,10 @@
 //!   segment (a crossing through a shared edge or vertex is counted once; a segment lying in a
 //!   triangle's plane does not cross it). Crossing points are computed in f64.
 //! - Inside/outside ([`Surface::value`]): for a watertight mesh (closed, manifold, consistently
-//!   oriented after welding), the signed distance, signed by angle-weighted pseudonormals
-//!   (Bærentzen & Aanæs 2005) through an exact-nearest BVH query. Otherwise `0.5 − w(p)` where
+//!   oriented after welding), the signed distance near the surface, signed by angle-weighted
+//!   pseudonormals (Bærentzen & Aanæs 2005) through a BVH nearest query, and farther than
+//!   [`PolyhedronSurface::suggested_size`] a constant magnitude signed by the parity of exact
+//!   crossings of a ray (the same predicates as the intersection oracle). Otherwise `0.5 − w(p)` where
 //!   `w` is the generalized winding number (Jacobson et al. 2013), evaluated hierarchically
 //!   (far BVH nodes by a second-order dipole expansion, Barill et al. 2018): negative inside,
 //!   positive outside, robust to soups and small holes.
@@ -311,10 +313,51 @@ impl PolyhedronSurface {
     }
 
     /// Whether the (welded, non-degenerate) mesh is closed, manifold and consistently
-    /// oriented. Then [`Surface::value`] is the signed distance (sign from angle-weighted
-    /// pseudonormals, Bærentzen & Aanæs 2005); otherwise it is `0.5 − w` (winding number).
+    /// oriented. Then [`Surface::value`] is the signed distance near the surface (sign from
+    /// angle-weighted pseudonormals, Bærentzen & Aanæs 2005) and sign-exact by ray parity
+    /// farther; otherwise it is `0.5 − w` (winding number).
     pub fn is_watertight(&self) -> bool {
         !self.pseudo.is_empty()
+    }
+
+    /// Sign-exact inside/outside for watertight meshes: within `suggested_size()` of the
+    /// surface, the signed distance; farther, `±suggested_size()` with the sign from the
+    /// parity of the exact crossings of a segment from `p` out of the bounding box (consistent
+    /// with [`Surface::crossings`]). `None` if the mesh is not watertight.
+    fn watertight_value(&self, p: DVec3) -> Option<f64> {
+        if self.pseudo.is_empty() {
+            return None;
+        }
+        let r = self.suggested_size();
+        if let Some((q, k, d2, f)) = self.bvh.closest_within(p, r * r) {
+            let s = (p - q).dot(self.pseudo[k as usize][f as usize]) * self.orientation;
+            return Some(if s < 0.0 {
+                -d2.sqrt()
+            } else if s > 0.0 {
+                d2.sqrt()
+            } else {
+                0.0
+            });
+        }
+        if p.cmplt(self.lo).any() || p.cmpgt(self.hi).any() {
+            return Some(r);
+        }
+        // Exit through the nearest face of the bounding box.
+        let below = p - self.lo;
+        let above = self.hi - p;
+        let (mut axis, mut dist, mut dir) = (0, f64::INFINITY, 0.0);
+        for i in 0..3 {
+            if below[i] < dist {
+                (axis, dist, dir) = (i, below[i], -1.0);
+            }
+            if above[i] < dist {
+                (axis, dist, dir) = (i, above[i], 1.0);
+            }
+        }
+        let mut b = p;
+        b[axis] += dir * (dist + r);
+        let odd = self.bvh.count_hits(p, b) % 2 == 1;
+        Some(if odd { -r } else { r })
     }
 
     /// Signed distance to the triangles (negative inside), for watertight meshes; `None`
@@ -508,13 +551,15 @@ impl Surface for PolyhedronSurface {
         }
     }
 
-    /// Signed distance for watertight meshes ([`PolyhedronSurface::is_watertight`]),
-    /// `0.5 − w(p)` (generalized winding number) otherwise; NaN for a non-finite `p`.
+    /// For watertight meshes ([`PolyhedronSurface::is_watertight`]): the signed distance
+    /// within [`PolyhedronSurface::suggested_size`] of the surface, `±suggested_size()` farther
+    /// (sign by exact ray parity). Otherwise `0.5 − w(p)` (generalized winding number). NaN
+    /// for a non-finite `p`.
     fn value(&self, p: DVec3) -> f64 {
         if !p.is_finite() {
             return f64::NAN;
         }
-        match self.signed_distance(p) {
+        match self.watertight_value(p) {
             Some(d) => d,
             None => 0.5 - self.winding_number(p),
         }
