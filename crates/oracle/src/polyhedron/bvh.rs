@@ -235,9 +235,20 @@ impl Bvh {
     /// Every crossing of the segment `[a, b]` with the triangles: `(t, leaf-order index)`.
     pub fn segment_hits(&self, a: DVec3, b: DVec3, out: &mut Vec<(f64, u32)>) {
         let d = b - a;
-        let mut stack = Vec::with_capacity(64);
-        stack.push(0u32);
-        while let Some(ni) = stack.pop() {
+        // Depth ≤ log2(n / LEAF_SIZE) + 1 for the median-split tree: 64 slots always suffice
+        // (the heap fallback is kept for safety).
+        let mut fixed = [0u32; 64];
+        let mut heap: Vec<u32> = Vec::new();
+        let mut sp = 1;
+        loop {
+            let ni = if let Some(x) = heap.pop() {
+                x
+            } else if sp > 0 {
+                sp -= 1;
+                fixed[sp]
+            } else {
+                break;
+            };
             let node = &self.nodes[ni as usize];
             if !segment_box(a, d, node.lo - self.pad, node.hi + self.pad) {
                 continue;
@@ -249,9 +260,13 @@ impl Bvh {
                         out.push((tt, (s + k) as u32));
                     }
                 }
+            } else if sp + 2 <= fixed.len() {
+                fixed[sp] = node.first;
+                fixed[sp + 1] = node.first + 1;
+                sp += 2;
             } else {
-                stack.push(node.first);
-                stack.push(node.first + 1);
+                heap.push(node.first);
+                heap.push(node.first + 1);
             }
         }
     }
