@@ -22,6 +22,7 @@
 //!   not shrink the balls. (The Delaunay-based λ-medial axis is not used: `delaunay3` was a stub
 //!   when this was written.)
 
+mod grid;
 mod linalg;
 mod xyz;
 
@@ -144,10 +145,10 @@ pub struct PointSetStats {
 pub struct PointSetSurface {
     points: Vec<DVec3>,
     normals: Vec<DVec3>,
-    /// Kernel support radius per point.
-    radius: Vec<f64>,
     /// Largest `radius` (query radius).
     max_radius: f64,
+    /// Points, normals and radii bucketed for the kernel sums.
+    grid: grid::Grid,
     tree: ImmutableKdTree<f64, 3>,
     lo: DVec3,
     hi: DVec3,
@@ -326,6 +327,7 @@ impl PointSetSurface {
             })
             .collect();
         let gwn = Bvh::build(gwn_tris, (0..n as u32).collect(), 0.0);
+        let grid = grid::Grid::new(points, &normals, &radius, max_radius);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for p in points {
             lo = lo.min(*p);
@@ -346,8 +348,8 @@ impl PointSetSurface {
         Ok(PointSetSurface {
             points: points.to_vec(),
             normals,
-            radius,
             max_radius,
+            grid,
             tree,
             lo,
             hi,
@@ -395,26 +397,19 @@ impl PointSetSurface {
 
     /// IMLS sums at `x`: (Σ φ n·(x−p), Σ φ, Σ φ n).
     fn sums(&self, x: DVec3) -> (f64, f64, DVec3) {
-        let res = self
-            .tree
-            .query(&x.to_array())
-            .within::<SquaredEuclidean<f64>>(self.max_radius * self.max_radius)
-            .unsorted()
-            .execute();
         let (mut num, mut den, mut nsum) = (0.0, 0.0, DVec3::ZERO);
-        for r in &res {
-            let i = r.item as usize;
-            let r2 = self.radius[i] * self.radius[i];
-            if r.distance >= r2 {
-                continue;
+        self.grid.for_each_near(x, self.max_radius, |it| {
+            let d = x - it.p;
+            let d2 = d.length_squared();
+            if d2 < it.r2 {
+                let u = 1.0 - d2 / it.r2;
+                let u2 = u * u;
+                let w = u2 * u2;
+                num += w * it.n.dot(d);
+                den += w;
+                nsum += w * it.n;
             }
-            let u = 1.0 - r.distance / r2;
-            let u2 = u * u;
-            let w = u2 * u2;
-            num += w * self.normals[i].dot(x - self.points[i]);
-            den += w;
-            nsum += w * self.normals[i];
-        }
+        });
         (num, den, nsum)
     }
 
