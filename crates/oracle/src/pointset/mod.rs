@@ -159,6 +159,8 @@ pub struct PointSetSurface {
     /// Each point as a tiny oriented triangle (area ≈ its share of the surface), for the
     /// point-cloud generalized winding number (Barill et al. 2018) that signs the far field.
     gwn: Bvh,
+    /// Subsampled copy of `gwn` and the distance beyond which it is used.
+    gwn_coarse: Option<(Bvh, f64)>,
     lfs: OnceLock<LfsSample>,
 }
 
@@ -177,6 +179,9 @@ impl std::fmt::Debug for PointSetSurface {
             .finish_non_exhaustive()
     }
 }
+
+/// Points in the coarse winding-number tree.
+const GWN_COARSE: usize = 4096;
 
 /// Total kernel weight below which the IMLS blends into the nearest-point signed distance.
 const MIN_WEIGHT: f64 = 1.0;
@@ -313,20 +318,35 @@ impl PointSetSurface {
         // Point-cloud winding number: each point becomes an equilateral triangle of area
         // ≈ 0.9 × spacing² (the share of the surface of a point whose k nearest neighbours are
         // at mean distance `spacing`) in its tangent plane, counter-clockwise about its normal.
-        let gwn_tris: Vec<[DVec3; 3]> = points
-            .iter()
-            .zip(&normals)
-            .zip(&spacing)
-            .map(|((p, n), s)| {
-                let (u, v) = n.any_orthonormal_pair();
-                let area = 0.9 * s.max(0.25 * med_spacing).powi(2);
-                let rho = (area / (0.75 * 3f64.sqrt())).sqrt();
-                let c = |t: f64| *p + rho * (t.cos() * u + t.sin() * v);
-                let third = 2.0 * std::f64::consts::FRAC_PI_3;
-                [c(0.0), c(third), c(2.0 * third)]
-            })
-            .collect();
-        let gwn = Bvh::build(gwn_tris, (0..n as u32).collect(), 0.0);
+        let tiny = |i: usize, scale: f64| {
+            let (u, v) = normals[i].any_orthonormal_pair();
+            let area = scale * 0.9 * spacing[i].max(0.25 * med_spacing).powi(2);
+            let rho = (area / (0.75 * 3f64.sqrt())).sqrt();
+            let c = |t: f64| points[i] + rho * (t.cos() * u + t.sin() * v);
+            let third = 2.0 * std::f64::consts::FRAC_PI_3;
+            [c(0.0), c(third), c(2.0 * third)]
+        };
+        let gwn = Bvh::build(
+            (0..n).map(|i| tiny(i, 1.0)).collect(),
+            (0..n as u32).collect(),
+            0.0,
+        );
+        // A coarse copy from a random subsample (areas scaled up), used far from the points
+        // (beyond 3 × its spacing, where the sum is as accurate and much cheaper).
+        let gwn_coarse = (n > 2 * GWN_COARSE).then(|| {
+            let mut idx: Vec<usize> = (0..n).collect();
+            let mut rng = SplitMix64(0xC0A2_5E);
+            for k in 0..GWN_COARSE {
+                let j = k + (rng.next_u64() % (n - k) as u64) as usize;
+                idx.swap(k, j);
+            }
+            idx.truncate(GWN_COARSE);
+            idx.sort_unstable();
+            let scale = n as f64 / GWN_COARSE as f64;
+            let tris = idx.iter().map(|&i| tiny(i, scale)).collect();
+            let bvh = Bvh::build(tris, (0..GWN_COARSE as u32).collect(), 0.0);
+            (bvh, 3.0 * med_spacing * scale.sqrt())
+        });
         let grid = grid::Grid::new(points, &normals, &radius, max_radius);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for p in points {
@@ -357,6 +377,7 @@ impl PointSetSurface {
             stats,
             roots,
             gwn,
+            gwn_coarse,
             lfs: OnceLock::new(),
         })
     }
@@ -418,7 +439,11 @@ impl PointSetSurface {
     fn far_value(&self, x: DVec3) -> f64 {
         let (_, d2) = self.nearest(x);
         let d = d2.sqrt();
-        if self.winding_number(x) > 0.5 { -d } else { d }
+        let w = match &self.gwn_coarse {
+            Some((coarse, far)) if d > *far => coarse.winding_number(x),
+            _ => self.gwn.winding_number(x),
+        };
+        if w > 0.5 { -d } else { d }
     }
 
     /// Generalized winding number of the oriented point cloud at `x` (≈ 1 inside, ≈ 0
