@@ -8,8 +8,8 @@
 //!   supported weight `φ_i(x) = (1 − |x − p_i|²/R_i²)⁴` and a support radius `R_i` proportional
 //!   to the local spacing (mean distance to the nearest neighbours), so it adapts to density and
 //!   averages noise over a few rings of neighbours.
-//! - Far from the points (total weight below a threshold) the value blends into the distance
-//!   to the nearest input point, signed by the point-cloud generalized winding number (Barill
+//! - Far from the points (total weight below a threshold) the value blends into a constant
+//!   (the largest kernel radius), signed by the point-cloud generalized winding number (Barill
 //!   et al. 2018: each oriented point a tiny triangle of its share of the area, evaluated
 //!   through the polyhedron backend's BVH): negative deep inside, positive outside, robust in
 //!   concave regions. On and outside the bounding sphere it is positive by construction.
@@ -159,8 +159,8 @@ pub struct PointSetSurface {
     /// Each point as a tiny oriented triangle (area ≈ its share of the surface), for the
     /// point-cloud generalized winding number (Barill et al. 2018) that signs the far field.
     gwn: Bvh,
-    /// Subsampled copy of `gwn` and the distance beyond which it is used.
-    gwn_coarse: Option<(Bvh, f64)>,
+    /// Subsampled copy of `gwn` (large inputs only).
+    gwn_coarse: Option<Bvh>,
     lfs: OnceLock<LfsSample>,
 }
 
@@ -331,11 +331,11 @@ impl PointSetSurface {
             (0..n as u32).collect(),
             0.0,
         );
-        // A coarse copy from a random subsample (areas scaled up), used far from the points
-        // (beyond 3 × its spacing, where the sum is as accurate and much cheaper).
+        // A coarse copy from a random subsample (areas scaled up), tried first out of the
+        // kernel support; its answer is kept when clear-cut (w < 0.1 or w > 0.9).
         let gwn_coarse = (n > 2 * GWN_COARSE).then(|| {
             let mut idx: Vec<usize> = (0..n).collect();
-            let mut rng = SplitMix64(0xC0A2_5E);
+            let mut rng = SplitMix64(0x00C0_A25E);
             for k in 0..GWN_COARSE {
                 let j = k + (rng.next_u64() % (n - k) as u64) as usize;
                 idx.swap(k, j);
@@ -344,8 +344,7 @@ impl PointSetSurface {
             idx.sort_unstable();
             let scale = n as f64 / GWN_COARSE as f64;
             let tris = idx.iter().map(|&i| tiny(i, scale)).collect();
-            let bvh = Bvh::build(tris, (0..GWN_COARSE as u32).collect(), 0.0);
-            (bvh, 3.0 * med_spacing * scale.sqrt())
+            Bvh::build(tris, (0..GWN_COARSE as u32).collect(), 0.0)
         });
         let grid = grid::Grid::new(points, &normals, &radius, max_radius);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
@@ -434,16 +433,22 @@ impl PointSetSurface {
         (num, den, nsum)
     }
 
-    /// Distance to the nearest input point, negative where the point-cloud winding number
-    /// is above 1/2 (inside).
-    fn far_value(&self, x: DVec3) -> f64 {
-        let (_, d2) = self.nearest(x);
-        let d = d2.sqrt();
-        let w = match &self.gwn_coarse {
-            Some((coarse, far)) if d > *far => coarse.winding_number(x),
+    /// Far-field value: `∓ max_radius`, negative where the point-cloud winding number is
+    /// above 1/2 (inside). `den` is the total kernel weight at `x`.
+    fn far_value(&self, x: DVec3, den: f64) -> f64 {
+        let coarse = match &self.gwn_coarse {
+            Some(c) if den == 0.0 => Some(c.winding_number(x)),
+            _ => None,
+        };
+        let w = match coarse {
+            Some(w) if !(0.1..=0.9).contains(&w) => w,
             _ => self.gwn.winding_number(x),
         };
-        if w > 0.5 { -d } else { d }
+        if w > 0.5 {
+            -self.max_radius
+        } else {
+            self.max_radius
+        }
     }
 
     /// Generalized winding number of the oriented point cloud at `x` (≈ 1 inside, ≈ 0
@@ -706,7 +711,7 @@ impl Surface for PointSetSurface {
         if den >= MIN_WEIGHT {
             return num / den;
         }
-        let far = self.far_value(x);
+        let far = self.far_value(x, den);
         if den <= 0.0 {
             return far;
         }
