@@ -214,6 +214,26 @@ proptest! {
         prop_assert!(n <= 2 || pa == pb);
     }
 
+    /// Parity is additive even when the end and split points lie on faces, edges or vertices
+    /// of the cube (all three are perturbed in the same direction, so they are classified
+    /// consistently).
+    #[test]
+    fn cube_parity_is_additive_at_degenerate_points(
+        a in prop::array::uniform3(-1i32..=5),
+        m in prop::array::uniform3(0i32..=4),
+        b in prop::array::uniform3(-1i32..=5),
+    ) {
+        let s = PolyhedronSurface::new(&cube()).unwrap();
+        let p = |c: [i32; 3]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 4.0;
+        let (pa, pm, pb) = (p(a), p(m), p(b));
+        prop_assume!(pa != pm && pm != pb && pa != pb);
+        let n1 = count(&s, pa, pm);
+        let n2 = count(&s, pm, pb);
+        let n = count(&s, pa, pb);
+        prop_assert_eq!((n1 + n2) % 2, n % 2, "{} + {} vs {}", n1, n2, n);
+        prop_assert_eq!(count(&s, pb, pa) % 2, n % 2);
+    }
+
     /// Splitting a segment at any point conserves the crossing count (no double counting at
     /// the split point, whatever lies there).
     #[test]
