@@ -134,7 +134,11 @@ fn two_spheres_with_given_and_estimated_normals() {
         .filter(|(n, o)| n.dot(**o) > 0.0)
         .count();
     assert!(good as f64 > 0.99 * pts.len() as f64, "{good}");
-    let given = PointSetSurface::new(&pts, Some(&outward), &PointSetParams::default()).unwrap();
+    let cloud = oracle::pointset::PointCloud {
+        points: pts.clone(),
+        normals: Some(outward.clone()),
+    };
+    let given = PointSetSurface::from_cloud(&cloud, &PointSetParams::default()).unwrap();
     assert!(!given.stats().estimated_normals);
     for s in [&est, &given] {
         assert!(s.value(c2) < 0.0 && s.value(DVec3::ZERO) < 0.0);

@@ -429,6 +429,9 @@ fn sharp_edges_of_the_cube_and_projection() {
         s.gradient(DVec3::new(0.5, 0.5, 1.2))
             .abs_diff_eq(DVec3::Z, 1e-12)
     );
+    // Near a corner: the vertex pseudonormal, along the diagonal.
+    let g = s.gradient(DVec3::splat(1.2));
+    assert!(g.abs_diff_eq(DVec3::ONE.normalize(), 1e-12), "{g}");
     // A smooth sphere has no sharp edge at 30 degrees.
     assert!(
         PolyhedronSurface::new(&icosphere(2))

@@ -381,6 +381,11 @@ impl PointSetSurface {
         })
     }
 
+    /// [`PointSetSurface::new`] from a [`PointCloud`] (e.g. from [`read_xyz`]).
+    pub fn from_cloud(cloud: &PointCloud, params: &PointSetParams) -> Result<Self, PointSetError> {
+        Self::new(&cloud.points, cloud.normals.as_deref(), params)
+    }
+
     /// What the construction found (spacing, components, whether normals were estimated).
     pub fn stats(&self) -> &PointSetStats {
         &self.stats

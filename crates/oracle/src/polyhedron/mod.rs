@@ -449,11 +449,18 @@ impl PolyhedronSurface {
         out
     }
 
-    /// Gradient direction: the unit normal of the nearest triangle, outward.
+    /// Gradient direction: the outward unit normal of the nearest feature (its angle-weighted
+    /// pseudonormal for watertight meshes, the nearest triangle's normal otherwise).
     fn nearest_normal(&self, p: DVec3) -> DVec3 {
-        let (_, k, _, _) = self.bvh.closest(p);
-        let t = self.bvh.tris[k as usize];
-        self.orientation * (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero()
+        let (_, k, _, f) = self.bvh.closest(p);
+        let n = match self.pseudo.get(k as usize) {
+            Some(ps) => ps[f as usize],
+            None => {
+                let t = self.bvh.tris[k as usize];
+                (t[1] - t[0]).cross(t[2] - t[0])
+            }
+        };
+        self.orientation * n.normalize_or_zero()
     }
 }
 
