@@ -1,4 +1,5 @@
-//! Polyhedron oracle on the bunny (6966 triangles): `value()` (hierarchical winding number),
+//! Polyhedron oracle on the bunny (6966 triangles): `value()` (watertight: signed distance /
+//! ray parity), `winding_number()` (hierarchical, used for non-watertight meshes),
 //! `crossings()` (exact segment-triangle search through the BVH), `project()`, construction.
 //! Run: `cargo bench -p oracle --bench polyhedron`.
 
@@ -83,6 +84,18 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             i = (i + 1) % near.len();
             s.value(black_box(near[i]))
+        })
+    });
+    g.bench_function("winding_number_near_surface", |b| {
+        b.iter(|| {
+            i = (i + 1) % near.len();
+            s.winding_number(black_box(near[i]))
+        })
+    });
+    g.bench_function("winding_number_bbox", |b| {
+        b.iter(|| {
+            i = (i + 1) % boxed.len();
+            s.winding_number(black_box(boxed[i]))
         })
     });
     let mut out = Vec::new();

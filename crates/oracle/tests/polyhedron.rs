@@ -214,6 +214,26 @@ proptest! {
         prop_assert!(n <= 2 || pa == pb);
     }
 
+    /// Parity is additive even when the end and split points lie on faces, edges or vertices
+    /// of the cube (all three are perturbed in the same direction, so they are classified
+    /// consistently).
+    #[test]
+    fn cube_parity_is_additive_at_degenerate_points(
+        a in prop::array::uniform3(-1i32..=5),
+        m in prop::array::uniform3(0i32..=4),
+        b in prop::array::uniform3(-1i32..=5),
+    ) {
+        let s = PolyhedronSurface::new(&cube()).unwrap();
+        let p = |c: [i32; 3]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 4.0;
+        let (pa, pm, pb) = (p(a), p(m), p(b));
+        prop_assume!(pa != pm && pm != pb && pa != pb);
+        let n1 = count(&s, pa, pm);
+        let n2 = count(&s, pm, pb);
+        let n = count(&s, pa, pb);
+        prop_assert_eq!((n1 + n2) % 2, n % 2, "{} + {} vs {}", n1, n2, n);
+        prop_assert_eq!(count(&s, pb, pa) % 2, n % 2);
+    }
+
     /// Splitting a segment at any point conserves the crossing count (no double counting at
     /// the split point, whatever lies there).
     #[test]
@@ -409,6 +429,9 @@ fn sharp_edges_of_the_cube_and_projection() {
         s.gradient(DVec3::new(0.5, 0.5, 1.2))
             .abs_diff_eq(DVec3::Z, 1e-12)
     );
+    // Near a corner: the vertex pseudonormal, along the diagonal.
+    let g = s.gradient(DVec3::splat(1.2));
+    assert!(g.abs_diff_eq(DVec3::ONE.normalize(), 1e-12), "{g}");
     // A smooth sphere has no sharp edge at 30 degrees.
     assert!(
         PolyhedronSurface::new(&icosphere(2))
@@ -459,4 +482,104 @@ fn bunny_seeds_are_on_it_and_its_inside_is_inside() {
         assert!(n % 2 == 1, "ray {k}: {n}");
     }
     assert!(s.suggested_size() > 0.0 && s.suggested_size() < 0.01);
+}
+
+#[test]
+fn bunny_as_a_soup_with_a_hole_still_classifies_inside_and_outside() {
+    let m = bunny();
+    // Soup: every triangle has its own three vertices.
+    let mut soup = TriMesh::default();
+    for t in &m.triangles {
+        let n = soup.vertices.len() as u32;
+        soup.vertices.extend(t.map(|i| m.vertices[i as usize]));
+        soup.triangles.push([n, n + 1, n + 2]);
+    }
+    // A hole: drop every triangle around vertex 100 (a one-ring).
+    let ring: Vec<usize> = (0..m.triangles.len())
+        .filter(|&f| m.triangles[f].contains(&100))
+        .collect();
+    assert!(ring.len() >= 3);
+    let mut holed = soup.clone();
+    for &f in ring.iter().rev() {
+        holed.triangles.remove(f);
+    }
+    let s = PolyhedronSurface::new(&soup).unwrap();
+    let h = PolyhedronSurface::new(&holed).unwrap();
+    let exact = PolyhedronSurface::new(&m).unwrap();
+    assert_eq!(s.stats().duplicate_vertices, 3 * 6966 - 3485);
+    assert_eq!(s.stats().components, 1);
+    assert_eq!(h.stats().boundary_edges, ring.len());
+    let (lo, hi) = exact.bbox();
+    let mut rng = oracle::roots::SplitMix64(2);
+    let mut agree = 0;
+    for _ in 0..400 {
+        let q = lo + (hi - lo) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let truth = exact.value(q) < 0.0;
+        assert_eq!(s.value(q) < 0.0, truth, "soup at {q}");
+        // Exact parity of crossings from outside the bounding sphere agrees with the sign.
+        let far = exact.bounding_sphere().center + DVec3::X * exact.bounding_sphere().radius;
+        assert_eq!(count(&s, far, q) % 2 == 1, truth, "parity at {q}");
+        agree += usize::from((h.value(q) < 0.0) == truth);
+    }
+    // With the hole, the winding number is still right everywhere but next to the hole.
+    assert!(agree >= 398, "{agree} of 400");
+}
+
+#[test]
+fn watertight_meshes_give_a_signed_distance() {
+    let s = PolyhedronSurface::new(&cube()).unwrap();
+    assert!(s.is_watertight());
+    let d = DVec3::new;
+    let r3 = 3f64.sqrt();
+    for (p, want) in [
+        (d(0.5, 0.5, 0.5), -0.5),
+        (d(1.01, 0.5, 0.5), 0.01),
+        (d(2.0, 0.5, 0.5), 1.0),
+        (d(0.9, 0.9, 0.9), -0.1),
+        (d(1.1, 1.1, 0.5), 0.1 * 2f64.sqrt()), // edge region
+        (d(1.1, 1.1, 1.1), 0.1 * r3),          // vertex region
+        (d(-0.1, -0.1, -0.1), 0.1 * r3),
+        (d(0.5, 0.5, 0.0), 0.0),
+    ] {
+        let sd = s.signed_distance(p).unwrap();
+        assert!((sd - want).abs() < 1e-12, "{p}: {sd} vs {want}");
+        // value: the same near the surface, the sign (and a constant) farther.
+        let v = s.value(p);
+        assert!(
+            v == sd || (sd.abs() > s.suggested_size() && v * sd > 0.0),
+            "{p}: {v}"
+        );
+    }
+    // Sign agrees with the winding number, for the bunny, its soup and an inverted copy.
+    let m = bunny();
+    let mut inv = m.clone();
+    for t in &mut inv.triangles {
+        t.swap(1, 2);
+    }
+    let b = PolyhedronSurface::new(&m).unwrap();
+    let bi = PolyhedronSurface::new(&inv).unwrap();
+    assert!(b.is_watertight() && bi.is_watertight());
+    let (lo, hi) = b.bbox();
+    let mut rng = oracle::roots::SplitMix64(8);
+    for _ in 0..2000 {
+        let q = lo + (hi - lo) * 1.2 * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64())
+            - (hi - lo) * 0.1;
+        let w = b.winding_number(q);
+        let v = b.value(q);
+        assert_eq!(v < 0.0, w > 0.5, "{q}: value {v} w {w}");
+        assert!((bi.value(q) - v).abs() < 1e-12);
+        let sd = b.signed_distance(q).unwrap();
+        assert_eq!(sd < 0.0, v < 0.0);
+        let dist = (b.closest_point(q).0 - q).length();
+        assert!((sd.abs() - dist).abs() < 1e-15);
+        if dist < b.suggested_size() {
+            assert_eq!(v, sd);
+        }
+    }
+    // A mesh with a hole is not watertight: the winding number decides.
+    let mut h = icosphere(2);
+    h.triangles.pop();
+    let sh = PolyhedronSurface::new(&h).unwrap();
+    assert!(!sh.is_watertight() && sh.signed_distance(DVec3::ZERO).is_none());
+    assert!((sh.value(DVec3::ZERO) - (0.5 - sh.winding_number(DVec3::ZERO))).abs() < 1e-15);
 }

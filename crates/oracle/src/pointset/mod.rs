@@ -8,9 +8,11 @@
 //!   supported weight `φ_i(x) = (1 − |x − p_i|²/R_i²)⁴` and a support radius `R_i` proportional
 //!   to the local spacing (mean distance to the nearest neighbours), so it adapts to density and
 //!   averages noise over a few rings of neighbours.
-//! - Far from the points (total weight below a threshold) the value blends into the signed
-//!   distance to the nearest input point, signed by that point's normal: negative deep inside,
-//!   positive outside. On and outside the bounding sphere it is positive by construction.
+//! - Far from the points (total weight below a threshold) the value blends into a constant
+//!   (the largest kernel radius), signed by the point-cloud generalized winding number (Barill
+//!   et al. 2018: each oriented point a tiny triangle of its share of the area, evaluated
+//!   through the polyhedron backend's BVH): negative deep inside, positive outside, robust in
+//!   concave regions. On and outside the bounding sphere it is positive by construction.
 //! - P1: a few well-spread input points (and the top and bottom of each component, where the
 //!   tangent plane is horizontal, as in the paper) projected onto the MLS surface.
 //! - P2 ([`Surface::dm_inf_hint`], [`PointSetSurface::estimate_local_feature_size`]): a
@@ -20,11 +22,13 @@
 //!   not shrink the balls. (The Delaunay-based λ-medial axis is not used: `delaunay3` was a stub
 //!   when this was written.)
 
+mod grid;
 mod linalg;
 mod xyz;
 
 pub use xyz::{PointCloud, XyzError, read_xyz, read_xyz_from};
 
+use crate::polyhedron::bvh::Bvh;
 use crate::roots::SplitMix64;
 use crate::{BoundingSphere, Surface};
 use glam::DVec3;
@@ -141,10 +145,10 @@ pub struct PointSetStats {
 pub struct PointSetSurface {
     points: Vec<DVec3>,
     normals: Vec<DVec3>,
-    /// Kernel support radius per point.
-    radius: Vec<f64>,
     /// Largest `radius` (query radius).
     max_radius: f64,
+    /// Points, normals and radii bucketed for the kernel sums.
+    grid: grid::Grid,
     tree: ImmutableKdTree<f64, 3>,
     lo: DVec3,
     hi: DVec3,
@@ -152,6 +156,11 @@ pub struct PointSetSurface {
     stats: PointSetStats,
     /// Root point of each kNN component (highest point).
     roots: Vec<usize>,
+    /// Each point as a tiny oriented triangle (area ≈ its share of the surface), for the
+    /// point-cloud generalized winding number (Barill et al. 2018) that signs the far field.
+    gwn: Bvh,
+    /// Subsampled copy of `gwn` (large inputs only).
+    gwn_coarse: Option<Bvh>,
     lfs: OnceLock<LfsSample>,
 }
 
@@ -170,6 +179,9 @@ impl std::fmt::Debug for PointSetSurface {
             .finish_non_exhaustive()
     }
 }
+
+/// Points in the coarse winding-number tree.
+const GWN_COARSE: usize = 4096;
 
 /// Total kernel weight below which the IMLS blends into the nearest-point signed distance.
 const MIN_WEIGHT: f64 = 1.0;
@@ -287,21 +299,54 @@ impl PointSetSurface {
         if med_spacing.is_nan() || med_spacing <= 0.0 {
             return Err(PointSetError::Coplanar { ratio: 0.0 });
         }
-        // Support radius: bandwidth × spacing, clamped to [0.5, 2] × the median (bounded cost,
-        // no empty support at isolated points).
+        // Support radius: bandwidth × spacing, clamped to [0.5, 1.5] × the median (the query
+        // radius is the largest support, so this bounds the cost; no empty support at
+        // isolated points).
         let radius: Vec<f64> = spacing
             .iter()
-            .map(|&s| params.bandwidth * s.clamp(0.5 * med_spacing, 2.0 * med_spacing))
+            .map(|&s| params.bandwidth * s.clamp(0.5 * med_spacing, 1.5 * med_spacing))
             .collect();
         let max_radius = radius.iter().copied().fold(0.0, f64::max);
         let estimated = normals.is_none();
         let (normals, roots) = match normals {
             Some(ns) => {
-                let roots = components_roots(points, &knn, params.k_normals);
+                let roots = components_roots(points, &knn, params.k_normals.min(K_GRAPH));
                 (ns.iter().map(|v| v.normalize()).collect(), roots)
             }
             None => estimate_normals(points, &knn, params.k_normals),
         };
+        // Point-cloud winding number: each point becomes an equilateral triangle of area
+        // ≈ 0.9 × spacing² (the share of the surface of a point whose k nearest neighbours are
+        // at mean distance `spacing`) in its tangent plane, counter-clockwise about its normal.
+        let tiny = |i: usize, scale: f64| {
+            let (u, v) = normals[i].any_orthonormal_pair();
+            let area = scale * 0.9 * spacing[i].max(0.25 * med_spacing).powi(2);
+            let rho = (area / (0.75 * 3f64.sqrt())).sqrt();
+            let c = |t: f64| points[i] + rho * (t.cos() * u + t.sin() * v);
+            let third = 2.0 * std::f64::consts::FRAC_PI_3;
+            [c(0.0), c(third), c(2.0 * third)]
+        };
+        let gwn = Bvh::build(
+            (0..n).map(|i| tiny(i, 1.0)).collect(),
+            (0..n as u32).collect(),
+            0.0,
+        );
+        // A coarse copy from a random subsample (areas scaled up), tried first out of the
+        // kernel support; its answer is kept when clear-cut (w < 0.1 or w > 0.9).
+        let gwn_coarse = (n > 2 * GWN_COARSE).then(|| {
+            let mut idx: Vec<usize> = (0..n).collect();
+            let mut rng = SplitMix64(0x00C0_A25E);
+            for k in 0..GWN_COARSE {
+                let j = k + (rng.next_u64() % (n - k) as u64) as usize;
+                idx.swap(k, j);
+            }
+            idx.truncate(GWN_COARSE);
+            idx.sort_unstable();
+            let scale = n as f64 / GWN_COARSE as f64;
+            let tris = idx.iter().map(|&i| tiny(i, scale)).collect();
+            Bvh::build(tris, (0..GWN_COARSE as u32).collect(), 0.0)
+        });
+        let grid = grid::Grid::new(points, &normals, &radius, max_radius);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for p in points {
             lo = lo.min(*p);
@@ -322,16 +367,23 @@ impl PointSetSurface {
         Ok(PointSetSurface {
             points: points.to_vec(),
             normals,
-            radius,
             max_radius,
+            grid,
             tree,
             lo,
             hi,
             sphere,
             stats,
             roots,
+            gwn,
+            gwn_coarse,
             lfs: OnceLock::new(),
         })
+    }
+
+    /// [`PointSetSurface::new`] from a [`PointCloud`] (e.g. from [`read_xyz`]).
+    pub fn from_cloud(cloud: &PointCloud, params: &PointSetParams) -> Result<Self, PointSetError> {
+        Self::new(&cloud.points, cloud.normals.as_deref(), params)
     }
 
     /// What the construction found (spacing, components, whether normals were estimated).
@@ -370,44 +422,53 @@ impl PointSetSurface {
 
     /// IMLS sums at `x`: (Σ φ n·(x−p), Σ φ, Σ φ n).
     fn sums(&self, x: DVec3) -> (f64, f64, DVec3) {
-        let res = self
-            .tree
-            .query(&x.to_array())
-            .within::<SquaredEuclidean<f64>>(self.max_radius * self.max_radius)
-            .unsorted()
-            .execute();
         let (mut num, mut den, mut nsum) = (0.0, 0.0, DVec3::ZERO);
-        for r in &res {
-            let i = r.item as usize;
-            let r2 = self.radius[i] * self.radius[i];
-            if r.distance >= r2 {
-                continue;
+        self.grid.for_each_near(x, self.max_radius, |it| {
+            let d = x - it.p;
+            let d2 = d.length_squared();
+            if d2 < it.r2 {
+                let u = 1.0 - d2 / it.r2;
+                let u2 = u * u;
+                let w = u2 * u2;
+                num += w * it.n.dot(d);
+                den += w;
+                nsum += w * it.n;
             }
-            let u = 1.0 - r.distance / r2;
-            let u2 = u * u;
-            let w = u2 * u2;
-            num += w * self.normals[i].dot(x - self.points[i]);
-            den += w;
-            nsum += w * self.normals[i];
-        }
+        });
         (num, den, nsum)
     }
 
-    /// Signed distance to the nearest input point, signed by its normal.
-    fn far_value(&self, x: DVec3) -> f64 {
-        let (j, d2) = self.nearest(x);
-        let d = d2.sqrt();
-        if self.normals[j].dot(x - self.points[j]) < 0.0 {
-            -d
+    /// Far-field value: `∓ max_radius`, negative where the point-cloud winding number is
+    /// above 1/2 (inside). `den` is the total kernel weight at `x`.
+    fn far_value(&self, x: DVec3, den: f64) -> f64 {
+        let coarse = match &self.gwn_coarse {
+            Some(c) if den == 0.0 => Some(c.winding_number(x)),
+            _ => None,
+        };
+        let w = match coarse {
+            Some(w) if !(0.1..=0.9).contains(&w) => w,
+            _ => self.gwn.winding_number(x),
+        };
+        if w > 0.5 {
+            -self.max_radius
         } else {
-            d
+            self.max_radius
         }
     }
 
+    /// Generalized winding number of the oriented point cloud at `x` (≈ 1 inside, ≈ 0
+    /// outside; meaningful at distances above the spacing).
+    pub fn winding_number(&self, x: DVec3) -> f64 {
+        self.gwn.winding_number(x)
+    }
+
     /// Local feature size (distance to the medial axis) estimated near `x`: the smaller
-    /// shrinking-ball radius at the nearest point of a subsample (≤ 4096 points) of the input.
+    /// shrinking-ball radius at the nearest point of a subsample (≤ 1024 points) of the input.
     /// Computed once (in parallel) on first use.
     pub fn estimate_local_feature_size(&self, x: DVec3) -> f64 {
+        if !x.is_finite() {
+            return f64::NAN;
+        }
         let s = self.lfs_sample();
         let r = s
             .tree
@@ -420,7 +481,7 @@ impl PointSetSurface {
     fn lfs_sample(&self) -> &LfsSample {
         self.lfs.get_or_init(|| {
             let n = self.points.len();
-            let step = n.div_ceil(4096).max(1);
+            let step = n.div_ceil(1024).max(1);
             let idx: Vec<usize> = (0..n).step_by(step).collect();
             // Neighbours within twice the kernel radius are noise-level: ignored.
             let rho = 2.0 * self.stats.median_radius;
@@ -452,16 +513,19 @@ impl PointSetSurface {
         let kq = NonZeroUsize::new(32.min(self.points.len())).expect("nonzero");
         for _ in 0..40 {
             let c = p + n * r;
-            let res = self
-                .tree
-                .query(&c.to_array())
-                .nearest_n::<SquaredEuclidean<f64>>(kq)
-                .execute();
-            // The nearest point to c that is not a near neighbour of p.
-            let q = res
-                .iter()
-                .map(|x| self.points[x.item as usize])
-                .find(|q| (*q - p).length_squared() > rho * rho);
+            // The nearest point to c that is not a near neighbour of p (usually the nearest).
+            let (j, _) = self.nearest(c);
+            let q = if (self.points[j] - p).length_squared() > rho * rho {
+                Some(self.points[j])
+            } else {
+                self.tree
+                    .query(&c.to_array())
+                    .nearest_n::<SquaredEuclidean<f64>>(kq)
+                    .execute()
+                    .iter()
+                    .map(|x| self.points[x.item as usize])
+                    .find(|q| (*q - p).length_squared() > rho * rho)
+            };
             let Some(q) = q else { break };
             if (q - c).length() >= r * (1.0 - 1e-9) {
                 break;
@@ -504,28 +568,52 @@ fn estimate_normals(points: &[DVec3], knn: &[Vec<u32>], k: usize) -> (Vec<DVec3>
             vecs[0]
         })
         .collect();
-    let roots = propagate(points, knn, k, &mut normals, true);
+    let roots = propagate(points, knn, k.min(K_GRAPH), &mut normals);
     (normals, roots)
 }
 
-/// Components of the kNN graph (roots = highest point of each), without changing normals.
+/// Components of the kNN graph (its first `k` neighbours, symmetrized), as the highest point
+/// (largest z, then smallest index) of each, in decreasing z order.
 fn components_roots(points: &[DVec3], knn: &[Vec<u32>], k: usize) -> Vec<usize> {
-    let mut dummy = vec![DVec3::Z; points.len()];
-    propagate(points, knn, k, &mut dummy, false)
+    let n = points.len();
+    let mut uf: Vec<u32> = (0..n as u32).collect();
+    fn find(uf: &mut [u32], mut x: u32) -> u32 {
+        while uf[x as usize] != x {
+            uf[x as usize] = uf[uf[x as usize] as usize];
+            x = uf[x as usize];
+        }
+        x
+    }
+    for (i, nb) in knn.iter().enumerate() {
+        for &j in &nb[..k.min(nb.len())] {
+            let (a, b) = (find(&mut uf, i as u32), find(&mut uf, j));
+            if a != b {
+                uf[a.max(b) as usize] = a.min(b);
+            }
+        }
+    }
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| points[b].z.total_cmp(&points[a].z).then(a.cmp(&b)));
+    let mut seen = vec![false; n];
+    let mut roots = Vec::new();
+    for i in order {
+        let r = find(&mut uf, i as u32) as usize;
+        if !seen[r] {
+            seen[r] = true;
+            roots.push(i);
+        }
+    }
+    roots
 }
 
-/// Prim's minimum spanning tree over the symmetric kNN graph with weights `1 − |n_i·n_j|`,
+/// Neighbours per point in the orientation graph (Hoppe et al. use about 8).
+const K_GRAPH: usize = 8;
+
+/// Prim's (approximate) minimum spanning tree over the symmetric kNN graph with weights
+/// `1 − |n_i·n_j|` (plus a penalty for edges along the normals),
 /// flipping each normal to agree with its parent. Components are started from their highest
 /// point (largest z, then smallest index), whose normal is oriented to +z.
-fn propagate(
-    points: &[DVec3],
-    knn: &[Vec<u32>],
-    k: usize,
-    normals: &mut [DVec3],
-    orient: bool,
-) -> Vec<usize> {
-    use std::cmp::Reverse;
-    use std::collections::BinaryHeap;
+fn propagate(points: &[DVec3], knn: &[Vec<u32>], k: usize, normals: &mut [DVec3]) -> Vec<usize> {
     let n = points.len();
     // Symmetric adjacency (CSR).
     let mut deg = vec![0u32; n + 1];
@@ -553,17 +641,25 @@ fn propagate(
     order.sort_by(|&a, &b| points[b].z.total_cmp(&points[a].z).then(a.cmp(&b)));
     let mut visited = vec![false; n];
     let mut roots = Vec::new();
-    let mut heap: BinaryHeap<Reverse<(u64, u32, u32)>> = BinaryHeap::new();
+    // Prim's algorithm with a bucket queue (weights in [0, 2] quantized to 1/128): an
+    // approximate minimum spanning tree, enough for orientation and O(1) per edge. Buckets are
+    // stacks, so the order is deterministic.
+    const BUCKETS: usize = 257;
+    let mut buckets: Vec<Vec<(u32, u32)>> = vec![Vec::new(); BUCKETS];
     for &root in &order {
         if visited[root] {
             continue;
         }
         roots.push(root);
         visited[root] = true;
-        if orient && normals[root].z < 0.0 {
+        if normals[root].z < 0.0 {
             normals[root] = -normals[root];
         }
-        let push = |heap: &mut BinaryHeap<_>, i: usize, normals: &[DVec3], visited: &[bool]| {
+        let push = |buckets: &mut [Vec<(u32, u32)>],
+                    i: usize,
+                    normals: &[DVec3],
+                    visited: &[bool],
+                    cur: &mut usize| {
             for &j in &adj[start[i]..start[i + 1]] {
                 if !visited[j as usize] {
                     // Hoppe's 1 − |n_i·n_j|, plus a penalty for edges along the normals: those
@@ -572,22 +668,31 @@ fn propagate(
                     let (ni, nj) = (normals[i], normals[j as usize]);
                     let d = (points[j as usize] - points[i]).normalize_or_zero();
                     let w = 1.0 - ni.dot(nj).abs() + 0.5 * (ni.dot(d).abs() + nj.dot(d).abs());
-                    // Non-negative f64 order = bit order.
-                    heap.push(Reverse((w.max(0.0).to_bits(), j, i as u32)));
+                    let b = ((w * 128.0) as usize).min(BUCKETS - 1);
+                    buckets[b].push((j, i as u32));
+                    *cur = (*cur).min(b);
                 }
             }
         };
-        push(&mut heap, root, normals, &visited);
-        while let Some(Reverse((_, j, i))) = heap.pop() {
+        let mut cur = BUCKETS;
+        push(&mut buckets, root, normals, &visited, &mut cur);
+        loop {
+            while cur < BUCKETS && buckets[cur].is_empty() {
+                cur += 1;
+            }
+            if cur == BUCKETS {
+                break;
+            }
+            let (j, i) = buckets[cur].pop().expect("non-empty bucket");
             let j = j as usize;
             if visited[j] {
                 continue;
             }
             visited[j] = true;
-            if orient && normals[i as usize].dot(normals[j]) < 0.0 {
+            if normals[i as usize].dot(normals[j]) < 0.0 {
                 normals[j] = -normals[j];
             }
-            push(&mut heap, j, normals, &visited);
+            push(&mut buckets, j, normals, &visited, &mut cur);
         }
     }
     roots
@@ -599,6 +704,9 @@ impl Surface for PointSetSurface {
     }
 
     fn value(&self, x: DVec3) -> f64 {
+        if !x.is_finite() {
+            return f64::NAN;
+        }
         let dc = (x - self.sphere.center).length();
         if dc >= self.sphere.radius {
             // Positive on and outside the bounding sphere (far from every point).
@@ -608,7 +716,7 @@ impl Surface for PointSetSurface {
         if den >= MIN_WEIGHT {
             return num / den;
         }
-        let far = self.far_value(x);
+        let far = self.far_value(x, den);
         if den <= 0.0 {
             return far;
         }
@@ -641,6 +749,9 @@ impl Surface for PointSetSurface {
     }
 
     fn gradient(&self, x: DVec3) -> DVec3 {
+        if !x.is_finite() {
+            return DVec3::NAN;
+        }
         let (_, den, nsum) = self.sums(x);
         if den > 0.0 {
             nsum.normalize_or_zero()
@@ -653,6 +764,9 @@ impl Surface for PointSetSurface {
 
     /// Newton-like projection along the averaged normal: `x ← x − f(x) n̄(x)`, checked.
     fn project(&self, p: DVec3) -> Option<DVec3> {
+        if !p.is_finite() {
+            return None;
+        }
         let tol = self.tolerance();
         let mut x = p;
         for _ in 0..50 {
@@ -678,6 +792,38 @@ impl Surface for PointSetSurface {
         None
     }
 
+    /// Bipolar oracle: Illinois (modified regula falsi) on the IMLS value, which is close to a
+    /// signed distance near the surface, so a few evaluations suffice; stops when the bracket
+    /// or |f| is below the tolerance.
+    fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
+        illinois(|x| self.value(x), a, fa, b, fb, self.tolerance())
+    }
+
+    /// Intersection oracle: sign changes of the value sampled at [`Surface::crossing_step`],
+    /// each refined by [`Surface::crossing`].
+    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+        let len = (b - a).length();
+        if !len.is_finite() {
+            return;
+        }
+        let n = ((len / self.crossing_step()).ceil() as usize).clamp(1, 1 << 20);
+        let (mut p0, mut f0) = (a, self.value(a));
+        for i in 1..=n {
+            let p1 = a.lerp(b, i as f64 / n as f64);
+            let f1 = self.value(p1);
+            if (f0 < 0.0) != (f1 < 0.0) {
+                out.push(self.crossing(p0, f0, p1, f1));
+            }
+            (p0, f0) = (p1, f1);
+        }
+    }
+
+    /// Half the median kernel radius: the IMLS surface does not oscillate at smaller scales,
+    /// so two crossings closer than this are not expected (and may be missed).
+    fn crossing_step(&self) -> f64 {
+        0.5 * self.stats.median_radius
+    }
+
     fn dm_inf_hint(&self) -> Option<f64> {
         let s = self.lfs_sample();
         let mut v = s.lfs.clone();
@@ -689,5 +835,76 @@ impl Surface for PointSetSurface {
         let x = *v.select_nth_unstable_by(k, f64::total_cmp).1;
         let _ = &s.points;
         (x > 0.0).then_some(x)
+    }
+}
+
+/// Illinois root finding on `[a, b]` (`fa`, `fb` of opposite signs), safeguarded by bisection
+/// steps when the bracket shrinks slowly. Returns a point within `tol` of a sign change (or
+/// where `|f| < tol`, for functions close to a distance).
+fn illinois(f: impl Fn(DVec3) -> f64, a: DVec3, fa: f64, b: DVec3, fb: f64, tol: f64) -> DVec3 {
+    let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
+    let mut side = 0i8;
+    let mut prev_len = (b - a).length();
+    for it in 0..200 {
+        let len = (b - a).length();
+        if len <= tol {
+            break;
+        }
+        // Every third step, bisect if the last steps did not halve the bracket.
+        let t = if it % 3 == 2 && len > 0.5 * prev_len {
+            0.5
+        } else {
+            let t = fa / (fa - fb);
+            if t.is_finite() {
+                t.clamp(0.0, 1.0)
+            } else {
+                0.5
+            }
+        };
+        if it % 3 == 2 {
+            prev_len = len;
+        }
+        let m = a.lerp(b, t);
+        let fm = f(m);
+        if fm.is_nan() || fm.abs() < tol {
+            return m;
+        }
+        if (fm < 0.0) == (fa < 0.0) {
+            (a, fa) = (m, fm);
+            if side == -1 {
+                fb *= 0.5;
+            }
+            side = -1;
+        } else {
+            (b, fb) = (m, fm);
+            if side == 1 {
+                fa *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    a.lerp(b, 0.5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::cell::Cell;
+
+    #[test]
+    fn illinois_converges_on_smooth_and_sign_only_functions() {
+        let (a, b) = (DVec3::new(-1.0, 0.2, 0.0), DVec3::new(2.0, 0.2, 0.0));
+        let calls = Cell::new(0);
+        let smooth = |x: DVec3| {
+            calls.set(calls.get() + 1);
+            x.length() - 1.0
+        };
+        let x = illinois(smooth, a, smooth(a), b, smooth(b), 1e-12);
+        assert!((x.length() - 1.0).abs() < 1e-12);
+        assert!(calls.get() < 20, "{} evaluations", calls.get());
+        // A sign-only function: the bisection safeguard still closes the bracket.
+        let step = |x: DVec3| if x.x < 0.3 { -1.0 } else { 1.0 };
+        let x = illinois(step, a, -1.0, b, 1.0, 1e-9);
+        assert!((x.x - 0.3).abs() < 1e-8, "{x}");
     }
 }

@@ -70,6 +70,14 @@ pub fn read_xyz(path: impl AsRef<Path>) -> Result<PointCloud, XyzError> {
 }
 
 /// Read `.xyz` text from any reader; `path` is only used in error messages.
+///
+/// ```
+/// use oracle::pointset::read_xyz_from;
+/// let c = read_xyz_from("# x y z nx ny nz\n0 0 1 0 0 1\n1 0 0 1 0 0\n".as_bytes(), "a.xyz")
+///     .unwrap();
+/// assert_eq!(c.points.len(), 2);
+/// assert_eq!(c.normals.unwrap()[1].x, 1.0);
+/// ```
 pub fn read_xyz_from(reader: impl BufRead, path: impl AsRef<Path>) -> Result<PointCloud, XyzError> {
     let path = path.as_ref();
     let mut points = Vec::new();

@@ -2,7 +2,7 @@
 //! centroid box), with per-node dipole data for the fast generalized winding number
 //! (Barill et al. 2018, first order).
 
-use super::predicates::{closest_point_triangle, segment_triangle, solid_angle};
+use super::predicates::{closest_point_triangle_feature, segment_triangle, solid_angle};
 use glam::{DMat3, DVec3};
 
 /// Triangles per leaf (at most).
@@ -235,9 +235,20 @@ impl Bvh {
     /// Every crossing of the segment `[a, b]` with the triangles: `(t, leaf-order index)`.
     pub fn segment_hits(&self, a: DVec3, b: DVec3, out: &mut Vec<(f64, u32)>) {
         let d = b - a;
-        let mut stack = Vec::with_capacity(64);
-        stack.push(0u32);
-        while let Some(ni) = stack.pop() {
+        // Depth ≤ log2(n / LEAF_SIZE) + 1 for the median-split tree: 64 slots always suffice
+        // (the heap fallback is kept for safety).
+        let mut fixed = [0u32; 64];
+        let mut heap: Vec<u32> = Vec::new();
+        let mut sp = 1;
+        loop {
+            let ni = if let Some(x) = heap.pop() {
+                x
+            } else if sp > 0 {
+                sp -= 1;
+                fixed[sp]
+            } else {
+                break;
+            };
             let node = &self.nodes[ni as usize];
             if !segment_box(a, d, node.lo - self.pad, node.hi + self.pad) {
                 continue;
@@ -249,29 +260,73 @@ impl Bvh {
                         out.push((tt, (s + k) as u32));
                     }
                 }
+            } else if sp + 2 <= fixed.len() {
+                fixed[sp] = node.first;
+                fixed[sp + 1] = node.first + 1;
+                sp += 2;
             } else {
-                stack.push(node.first);
-                stack.push(node.first + 1);
+                heap.push(node.first);
+                heap.push(node.first + 1);
             }
         }
     }
 
-    /// Closest point on the triangles to `p`: `(point, leaf-order index, squared distance)`.
-    pub fn closest(&self, p: DVec3) -> (DVec3, u32, f64) {
-        let mut best = (self.tris[0][0], 0u32, f64::INFINITY);
+    /// Closest point on the triangles to `p`: `(point, leaf-order index, squared distance,
+    /// feature)` (feature as in `closest_point_triangle_feature`).
+    pub fn closest(&self, p: DVec3) -> (DVec3, u32, f64, u8) {
+        let mut best = (self.tris[0][0], 0u32, f64::INFINITY, 1u8);
         self.closest_rec(0, p, &mut best);
         best
     }
 
-    fn closest_rec(&self, ni: usize, p: DVec3, best: &mut (DVec3, u32, f64)) {
+    /// Like [`Bvh::closest`], restricted to triangles closer than `sqrt(r2)`.
+    pub fn closest_within(&self, p: DVec3, r2: f64) -> Option<(DVec3, u32, f64, u8)> {
+        let mut best = (self.tris[0][0], u32::MAX, r2, 1u8);
+        if box_dist2(p, &self.nodes[0]) < r2 {
+            self.closest_rec(0, p, &mut best);
+        }
+        (best.1 != u32::MAX).then_some(best)
+    }
+
+    /// Number of crossings of `[a, b]` with the triangles (exact, perturbed predicates).
+    pub fn count_hits(&self, a: DVec3, b: DVec3) -> usize {
+        let d = b - a;
+        let mut stack = [0u32; 64];
+        let mut sp = 1;
+        let mut n = 0;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if !segment_box(a, d, node.lo - self.pad, node.hi + self.pad) {
+                continue;
+            }
+            if node.count > 0 {
+                let s = node.first as usize;
+                for t in &self.tris[s..s + node.count as usize] {
+                    n += usize::from(segment_triangle(a, b, t[0], t[1], t[2]).is_some());
+                }
+            } else if sp + 2 <= stack.len() {
+                stack[sp] = node.first;
+                stack[sp + 1] = node.first + 1;
+                sp += 2;
+            } else {
+                let mut v = Vec::new();
+                self.segment_hits(a, b, &mut v);
+                return v.len();
+            }
+        }
+        n
+    }
+
+    fn closest_rec(&self, ni: usize, p: DVec3, best: &mut (DVec3, u32, f64, u8)) {
         let node = &self.nodes[ni];
         if node.count > 0 {
             let s = node.first as usize;
             for (k, t) in self.tris[s..s + node.count as usize].iter().enumerate() {
-                let q = closest_point_triangle(p, t[0], t[1], t[2]);
+                let (q, f) = closest_point_triangle_feature(p, t[0], t[1], t[2]);
                 let d2 = (q - p).length_squared();
                 if d2 < best.2 {
-                    *best = (q, (s + k) as u32, d2);
+                    *best = (q, (s + k) as u32, d2, f);
                 }
             }
             return;

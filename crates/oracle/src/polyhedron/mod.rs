@@ -4,9 +4,14 @@
 //!   triangles, through a BVH, decided by exact predicates with a symbolic perturbation of the
 //!   segment (a crossing through a shared edge or vertex is counted once; a segment lying in a
 //!   triangle's plane does not cross it). Crossing points are computed in f64.
-//! - Inside/outside ([`Surface::value`]): `0.5 − w(p)` where `w` is the generalized winding
-//!   number (Jacobson et al. 2013), evaluated hierarchically (far BVH nodes by their dipole,
-//!   Barill et al. 2018). Negative inside, positive outside; robust to soups and small holes.
+//! - Inside/outside ([`Surface::value`]): for a watertight mesh (closed, manifold, consistently
+//!   oriented after welding), the signed distance near the surface, signed by angle-weighted
+//!   pseudonormals (Bærentzen & Aanæs 2005) through a BVH nearest query, and farther than
+//!   [`PolyhedronSurface::suggested_size`] a constant magnitude signed by the parity of exact
+//!   crossings of a ray (the same predicates as the intersection oracle). Otherwise `0.5 − w(p)` where
+//!   `w` is the generalized winding number (Jacobson et al. 2013), evaluated hierarchically
+//!   (far BVH nodes by a second-order dipole expansion, Barill et al. 2018): negative inside,
+//!   positive outside, robust to soups and small holes.
 //!   Triangles are expected counter-clockwise seen from outside (then `w ≈ 1` inside); a mesh
 //!   with the opposite global orientation is detected (negative signed volume) and flipped.
 //! - Bipolar oracle ([`Surface::crossing`]): the exact crossing where the sign changes, with
@@ -16,7 +21,7 @@
 //! Invariants kept by [`PolyhedronSurface`]: every stored triangle is non-degenerate (exactly)
 //! and has finite vertices within the exact range of the predicates.
 
-mod bvh;
+pub(crate) mod bvh;
 mod predicates;
 
 use crate::roots::{SplitMix64, bisect};
@@ -121,6 +126,9 @@ pub struct PolyhedronSurface {
     hi: DVec3,
     /// +1 if the mesh is oriented outward (positive signed volume), −1 otherwise.
     orientation: f64,
+    /// Watertight meshes only (else empty): per triangle in leaf order, the angle-weighted
+    /// pseudonormals of its features `[face, vertex a, b, c, edge ab, bc, ca]`.
+    pseudo: Vec<[DVec3; 7]>,
     stats: PolyhedronStats,
 }
 
@@ -229,11 +237,12 @@ impl PolyhedronSurface {
             })
             .collect();
         // Edge statistics (sorted, deterministic).
-        let mut edges: Vec<(u32, u32, bool)> = Vec::with_capacity(faces.len() * 3);
-        for (t, _) in &faces {
+        // (min, max, direction, face, local edge)
+        let mut edges: Vec<(u32, u32, bool, u32, u8)> = Vec::with_capacity(faces.len() * 3);
+        for (fi, (t, _)) in faces.iter().enumerate() {
             for k in 0..3 {
                 let (u, v) = (t[k], t[(k + 1) % 3]);
-                edges.push((u.min(v), u.max(v), u < v));
+                edges.push((u.min(v), u.max(v), u < v, fi as u32, k as u8));
             }
         }
         edges.sort_unstable();
@@ -249,6 +258,7 @@ impl PolyhedronSurface {
                 _ => nonmanifold_edges += 1,
             }
         }
+        let watertight = boundary_edges == 0 && nonmanifold_edges == 0 && misoriented_edges == 0;
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         let mut volume = 0.0;
         let tris: Vec<[DVec3; 3]> = faces
@@ -273,6 +283,11 @@ impl PolyhedronSurface {
             .iter()
             .map(|&i| face_comp[i as usize])
             .collect();
+        let pseudo = if watertight {
+            pseudonormals(&mesh.vertices, &faces, &edges, &bvh.face_ids)
+        } else {
+            Vec::new()
+        };
         let stats = PolyhedronStats {
             vertices: nv,
             triangles: mesh.triangles.len(),
@@ -293,6 +308,72 @@ impl PolyhedronSurface {
             hi,
             orientation: if volume < 0.0 { -1.0 } else { 1.0 },
             stats,
+            pseudo,
+        })
+    }
+
+    /// Whether the (welded, non-degenerate) mesh is closed, manifold and consistently
+    /// oriented. Then [`Surface::value`] is the signed distance near the surface (sign from
+    /// angle-weighted pseudonormals, Bærentzen & Aanæs 2005) and sign-exact by ray parity
+    /// farther; otherwise it is `0.5 − w` (winding number).
+    pub fn is_watertight(&self) -> bool {
+        !self.pseudo.is_empty()
+    }
+
+    /// Sign-exact inside/outside for watertight meshes: within `suggested_size()` of the
+    /// surface, the signed distance; farther, `±suggested_size()` with the sign from the
+    /// parity of the exact crossings of a segment from `p` out of the bounding box (consistent
+    /// with [`Surface::crossings`]). `None` if the mesh is not watertight.
+    fn watertight_value(&self, p: DVec3) -> Option<f64> {
+        if self.pseudo.is_empty() {
+            return None;
+        }
+        let r = self.suggested_size();
+        if let Some((q, k, d2, f)) = self.bvh.closest_within(p, r * r) {
+            let s = (p - q).dot(self.pseudo[k as usize][f as usize]) * self.orientation;
+            return Some(if s < 0.0 {
+                -d2.sqrt()
+            } else if s > 0.0 {
+                d2.sqrt()
+            } else {
+                0.0
+            });
+        }
+        if p.cmplt(self.lo).any() || p.cmpgt(self.hi).any() {
+            return Some(r);
+        }
+        // Exit through the nearest face of the bounding box.
+        let below = p - self.lo;
+        let above = self.hi - p;
+        let (mut axis, mut dist, mut dir) = (0, f64::INFINITY, 0.0);
+        for i in 0..3 {
+            if below[i] < dist {
+                (axis, dist, dir) = (i, below[i], -1.0);
+            }
+            if above[i] < dist {
+                (axis, dist, dir) = (i, above[i], 1.0);
+            }
+        }
+        let mut b = p;
+        b[axis] += dir * (dist + r);
+        let odd = self.bvh.count_hits(p, b) % 2 == 1;
+        Some(if odd { -r } else { r })
+    }
+
+    /// Signed distance to the triangles (negative inside), for watertight meshes; `None`
+    /// otherwise.
+    pub fn signed_distance(&self, p: DVec3) -> Option<f64> {
+        if self.pseudo.is_empty() {
+            return None;
+        }
+        let (q, k, d2, f) = self.bvh.closest(p);
+        let s = (p - q).dot(self.pseudo[k as usize][f as usize]) * self.orientation;
+        Some(if s < 0.0 {
+            -d2.sqrt()
+        } else if s > 0.0 {
+            d2.sqrt()
+        } else {
+            0.0
         })
     }
 
@@ -330,7 +411,7 @@ impl PolyhedronSurface {
 
     /// Closest point on the triangles and the input index of the face it lies on.
     pub fn closest_point(&self, p: DVec3) -> (DVec3, usize) {
-        let (q, k, _) = self.bvh.closest(p);
+        let (q, k, _, _) = self.bvh.closest(p);
         let f = self.faces[self.bvh.face_ids[k as usize] as usize].1;
         (q, f as usize)
     }
@@ -368,12 +449,71 @@ impl PolyhedronSurface {
         out
     }
 
-    /// Gradient direction: the unit normal of the nearest triangle, outward.
+    /// Gradient direction: the outward unit normal of the nearest feature (its angle-weighted
+    /// pseudonormal for watertight meshes, the nearest triangle's normal otherwise).
     fn nearest_normal(&self, p: DVec3) -> DVec3 {
-        let (_, k, _) = self.bvh.closest(p);
-        let t = self.bvh.tris[k as usize];
-        self.orientation * (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero()
+        let (_, k, _, f) = self.bvh.closest(p);
+        let n = match self.pseudo.get(k as usize) {
+            Some(ps) => ps[f as usize],
+            None => {
+                let t = self.bvh.tris[k as usize];
+                (t[1] - t[0]).cross(t[2] - t[0])
+            }
+        };
+        self.orientation * n.normalize_or_zero()
     }
+}
+
+/// Angle-weighted pseudonormals (Bærentzen & Aanæs 2005) per triangle in leaf order:
+/// `[face, vertex a, b, c, edge ab, bc, ca]`. `edges` is the sorted edge list
+/// `(min, max, direction, face, local edge)` of a watertight mesh (two faces per edge).
+fn pseudonormals(
+    vertices: &[DVec3],
+    faces: &[([u32; 3], u32)],
+    edges: &[(u32, u32, bool, u32, u8)],
+    leaf_faces: &[u32],
+) -> Vec<[DVec3; 7]> {
+    let fnormal: Vec<DVec3> = faces
+        .iter()
+        .map(|(t, _)| {
+            let [a, b, c] = t.map(|i| vertices[i as usize]);
+            (b - a).cross(c - a).normalize_or_zero()
+        })
+        .collect();
+    let mut vnormal = vec![DVec3::ZERO; vertices.len()];
+    for ((t, _), n) in faces.iter().zip(&fnormal) {
+        let p = t.map(|i| vertices[i as usize]);
+        for k in 0..3 {
+            let (u, v) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+            let angle = u.angle_between(v);
+            if angle.is_finite() {
+                vnormal[t[k] as usize] += angle * *n;
+            }
+        }
+    }
+    let mut enormal = vec![[DVec3::ZERO; 3]; faces.len()];
+    for run in edges.chunk_by(|x, y| x.0 == y.0 && x.1 == y.1) {
+        let sum: DVec3 = run.iter().map(|e| fnormal[e.3 as usize]).sum();
+        for e in run {
+            enormal[e.3 as usize][e.4 as usize] = sum;
+        }
+    }
+    leaf_faces
+        .iter()
+        .map(|&fi| {
+            let (t, _) = faces[fi as usize];
+            let e = enormal[fi as usize];
+            [
+                fnormal[fi as usize],
+                vnormal[t[0] as usize],
+                vnormal[t[1] as usize],
+                vnormal[t[2] as usize],
+                e[0],
+                e[1],
+                e[2],
+            ]
+        })
+        .collect()
 }
 
 /// Distance from each point to the nearest of the `edges` (infinity if there are none).
@@ -418,8 +558,18 @@ impl Surface for PolyhedronSurface {
         }
     }
 
+    /// For watertight meshes ([`PolyhedronSurface::is_watertight`]): the signed distance
+    /// within [`PolyhedronSurface::suggested_size`] of the surface, `±suggested_size()` farther
+    /// (sign by exact ray parity). Otherwise `0.5 − w(p)` (generalized winding number). NaN
+    /// for a non-finite `p`.
     fn value(&self, p: DVec3) -> f64 {
-        0.5 - self.winding_number(p)
+        if !p.is_finite() {
+            return f64::NAN;
+        }
+        match self.watertight_value(p) {
+            Some(d) => d,
+            None => 0.5 - self.winding_number(p),
+        }
     }
 
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {

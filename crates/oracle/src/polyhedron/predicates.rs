@@ -141,47 +141,54 @@ pub(crate) fn segment_triangle(a: DVec3, b: DVec3, p: DVec3, q: DVec3, r: DVec3)
     Some(t)
 }
 
-/// Closest point of triangle `abc` to `p` (Ericson, Real-Time Collision Detection, 5.1.5).
-pub(crate) fn closest_point_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+/// Closest point of triangle `abc` to `p` (Ericson, Real-Time Collision Detection, 5.1.5)
+/// and the feature it lies on: 0 the interior,
+/// 1, 2, 3 the vertices `a`, `b`, `c`, 4, 5, 6 the edges `ab`, `bc`, `ca`.
+pub(crate) fn closest_point_triangle_feature(
+    p: DVec3,
+    a: DVec3,
+    b: DVec3,
+    c: DVec3,
+) -> (DVec3, u8) {
     let ab = b - a;
     let ac = c - a;
     let ap = p - a;
     let d1 = ab.dot(ap);
     let d2 = ac.dot(ap);
     if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
+        return (a, 1);
     }
     let bp = p - b;
     let d3 = ab.dot(bp);
     let d4 = ac.dot(bp);
     if d3 >= 0.0 && d4 <= d3 {
-        return b;
+        return (b, 2);
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let v = d1 / (d1 - d3);
-        return a + ab * v;
+        return (a + ab * v, 4);
     }
     let cp = p - c;
     let d5 = ab.dot(cp);
     let d6 = ac.dot(cp);
     if d6 >= 0.0 && d5 <= d6 {
-        return c;
+        return (c, 3);
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let w = d2 / (d2 - d6);
-        return a + ac * w;
+        return (a + ac * w, 6);
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return b + (c - b) * w;
+        return (b + (c - b) * w, 5);
     }
     let denom = 1.0 / (va + vb + vc);
     let v = vb * denom;
     let w = vc * denom;
-    a + ab * v + ac * w
+    (a + ab * v + ac * w, 0)
 }
 
 /// Closest point of segment `[a, b]` to `p`.

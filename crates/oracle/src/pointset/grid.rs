@@ -1,0 +1,155 @@
+//! Uniform grid over the points for the fixed-radius kernel sums (cache-friendly, no
+//! allocation per query): cells of side ≥ the largest support radius, points stored
+//! contiguously in cell order with their normal and squared support radius.
+
+use glam::DVec3;
+
+/// One point as the kernel sum needs it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Item {
+    pub p: DVec3,
+    pub n: DVec3,
+    /// Squared support radius.
+    pub r2: f64,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct Grid {
+    lo: DVec3,
+    inv: f64,
+    dims: [usize; 3],
+    /// `start[c]..start[c + 1]` are the items of cell `c` (x fastest).
+    start: Vec<u32>,
+    items: Vec<Item>,
+}
+
+impl Grid {
+    /// `cell` ≥ every support radius. The cell size grows if the grid would have far more
+    /// cells than points (sparse, spread-out input).
+    pub fn new(points: &[DVec3], normals: &[DVec3], radius: &[f64], cell: f64) -> Self {
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for p in points {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let mut cell = cell.max(1e-300);
+        let max_cells = 4 * points.len() + 4096;
+        let dims = loop {
+            let d = ((hi - lo) / cell).floor() + DVec3::ONE;
+            if d.x * d.y * d.z <= max_cells as f64 {
+                break [d.x as usize, d.y as usize, d.z as usize];
+            }
+            cell *= 1.5;
+        };
+        let inv = 1.0 / cell;
+        let mut grid = Grid {
+            lo,
+            inv,
+            dims,
+            start: Vec::new(),
+            items: Vec::new(),
+        };
+        let ncell = dims[0] * dims[1] * dims[2];
+        let cid: Vec<usize> = points.iter().map(|p| grid.cell_index(*p)).collect();
+        let mut start = vec![0u32; ncell + 1];
+        for &c in &cid {
+            start[c + 1] += 1;
+        }
+        for c in 0..ncell {
+            start[c + 1] += start[c];
+        }
+        let mut fill: Vec<u32> = start[..ncell].to_vec();
+        let dummy = Item {
+            p: DVec3::ZERO,
+            n: DVec3::ZERO,
+            r2: 0.0,
+        };
+        let mut items = vec![dummy; points.len()];
+        for (i, &c) in cid.iter().enumerate() {
+            items[fill[c] as usize] = Item {
+                p: points[i],
+                n: normals[i],
+                r2: radius[i] * radius[i],
+            };
+            fill[c] += 1;
+        }
+        grid.start = start;
+        grid.items = items;
+        grid
+    }
+
+    fn coord(&self, v: f64, axis: usize) -> usize {
+        let c = ((v - self.lo[axis]) * self.inv).floor();
+        if c <= 0.0 {
+            0
+        } else {
+            (c as usize).min(self.dims[axis] - 1)
+        }
+    }
+
+    fn cell_index(&self, p: DVec3) -> usize {
+        let (i, j, k) = (self.coord(p.x, 0), self.coord(p.y, 1), self.coord(p.z, 2));
+        (k * self.dims[1] + j) * self.dims[0] + i
+    }
+
+    /// Visit every item within `r` of `x` (and possibly a few more: callers test `r2`).
+    #[inline]
+    pub fn for_each_near(&self, x: DVec3, r: f64, mut f: impl FnMut(&Item)) {
+        let a = x - DVec3::splat(r);
+        let b = x + DVec3::splat(r);
+        let hi = self.lo
+            + DVec3::new(
+                self.dims[0] as f64,
+                self.dims[1] as f64,
+                self.dims[2] as f64,
+            ) / self.inv;
+        if b.cmplt(self.lo).any() || a.cmpgt(hi).any() {
+            return;
+        }
+        let (i0, i1) = (self.coord(a.x, 0), self.coord(b.x, 0));
+        let (j0, j1) = (self.coord(a.y, 1), self.coord(b.y, 1));
+        let (k0, k1) = (self.coord(a.z, 2), self.coord(b.z, 2));
+        for k in k0..=k1 {
+            for j in j0..=j1 {
+                let row = (k * self.dims[1] + j) * self.dims[0];
+                // Cells i0..=i1 of a row are contiguous in `items`.
+                let s = self.start[row + i0] as usize;
+                let e = self.start[row + i1 + 1] as usize;
+                for it in &self.items[s..e] {
+                    f(it);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::roots::SplitMix64;
+
+    #[test]
+    fn visits_every_point_within_the_radius() {
+        let mut rng = SplitMix64(3);
+        let pts: Vec<DVec3> = (0..2000)
+            .map(|_| rng.unit_vector() * (1.0 + 0.3 * rng.next_f64()))
+            .collect();
+        let nrm = vec![DVec3::Z; pts.len()];
+        let rad: Vec<f64> = (0..pts.len())
+            .map(|i| 0.05 + 0.1 * (i % 7) as f64 / 7.0)
+            .collect();
+        let rmax = rad.iter().copied().fold(0.0, f64::max);
+        for cell in [rmax, 10.0 * rmax, 1e-6] {
+            let g = Grid::new(&pts, &nrm, &rad, cell.max(rmax));
+            for _ in 0..300 {
+                let x = rng.unit_vector() * 2.0 * rng.next_f64() + DVec3::splat(0.1);
+                let mut seen = 0;
+                g.for_each_near(x, rmax, |it| {
+                    seen += usize::from((it.p - x).length() < rmax)
+                });
+                let want = pts.iter().filter(|p| (**p - x).length() < rmax).count();
+                assert_eq!(seen, want, "{x}");
+            }
+        }
+    }
+}
