@@ -1,3 +1,58 @@
+//! `cargo xtask`: the project's runner (mesh, verify, delaunay, regress, bench, paper-table).
+
+use clap::{Parser, Subcommand};
+
+mod bench;
+mod bench_image;
+mod delaunay_cmd;
+mod mesh_cmd;
+mod surface_spec;
+mod verify_cmd;
+
+#[derive(Parser)]
+#[command(
+    name = "cargo xtask",
+    about = "rdt-mesher runner: mesh surfaces, verify meshes, run suites"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Mesh a surface (default: the catalog torus) and write the mesh and a report.
+    Mesh(mesh_cmd::MeshArgs),
+    /// Verify a triangle mesh (topology, self-intersections, quality; against a surface:
+    /// Hausdorff, normals, loose-epsilon certificate).
+    Verify(verify_cmd::VerifyArgs),
+    /// 3D Delaunay triangulation of a point file or of random points.
+    Delaunay(delaunay_cmd::DelaunayArgs),
+    /// Timing tables (medians, ratios against baselines measured in the same run).
+    Bench(bench::BenchArgs),
+}
+
 fn main() {
-    println!("xtask: in progress");
+    let cli = Cli::parse();
+    let r = match &cli.cmd {
+        Cmd::Mesh(a) => mesh_cmd::run(a),
+        Cmd::Delaunay(a) => delaunay_cmd::run(a),
+        Cmd::Verify(a) => verify_cmd::run(a),
+        Cmd::Bench(a) => bench::run(a),
+    };
+    if let Err(e) = r {
+        // One readable line, non-zero exit.
+        let mut msg = format!("{e}");
+        let mut src = e.source();
+        while let Some(s) = src {
+            let t = s.to_string();
+            if !msg.contains(&t) {
+                msg.push_str(": ");
+                msg.push_str(&t);
+            }
+            src = s.source();
+        }
+        eprintln!("error: {msg}");
+        std::process::exit(1);
+    }
 }

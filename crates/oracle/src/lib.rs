@@ -95,7 +95,14 @@ pub trait Surface: Send + Sync {
     /// Default: sample the segment at steps of at most [`Surface::crossing_step`] and bisect every
     /// sign change (so crossings closer than the step may be missed, as the paper's Θ(1/Δ) oracle).
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
-        roots::all_crossings(|p| self.value(p), a, b, self.crossing_step(), self.tolerance(), out)
+        roots::all_crossings(
+            |p| self.value(p),
+            a,
+            b,
+            self.crossing_step(),
+            self.tolerance(),
+            out,
+        )
     }
 
     /// Subdivision step of the default intersection oracle. Default: 1e-3 of the bounding radius.

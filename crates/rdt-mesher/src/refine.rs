@@ -74,11 +74,15 @@ impl Default for MeshOptions {
 /// Errors of a meshing run.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    #[error("invalid size bound sigma = {0}: it must be a positive finite number (e.g. --size 0.05)")]
+    #[error(
+        "invalid size bound sigma = {0}: it must be a positive finite number (e.g. --size 0.05)"
+    )]
     InvalidSize(f64),
     #[error("the size function returned {value} at ({}, {}, {}): sigma must be positive and finite on S", .at.x, .at.y, .at.z)]
     InvalidSizeField { value: f64, at: DVec3 },
-    #[error("invalid angle bound {0} degrees: use a value in [0, 35) (30 has a termination proof; 0 disables it)")]
+    #[error(
+        "invalid angle bound {0} degrees: use a value in [0, 35) (30 has a termination proof; 0 disables it)"
+    )]
     InvalidAngle(f64),
     #[error("invalid distance bound {0}: it must be positive and finite")]
     InvalidDistance(f64),
@@ -449,7 +453,12 @@ impl<'a> Refiner<'a> {
     /// The dual of facet `f` as a segment oriented from `f.cell`'s side to the mirror side,
     /// clipped to the bounding ball, with the values at its ends (+inf = on the ball's
     /// boundary or beyond, where the value is positive by the oracle's contract).
-    fn clipped_dual(&self, f: Facet, m: Facet, verts: [VertexId; 3]) -> Option<(DVec3, f64, DVec3, f64)> {
+    fn clipped_dual(
+        &self,
+        f: Facet,
+        m: Facet,
+        verts: [VertexId; 3],
+    ) -> Option<(DVec3, f64, DVec3, f64)> {
         let ci = self.tri.is_infinite(f.cell);
         let mi = self.tri.is_infinite(m.cell);
         let (p, fp, q, fq) = match (ci, mi) {
@@ -554,7 +563,10 @@ impl<'a> Refiner<'a> {
         if let Some(crate::Sizing::Field(_)) = &self.opts.criteria.size {
             let s = self.opts.criteria.size.as_ref().unwrap().at(center);
             if !(s > 0.0 && s.is_finite()) {
-                return Err(MeshError::InvalidSizeField { value: s, at: center });
+                return Err(MeshError::InvalidSizeField {
+                    value: s,
+                    at: center,
+                });
             }
         }
         let bad = self.opts.criteria.badness(pts, center, radius);
@@ -894,7 +906,11 @@ impl<'a> Refiner<'a> {
         st.time_queue_s = self.t_queue.as_secs_f64();
         st.max_r_over_sigma = max_rs;
         st.max_distance_ratio = max_dist;
-        st.min_angle_deg = if min_angle.is_finite() { min_angle } else { 0.0 };
+        st.min_angle_deg = if min_angle.is_finite() {
+            min_angle
+        } else {
+            0.0
+        };
         st.nonmanifold_edges = bad_edges.len();
         st.nonmanifold_vertices = bad_vertices.len();
         let mut unmet = Vec::new();

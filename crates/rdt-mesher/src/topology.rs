@@ -10,9 +10,9 @@ use delaunay3::VertexId;
 /// // A closed tetrahedron is a 2-manifold.
 /// let tet = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
 /// assert_eq!(nonmanifold_elements(&tet), (vec![], vec![]));
-/// // Remove one facet: three boundary edges, every vertex on the boundary.
+/// // Remove one facet: its three edges and three vertices are on the boundary.
 /// let (e, v) = nonmanifold_elements(&tet[..3]);
-/// assert_eq!((e.len(), v.len()), (3, 4));
+/// assert_eq!((e.len(), v.len()), (3, 3));
 /// ```
 pub fn nonmanifold_elements(tris: &[[VertexId; 3]]) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
     let mut edges: Vec<[VertexId; 2]> = Vec::with_capacity(tris.len() * 3);
@@ -82,7 +82,11 @@ fn is_single_cycle(
     // Walk the cycle from edge 0 and count its edges.
     let other = |x: VertexId, k: usize| -> usize {
         let i = ends.partition_point(|e| e.0 < x);
-        if ends[i].1 == k { ends[i + 1].1 } else { ends[i].1 }
+        if ends[i].1 == k {
+            ends[i + 1].1
+        } else {
+            ends[i].1
+        }
     };
     let (_, start_a, _) = link[0];
     let mut k = 0usize;

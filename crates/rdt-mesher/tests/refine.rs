@@ -197,13 +197,24 @@ fn budget_stops_cleanly_and_reports() {
 #[test]
 fn nan_function_is_an_error() {
     let s = Analytic {
-        f: |p: DVec3| if p.x > 0.3 { f64::NAN } else { p.length_squared() - 1.0 },
+        f: |p: DVec3| {
+            if p.x > 0.3 {
+                f64::NAN
+            } else {
+                p.length_squared() - 1.0
+            }
+        },
         center: DVec3::ZERO,
         radius: 2.0,
     };
     let opts = MeshOptions {
         criteria: Criteria::uniform(0.1),
-        control_points: Some(vec![-DVec3::X, -DVec3::Y, -DVec3::Z, DVec3::new(-0.6, 0.0, 0.8)]),
+        control_points: Some(vec![
+            -DVec3::X,
+            -DVec3::Y,
+            -DVec3::Z,
+            DVec3::new(-0.6, 0.0, 0.8),
+        ]),
         ..Default::default()
     };
     let err = mesh(&s, &opts).unwrap_err();
@@ -228,7 +239,10 @@ fn invalid_size_is_an_error() {
 fn incremental_update_equals_full_recomputation() {
     // The invariant of refine.rs: after every insertion only changed Voronoi edges are
     // re-tested, and the result equals a from-scratch recomputation of Del_S(E).
-    for (sigma, oracle) in [(0.03, OracleKind::Bipolar), (0.08, OracleKind::Intersection)] {
+    for (sigma, oracle) in [
+        (0.03, OracleKind::Bipolar),
+        (0.08, OracleKind::Intersection),
+    ] {
         let opts = MeshOptions {
             criteria: Criteria::uniform(sigma),
             oracle,

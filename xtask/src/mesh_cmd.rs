@@ -1,0 +1,312 @@
+//! `cargo xtask mesh`: mesh a surface, write the mesh, print a summary, write a JSON report.
+
+use crate::surface_spec::{self, SurfaceOptions};
+use anyhow::{Context, Result, bail};
+use clap::ValueEnum;
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use rdt_mesher::{Criteria, MeshOptions, OracleKind, Sizing};
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum OracleArg {
+    Bipolar,
+    Intersection,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct MeshArgs {
+    /// Surface to mesh: `implicit:NAME` (catalog), `implicit:"EXPR"` (with --bounding-sphere),
+    /// an image (.nii, .nii.gz, a folder of slices, .raw), a mesh (.ply .off .obj .stl) or a
+    /// point set (.xyz, .ply without faces). Default: implicit:torus.
+    pub input: Option<String>,
+    /// Size bound sigma (constant), in the surface's units.
+    #[arg(long)]
+    pub size: Option<f64>,
+    /// Target epsilon: sigma = epsilon * d_M^inf (uniform), from the backend's estimate.
+    #[arg(long)]
+    pub epsilon: Option<f64>,
+    /// Facet angle bound in degrees (0 = off).
+    #[arg(long, default_value_t = 30.0)]
+    pub angle: f64,
+    /// Distance bound between a facet's circumcenter and its ball center (CGAL's distance_bound).
+    #[arg(long)]
+    pub distance: Option<f64>,
+    /// Oracle: bipolar (sign change + one point) or intersection (all points).
+    #[arg(long, value_enum, default_value = "bipolar")]
+    pub oracle: OracleArg,
+    /// Do not enforce a manifold output (section 6.6.1's patch is on by default).
+    #[arg(long)]
+    pub no_manifold: bool,
+    /// Seed for every random choice.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Stop at this many sample points (the mesh so far is written, unmet criteria reported).
+    #[arg(long)]
+    pub max_vertices: Option<usize>,
+    /// Stop after this many seconds (likewise).
+    #[arg(long)]
+    pub time_limit: Option<f64>,
+    /// Output mesh (.ply, .off, .obj, .stl). Default: out/NAME.ply.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Write a JSON report here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Bounding sphere `cx,cy,cz,r` for an expression.
+    #[arg(long)]
+    pub bounding_sphere: Option<String>,
+    /// Start from this sample E_0 (`x y z` per line), section 6.4.1.
+    #[arg(long)]
+    pub initial_points: Option<PathBuf>,
+    /// Skip the verification of the output (default: topology, self-intersections,
+    /// quality, Hausdorff against the surface, loose-epsilon certificate).
+    #[arg(long)]
+    pub no_verify: bool,
+    /// Requested epsilon for the certificate (default: sigma / d_M^inf when known).
+    #[arg(long)]
+    pub certify_epsilon: Option<f64>,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub surface: SurfaceOptions,
+}
+
+pub fn parse_vec3(s: &str, what: &str) -> Result<Vec<f64>> {
+    s.split(',')
+        .map(|t| {
+            t.trim().parse::<f64>().with_context(|| {
+                format!("{what}: '{t}' is not a number (expected comma-separated numbers)")
+            })
+        })
+        .collect()
+}
+
+pub fn read_xyz(path: &PathBuf) -> Result<Vec<DVec3>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut pts = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let l = line.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .take(3)
+            .map(|t| t.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| {
+                anyhow::anyhow!(
+                    "{}:{}: expected `x y z`, found '{l}'",
+                    path.display(),
+                    i + 1
+                )
+            })?;
+        if v.len() < 3 || v.iter().any(|x| !x.is_finite()) {
+            bail!(
+                "{}:{}: expected three finite numbers `x y z`, found '{l}'",
+                path.display(),
+                i + 1
+            );
+        }
+        pts.push(DVec3::new(v[0], v[1], v[2]));
+    }
+    Ok(pts)
+}
+
+pub fn run(a: &MeshArgs) -> Result<()> {
+    let spec = a
+        .input
+        .clone()
+        .unwrap_or_else(|| "implicit:torus".to_string());
+    let opened = surface_spec::open(&spec, a.bounding_sphere.as_deref(), &a.surface)?;
+    let surface = opened.surface.as_ref();
+    let mut notes = opened.notes.clone();
+    let sigma = match (a.size, a.epsilon) {
+        (Some(s), _) => {
+            if !(s > 0.0 && s.is_finite()) {
+                bail!("--size {s}: the size bound must be a positive number, e.g. --size 0.05");
+            }
+            s
+        }
+        (None, Some(e)) => {
+            if !(e > 0.0 && e.is_finite()) {
+                bail!("--epsilon {e}: epsilon must be a positive number, e.g. --epsilon 0.09");
+            }
+            let dm = opened
+                .dm_inf
+                .context("--epsilon needs an estimate of d_M^inf, which this input does not provide; pass --size instead")?;
+            notes.push(format!("sigma = {e} * d_M^inf ({dm:.4}) = {:.5}", e * dm));
+            e * dm
+        }
+        (None, None) => {
+            let s = match (opened.dm_inf, opened.default_size) {
+                (_, Some(d)) => {
+                    notes.push(format!(
+                        "no --size: using the input's suggested size {d:.5}"
+                    ));
+                    d
+                }
+                (Some(dm), None) => {
+                    notes.push(format!(
+                        "no --size: using sigma = 0.09 * d_M^inf = {:.5}",
+                        0.09 * dm
+                    ));
+                    0.09 * dm
+                }
+                (None, None) => {
+                    let r = surface.bounding_sphere().radius / 20.0;
+                    notes.push(format!(
+                        "no --size: using sigma = bounding radius / 20 = {r:.5}"
+                    ));
+                    r
+                }
+            };
+            s
+        }
+    };
+    let initial_points = match &a.initial_points {
+        Some(p) => read_xyz(p)?,
+        None => Vec::new(),
+    };
+    let opts = MeshOptions {
+        criteria: Criteria {
+            size: Some(Sizing::Constant(sigma)),
+            min_angle_deg: a.angle,
+            max_distance: a.distance,
+        },
+        oracle: match a.oracle {
+            OracleArg::Bipolar => OracleKind::Bipolar,
+            OracleArg::Intersection => OracleKind::Intersection,
+        },
+        manifold: !a.no_manifold,
+        seed: a.seed,
+        max_vertices: a.max_vertices,
+        time_limit: a.time_limit.map(Duration::from_secs_f64),
+        initial_points,
+        control_points: opened.control_points.clone(),
+        ..Default::default()
+    };
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    let bar = if a.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new_spinner();
+        b.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").unwrap());
+        b.enable_steady_tick(Duration::from_millis(200));
+        b
+    };
+    let result = rdt_mesher::mesh_with_progress(surface, &opts, &mut |p| {
+        bar.set_message(format!(
+            "{} points, {} restricted facets, queue {}",
+            p.sample_points, p.restricted_facets, p.queue
+        ))
+    })
+    .with_context(|| format!("meshing {spec}"))?;
+    bar.finish_and_clear();
+    let out_path = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/{}.ply", opened.name)));
+    if let Some(dir) = out_path.parent() {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+    }
+    meshio::write(&out_path, &result.mesh)
+        .with_context(|| format!("writing {}", out_path.display()))?;
+    let st = &result.stats;
+    let check = if a.no_verify {
+        None
+    } else {
+        bar.set_message("verifying");
+        let balls = result
+            .balls
+            .iter()
+            .enumerate()
+            .map(|(i, b)| verify::SurfaceBall {
+                facet: i,
+                center: b.center,
+                radius: b.radius,
+            })
+            .collect();
+        let vopts = verify::Options {
+            samples_per_edge: 2,
+            surface_balls: Some(balls),
+            epsilon: a.certify_epsilon.or(opened.dm_inf.map(|d| sigma / d)),
+            min_angle_deg: (a.angle > 0.0).then_some(a.angle - 1e-9),
+            component_seeds: opened.control_points.clone(),
+            seed: a.seed,
+            ..Default::default()
+        };
+        Some(verify::check_against(&result.mesh, surface, &vopts))
+    };
+    let topo = check.as_ref().and_then(|c| c.topology.as_ref());
+    let manifold = topo.map(|t| {
+        t.boundary_edges_total == 0
+            && t.non_manifold_edges_total == 0
+            && t.non_manifold_vertices_total == 0
+            && t.inconsistent_edges_total == 0
+    });
+    let genus: Vec<String> = topo
+        .map(|t| {
+            t.components
+                .iter()
+                .map(|c| c.genus.map_or("?".into(), |g| g.to_string()))
+                .collect()
+        })
+        .unwrap_or_default();
+    println!(
+        "{spec}: {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, oracle {:.3} s); min angle {:.2} deg; max r/sigma {:.3}; {}; genus [{}]; wrote {}",
+        st.vertices,
+        st.facets,
+        st.time_total_s,
+        st.time_delaunay_s,
+        st.time_oracle_s,
+        st.min_angle_deg,
+        st.max_r_over_sigma.unwrap_or(f64::NAN),
+        match manifold {
+            Some(true) => "closed manifold",
+            Some(false) => "NOT a closed manifold",
+            None => "not verified",
+        },
+        genus.join(", "),
+        out_path.display()
+    );
+    if let Some(c) = &check {
+        if !c.passed() {
+            println!("verify: FAIL: {}", c.failures().join(", "));
+        } else {
+            println!("verify: PASS ({} checks)", c.checks.len());
+        }
+    }
+    if let Some(s) = &st.stopped_by {
+        println!("stopped by {s}; unmet: {}", st.unmet.join("; "));
+    } else if !st.unmet.is_empty() {
+        println!("unmet: {}", st.unmet.join("; "));
+    }
+    if let Some(r) = &a.report {
+        let report = serde_json::json!({
+            "input": spec,
+            "output": out_path,
+            "sigma": sigma,
+            "angle": a.angle,
+            "distance": a.distance,
+            "oracle": format!("{:?}", a.oracle).to_lowercase(),
+            "manifold": !a.no_manifold,
+            "seed": a.seed,
+            "notes": notes,
+            "stats": st,
+            "verify": check,
+        });
+        std::fs::write(r, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("cannot write report {}", r.display()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,282 @@
+//! Turning a command-line surface spec into an oracle: `implicit:NAME`, `implicit:EXPR`,
+//! images (.nii, .nii.gz, .tif/.tiff stacks, folders of slices, raw volumes), meshes
+//! (.ply .off .obj .stl) and point sets (.xyz, .ply without faces).
+
+use anyhow::{Context, Result, bail};
+use clap::ValueEnum;
+use glam::DVec3;
+use oracle::image::{Dtype, ImageOptions, ImageSurface, LoadOptions, RawOptions};
+use oracle::{BoundingSphere, Surface};
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum AsKind {
+    Mesh,
+    Points,
+}
+
+/// Options for image, mesh and point-set inputs.
+#[derive(clap::Args, Debug, Default, Clone)]
+pub struct SurfaceOptions {
+    /// Image iso value (default: halfway for binary images; required otherwise).
+    #[arg(long)]
+    pub iso: Option<f64>,
+    /// Image: mesh the boundary of this label.
+    #[arg(long)]
+    pub label: Option<i64>,
+    /// Image: the inside is where the intensity is below the iso value (default: above).
+    #[arg(long)]
+    pub dark_foreground: bool,
+    /// Image stacks and raw volumes: voxel spacing `sx,sy,sz` in world units.
+    #[arg(long)]
+    pub spacing: Option<String>,
+    /// Raw volume: dimensions `nx,ny,nz`.
+    #[arg(long)]
+    pub dims: Option<String>,
+    /// Raw volume: voxel type (u8, i8, u16, i16, u32, i32, f32, f64).
+    #[arg(long)]
+    pub dtype: Option<String>,
+    /// Raw volume: big-endian voxels.
+    #[arg(long)]
+    pub big_endian: bool,
+    /// Read a .ply as a triangle mesh or as a point set (default: by its faces).
+    #[arg(long = "as", value_enum)]
+    pub as_kind: Option<AsKind>,
+}
+
+/// An opened surface with what the command needs to know about it.
+#[allow(dead_code)] // genus and components are read by the regression suite
+pub struct Opened {
+    pub surface: Box<dyn Surface>,
+    /// Short name for default output paths.
+    pub name: String,
+    /// Known or estimated d_M^inf.
+    pub dm_inf: Option<f64>,
+    /// A default size when neither --size nor --epsilon is given (otherwise 0.09 d_M^inf).
+    pub default_size: Option<f64>,
+    /// Catalog genus and component count, if known.
+    pub genus: Option<u32>,
+    pub components: Option<u32>,
+    pub control_points: Option<Vec<DVec3>>,
+    pub notes: Vec<String>,
+}
+
+fn triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3]> {
+    let v: Vec<T> = s
+        .split(',')
+        .map(|t| {
+            t.trim().parse::<T>().map_err(|_| {
+                anyhow::anyhow!(
+                    "{what}: '{t}' is not valid (expected three comma-separated values, e.g. 1,1,2)"
+                )
+            })
+        })
+        .collect::<Result<_>>()?;
+    let n = v.len();
+    v.try_into()
+        .map_err(|_| anyhow::anyhow!("{what}: expected three comma-separated values, got {n}"))
+}
+
+/// A catalog surface by name (for benches and suites).
+pub fn catalog_surface(name: &str) -> Result<Box<dyn Surface>> {
+    Ok(Box::new(oracle::catalog::surface(name)?))
+}
+
+fn stem(p: &Path) -> String {
+    let s = p
+        .file_name()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "surface".into());
+    s.trim_end_matches(".gz")
+        .rsplit_once('.')
+        .map(|(a, _)| a.to_string())
+        .unwrap_or(s)
+}
+
+pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Result<Opened> {
+    let bs = match bounding_sphere {
+        Some(s) => {
+            let v = crate::mesh_cmd::parse_vec3(s, "--bounding-sphere")?;
+            if v.len() != 4 {
+                bail!(
+                    "--bounding-sphere expects cx,cy,cz,r (4 numbers), got {}",
+                    v.len()
+                );
+            }
+            Some(BoundingSphere {
+                center: DVec3::new(v[0], v[1], v[2]),
+                radius: v[3],
+            })
+        }
+        None => None,
+    };
+    if let Some(rest) = spec.strip_prefix("implicit:") {
+        let entry = oracle::catalog::entry(rest.trim());
+        if entry.is_none() && bs.is_none() {
+            bail!(
+                "implicit:\"{rest}\" is not a catalog name ({}); an expression needs --bounding-sphere cx,cy,cz,r",
+                oracle::catalog::names().join(", ")
+            );
+        }
+        let s = oracle::catalog::resolve(rest, bs)?;
+        let name = entry
+            .as_ref()
+            .map(|e| e.name.to_string())
+            .unwrap_or_else(|| "implicit".into());
+        return Ok(Opened {
+            dm_inf: s.dm_inf_hint(),
+            surface: Box::new(s),
+            name,
+            default_size: None,
+            genus: entry.as_ref().and_then(|e| e.genus),
+            components: entry.as_ref().and_then(|e| e.components),
+            control_points: None,
+            notes: vec![],
+        });
+    }
+    let path = Path::new(spec);
+    if !path.exists() {
+        bail!(
+            "input '{spec}' is neither implicit:NAME/EXPR nor an existing file (catalog names: {})",
+            oracle::catalog::names().join(", ")
+        );
+    }
+    let lower = spec.to_lowercase();
+    let is_image = path.is_dir()
+        || lower.ends_with(".nii")
+        || lower.ends_with(".nii.gz")
+        || lower.ends_with(".tif")
+        || lower.ends_with(".tiff")
+        || lower.ends_with(".raw")
+        || o.dims.is_some();
+    if is_image {
+        let spacing = o
+            .spacing
+            .as_deref()
+            .map(|s| triple::<f64>(s, "--spacing"))
+            .transpose()?;
+        let raw = match (&o.dims, &o.dtype) {
+            (Some(d), Some(t)) => Some(RawOptions {
+                dims: triple::<usize>(d, "--dims")?,
+                dtype: t
+                    .parse::<Dtype>()
+                    .map_err(|e| anyhow::anyhow!("--dtype {t}: {e}"))?,
+                big_endian: o.big_endian,
+                offset: 0,
+            }),
+            (None, None) => None,
+            _ => bail!("a raw volume needs both --dims nx,ny,nz and --dtype TYPE"),
+        };
+        let load = LoadOptions { spacing, raw };
+        let img = ImageSurface::open(
+            path,
+            &load,
+            &ImageOptions {
+                iso: o.iso,
+                label: o.label,
+                dark_foreground: o.dark_foreground,
+                background: None,
+            },
+        )
+        .with_context(|| format!("opening image {spec}"))?;
+        let comps = img.component_count();
+        let dm = img.dm_inf_hint();
+        let mut notes = vec![format!(
+            "image: {} surface component(s) found by the voxel scan (iso {})",
+            comps,
+            img.iso()
+        )];
+        if let Some(d) = dm {
+            notes.push(format!("image: d_M^inf estimate {d:.4}"));
+        }
+        return Ok(Opened {
+            surface: Box::new(img),
+            name: stem(path),
+            dm_inf: dm,
+            default_size: None,
+            genus: None,
+            components: Some(comps as u32),
+            control_points: None,
+            notes,
+        });
+    }
+    let as_points = match o.as_kind {
+        Some(AsKind::Points) => true,
+        Some(AsKind::Mesh) => false,
+        None => lower.ends_with(".xyz") || (lower.ends_with(".ply") && ply_has_no_faces(path)),
+    };
+    if as_points {
+        let cloud = if lower.ends_with(".xyz") {
+            oracle::pointset::read_xyz(path)?
+        } else {
+            let c = meshio::read_point_cloud(path)?;
+            oracle::pointset::PointCloud {
+                points: c.points,
+                normals: c.normals,
+            }
+        };
+        let had_normals = cloud.normals.is_some();
+        let ps = oracle::pointset::PointSetSurface::from_cloud(&cloud, &Default::default())
+            .with_context(|| format!("point set {spec}"))?;
+        let size = ps.suggested_size();
+        return Ok(Opened {
+            dm_inf: ps.dm_inf_hint(),
+            name: stem(path),
+            default_size: Some(size),
+            genus: None,
+            components: None,
+            control_points: None,
+            notes: vec![format!(
+                "point set: {} points, normals {}; suggested size {size:.5}",
+                cloud.points.len(),
+                if had_normals {
+                    "given"
+                } else {
+                    "estimated (PCA + propagation)"
+                }
+            )],
+            surface: Box::new(ps),
+        });
+    }
+    let mesh = meshio::read(path)?;
+    let poly = oracle::polyhedron::PolyhedronSurface::new(&mesh)
+        .with_context(|| format!("mesh {spec}"))?;
+    let size = poly.suggested_size();
+    let st = poly.stats();
+    Ok(Opened {
+        dm_inf: None,
+        name: stem(path),
+        default_size: Some(size),
+        genus: None,
+        components: None,
+        control_points: None,
+        notes: vec![format!(
+            "polyhedron: {} vertices, {} triangles ({:?}); suggested size {size:.5}",
+            mesh.vertices.len(),
+            mesh.triangles.len(),
+            st
+        )],
+        surface: Box::new(poly),
+    })
+}
+
+fn ply_has_no_faces(path: &Path) -> bool {
+    // Read the header only.
+    let Ok(f) = std::fs::File::open(path) else {
+        return false;
+    };
+    use std::io::{BufRead, BufReader};
+    let mut faces = None;
+    for line in BufReader::new(f).split(b'\n').take(200) {
+        let Ok(line) = line else { break };
+        let l = String::from_utf8_lossy(&line);
+        let l = l.trim();
+        if let Some(rest) = l.strip_prefix("element face") {
+            faces = rest.trim().parse::<u64>().ok();
+        }
+        if l == "end_header" {
+            break;
+        }
+    }
+    faces.unwrap_or(0) == 0
+}

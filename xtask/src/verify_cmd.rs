@@ -1,0 +1,66 @@
+//! `cargo xtask verify mesh.ply [--against SURFACE] [--epsilon E] [--report r.json]`.
+
+use crate::surface_spec::{self, SurfaceOptions};
+use anyhow::{Context, Result};
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct VerifyArgs {
+    /// The mesh to check (.ply, .off, .obj, .stl).
+    pub mesh: PathBuf,
+    /// Check against this surface (same specs as `mesh`: implicit:NAME, an image, a mesh...).
+    #[arg(long)]
+    pub against: Option<String>,
+    /// Bounding sphere `cx,cy,cz,r` for an implicit expression.
+    #[arg(long)]
+    pub bounding_sphere: Option<String>,
+    /// Requested epsilon of the loose epsilon-sample certificate.
+    #[arg(long)]
+    pub epsilon: Option<f64>,
+    /// FAIL if the two-sided Hausdorff estimate exceeds this distance.
+    #[arg(long)]
+    pub max_hausdorff: Option<f64>,
+    /// FAIL if a facet angle is below this bound (degrees).
+    #[arg(long)]
+    pub min_angle: Option<f64>,
+    /// Mesh samples per triangle edge for the distance estimates.
+    #[arg(long, default_value_t = 4)]
+    pub samples_per_edge: usize,
+    /// Write the JSON report here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub surface: SurfaceOptions,
+}
+
+pub fn run(a: &VerifyArgs) -> Result<()> {
+    let mesh = meshio::read(&a.mesh)?;
+    let opts = verify::Options {
+        epsilon: a.epsilon,
+        max_hausdorff: a.max_hausdorff,
+        min_angle_deg: a.min_angle,
+        samples_per_edge: a.samples_per_edge,
+        ..Default::default()
+    };
+    let report = match &a.against {
+        Some(spec) => {
+            let opened = surface_spec::open(spec, a.bounding_sphere.as_deref(), &a.surface)?;
+            verify::check_against(&mesh, opened.surface.as_ref(), &opts)
+        }
+        None => verify::check(&mesh, &opts),
+    };
+    print!("{}", report.summary());
+    if let Some(p) = &a.report {
+        report
+            .write_json(p)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    if !report.passed() {
+        anyhow::bail!(
+            "{}: FAIL ({})",
+            a.mesh.display(),
+            report.failures().join(", ")
+        );
+    }
+    Ok(())
+}
