@@ -29,12 +29,13 @@
 //! ```
 
 pub mod criteria;
+pub mod init;
 pub mod refine;
 pub mod sizing;
 pub mod topology;
 
 pub use criteria::{Criteria, Sizing};
 pub use refine::{
-    MeshError, MeshOptions, MeshResult, OracleKind, Progress, Stats, SurfaceBall, mesh,
-    mesh_with_progress,
+    Initialization, MeshError, MeshOptions, MeshResult, OracleKind, Progress, Stats, SurfaceBall,
+    mesh, mesh_with_progress,
 };

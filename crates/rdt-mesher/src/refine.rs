@@ -32,6 +32,19 @@ pub enum OracleKind {
     Intersection,
 }
 
+/// How the initial sample is built (paper, sections 6.2 and 6.4.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Initialization {
+    /// Section 6.4.3: the control points E'_i are the initial sample; the main loop shoots
+    /// random rays until every control point is a vertex of Del_S(E). No persistent facets.
+    #[default]
+    ControlPoints,
+    /// Section 6.2: three points of S on a small sphere around every control point form a
+    /// persistent facet (with the bipolar oracle, section 6.4.2's extra insertions).
+    PersistentFacets,
+}
+
 /// Options of one meshing run.
 #[derive(Clone, Debug)]
 pub struct MeshOptions {
@@ -53,6 +66,8 @@ pub struct MeshOptions {
     pub control_points: Option<Vec<DVec3>>,
     /// At most this many control points are kept (farthest-point selection).
     pub max_control_points: usize,
+    /// Initialization strategy.
+    pub initialization: Initialization,
 }
 
 impl Default for MeshOptions {
@@ -67,6 +82,7 @@ impl Default for MeshOptions {
             initial_points: Vec::new(),
             control_points: None,
             max_control_points: 64,
+            initialization: Initialization::ControlPoints,
         }
     }
 }
@@ -375,7 +391,11 @@ impl<'a> Refiner<'a> {
     }
 
     fn initialize(&mut self) -> Result<(), MeshError> {
-        let control = self.control_points();
+        let mut control = self.control_points();
+        if self.opts.initialization == Initialization::PersistentFacets {
+            // E_i replaces E'_i; the control-point loop is not used (lemma 6.1 instead).
+            control = crate::init::persistent_facet_points(self.s, &control, self.opts)?;
+        }
         let mut pts: Vec<DVec3> = control.clone();
         pts.extend(self.opts.initial_points.iter().copied());
         if pts.is_empty() {
@@ -403,7 +423,11 @@ impl<'a> Refiner<'a> {
         if self.tri.dimension() < 3 {
             return Err(MeshError::DegenerateSeeds(pts.len()));
         }
-        self.control = ids[..control.len()].to_vec();
+        self.control = if self.opts.initialization == Initialization::PersistentFacets {
+            Vec::new()
+        } else {
+            ids[..control.len()].to_vec()
+        };
         self.control.sort_unstable();
         self.control.dedup();
         self.stats.control_points = self.control.len();
