@@ -126,6 +126,9 @@ pub enum Insertion {
 pub struct Changes {
     /// Vertex tuples of the cells destroyed (the conflict zone), as they were.
     pub removed: Vec<[VertexId; 4]>,
+    /// The ids the destroyed cells had (parallel to `removed`). Their slots may already be
+    /// reused by `created` cells: read your per-cell data for them before updating it.
+    pub removed_cells: Vec<CellId>,
     /// Cells created by the insertion. Every facet of a created cell is either new or a
     /// boundary facet of the cavity (whose dual changed).
     pub created: Vec<CellId>,
@@ -337,6 +340,7 @@ impl Triangulation {
         let mut changes = changes;
         if let Some(ch) = changes.as_deref_mut() {
             ch.removed.clear();
+            ch.removed_cells.clear();
             ch.created.clear();
         }
         if !self.built {
@@ -981,6 +985,7 @@ impl Triangulation {
         if let Some(ch) = changes {
             for &c in &cavity {
                 ch.removed.push(self.cells[c as usize].v);
+                ch.removed_cells.push(c);
             }
             created = Some(&mut ch.created);
         }

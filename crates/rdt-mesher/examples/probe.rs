@@ -1,38 +1,25 @@
-use glam::DVec3;
-use oracle::{BoundingSphere, Surface};
-use rdt_mesher::{Criteria, MeshOptions, mesh};
-struct Sphere;
-impl Surface for Sphere {
-    fn bounding_sphere(&self) -> BoundingSphere {
-        BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 2.0,
-        }
-    }
-    fn value(&self, p: DVec3) -> f64 {
-        p.length_squared() - 1.0
-    }
-}
+//! Profiling probe: `cargo run -p rdt-mesher --release --example probe -- NAME SIZE [distance]`.
+use rdt_mesher::{Criteria, MeshOptions, Sizing, mesh};
 fn main() {
-    let n: usize = std::env::args()
-        .nth(1)
-        .map(|s| s.parse().unwrap())
-        .unwrap_or(2000);
-    let s: f64 = std::env::args()
-        .nth(2)
-        .map(|s| s.parse().unwrap())
-        .unwrap_or(0.1);
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map(String::as_str).unwrap_or("torus");
+    let s: f64 = args.get(2).map(|s| s.parse().unwrap()).unwrap_or(0.0194);
+    let d: Option<f64> = args.get(3).map(|s| s.parse().unwrap());
+    let surf = oracle::catalog::surface(name).unwrap();
     let opts = MeshOptions {
-        criteria: Criteria::uniform(s),
-        max_vertices: Some(n),
+        criteria: Criteria {
+            size: Some(Sizing::Constant(s)),
+            min_angle_deg: 30.0,
+            max_distance: d,
+        },
         ..Default::default()
     };
-    let mut o2 = opts.clone();
-    o2.manifold = false;
+    let t = std::time::Instant::now();
+    let out = mesh(&surf, &opts).unwrap();
     println!(
-        "audit: {}",
-        rdt_mesher::refine::audit(&Sphere, &o2).unwrap()
+        "{} vertices in {:.3} s: {:?}",
+        out.stats.vertices,
+        t.elapsed().as_secs_f64(),
+        out.stats
     );
-    let out = mesh(&Sphere, &opts).unwrap();
-    println!("{:#?}", out.stats);
 }

@@ -153,6 +153,7 @@ pub struct Stats {
     pub time_total_s: f64,
     pub time_delaunay_s: f64,
     pub time_oracle_s: f64,
+    /// Everything else: queue, restricted-complex bookkeeping, criteria.
     pub time_queue_s: f64,
     /// max over the output facets of r / sigma(c) (<= 1 when the size criterion holds).
     pub max_r_over_sigma: Option<f64>,
@@ -220,10 +221,9 @@ struct QEntry {
 impl Eq for QEntry {}
 impl Ord for QEntry {
     fn cmp(&self, o: &Self) -> Ordering {
-        self.bad
-            .total_cmp(&o.bad)
-            .then_with(|| o.key.cmp(&self.key))
-            .then_with(|| o.version.cmp(&self.version))
+        // `bad` > 0, so its bits order like its value; versions are unique, so the order is
+        // total and deterministic (older entries first among equals).
+        (self.bad.to_bits(), o.version).cmp(&(o.bad.to_bits(), self.version))
     }
 }
 impl PartialOrd for QEntry {
@@ -311,6 +311,10 @@ pub(crate) struct Refiner<'a> {
     version: u32,
     changes: Changes,
     created_stamp: Vec<u32>,
+    /// Bit i of `facet_mask[c]`: facet i of cell c may be registered in `restricted`.
+    /// Set on both cells of a facet when it is registered; a set bit without an entry is
+    /// harmless (a missed lookup), a registered facet always has its bits set.
+    facet_mask: Vec<u8>,
     round: u32,
     crossings_buf: Vec<DVec3>,
     control: Vec<VertexId>,
@@ -318,7 +322,6 @@ pub(crate) struct Refiner<'a> {
     stats: Stats,
     t_delaunay: Duration,
     t_oracle: Duration,
-    t_queue: Duration,
     start: Instant,
     values: u64,
     crossing_calls: u64,
@@ -338,6 +341,7 @@ impl<'a> Refiner<'a> {
             version: 0,
             changes: Changes::default(),
             created_stamp: Vec::new(),
+            facet_mask: Vec::new(),
             round: 0,
             crossings_buf: Vec::new(),
             control: Vec::new(),
@@ -345,7 +349,6 @@ impl<'a> Refiner<'a> {
             stats: Stats::default(),
             t_delaunay: Duration::ZERO,
             t_oracle: Duration::ZERO,
-            t_queue: Duration::ZERO,
             start: Instant::now(),
             values: 0,
             crossing_calls: 0,
@@ -434,9 +437,11 @@ impl<'a> Refiner<'a> {
         self.ensure_vertex_slots();
         // Full scan of Del(E).
         let cells: Vec<CellId> = self.tri.finite_cells().collect();
+        let t = Instant::now();
         for &c in &cells {
             self.update_cell(c)?;
         }
+        self.t_oracle += t.elapsed();
         for &c in &cells {
             for i in 0..4u8 {
                 let f = Facet { cell: c, index: i };
@@ -463,10 +468,7 @@ impl<'a> Refiner<'a> {
         }
         let cc = self.tri.circumcenter(c);
         let f = if cc.is_finite() && self.ball.contains(cc) {
-            let t = Instant::now();
-            let v = self.eval(cc)?;
-            self.t_oracle += t.elapsed();
-            v
+            self.eval(cc)?
         } else {
             f64::INFINITY
         };
@@ -524,7 +526,8 @@ impl<'a> Refiner<'a> {
         Some((pc, fp, qc, fq))
     }
 
-    /// (Re)test the facet `f`: remove its old entry, insert the new one if restricted.
+    /// Test the facet `f` and insert its entry if it is restricted. The caller has removed
+    /// any previous entry of this facet (all facets of destroyed cells are removed first).
     fn test_facet(&mut self, f: Facet) -> Result<(), MeshError> {
         // Always look from a finite cell: only finite cells' facet orientation is used.
         let f = if self.tri.is_infinite(f.cell) {
@@ -536,9 +539,22 @@ impl<'a> Refiner<'a> {
         if verts.contains(&INFINITE_VERTEX) {
             return Ok(());
         }
-        let key = sorted3(verts);
-        self.remove_key(key);
         let m = self.tri.mirror_facet(f);
+        if self.opts.oracle == OracleKind::Bipolar {
+            // Cheap rejection from the cached signs. An end outside the bounding ball (or a
+            // hull facet's ray, which ends outside it) counts as outside, exactly as its
+            // clipped end on the ball's boundary would.
+            let fa = self.cells[f.cell as usize].f;
+            let fb = if self.tri.is_infinite(m.cell) {
+                f64::INFINITY
+            } else {
+                self.cells[m.cell as usize].f
+            };
+            if inside(fa) == inside(fb) {
+                return Ok(());
+            }
+        }
+        let key = sorted3(verts);
         let Some((p, fp, q, fq)) = self.clipped_dual(f, m, verts) else {
             return Ok(());
         };
@@ -609,6 +625,12 @@ impl<'a> Refiner<'a> {
             version: self.version,
         };
         self.restricted.insert(key, rf);
+        let need = f.cell.max(m.cell) as usize + 1;
+        if self.facet_mask.len() < need {
+            self.facet_mask.resize(need + need / 2, 0);
+        }
+        self.facet_mask[f.cell as usize] |= 1 << f.index;
+        self.facet_mask[m.cell as usize] |= 1 << m.index;
         for v in key {
             self.vertex_facets[v as usize] += 1;
         }
@@ -658,8 +680,15 @@ impl<'a> Refiner<'a> {
             return Ok(false);
         }
         self.ensure_vertex_slots();
-        for cell in &changes.removed {
+        for (cell, &id) in changes.removed.iter().zip(&changes.removed_cells) {
+            let mask = self.facet_mask.get(id as usize).copied().unwrap_or(0);
+            if mask == 0 {
+                continue;
+            }
             for i in 0..4 {
+                if mask & (1 << i) == 0 {
+                    continue;
+                }
                 let mut f = [0; 3];
                 let mut k = 0;
                 for (j, &v) in cell.iter().enumerate() {
@@ -674,8 +703,15 @@ impl<'a> Refiner<'a> {
             }
         }
         self.round = self.round.wrapping_add(1);
+        let t = Instant::now();
         for &c in &changes.created {
             self.update_cell(c)?;
+            if let Some(m) = self.facet_mask.get_mut(c as usize) {
+                *m = 0;
+            }
+        }
+        self.t_oracle += t.elapsed();
+        for &c in &changes.created {
             let idx = c as usize;
             if idx >= self.created_stamp.len() {
                 self.created_stamp.resize(idx + 1 + idx / 2, 0);
@@ -719,12 +755,7 @@ impl<'a> Refiner<'a> {
         let mut since_progress = 0usize;
         loop {
             // Main loop: refine bad balls, worst first.
-            while let Some(e) = {
-                let t = Instant::now();
-                let e = self.queue.pop();
-                self.t_queue += t.elapsed();
-                e
-            } {
+            while let Some(e) = self.queue.pop() {
                 let Some(rf) = self.restricted.get(&e.key).copied() else {
                     continue;
                 };
@@ -849,6 +880,7 @@ impl<'a> Refiner<'a> {
     fn audit(&mut self) -> Result<usize, MeshError> {
         let before: Vec<([VertexId; 3], RFacet)> = self.sorted_facets();
         self.restricted.clear();
+        self.facet_mask.clear();
         for v in self.vertex_facets.iter_mut() {
             *v = 0;
         }
@@ -927,7 +959,7 @@ impl<'a> Refiner<'a> {
         st.time_total_s = self.start.elapsed().as_secs_f64();
         st.time_delaunay_s = self.t_delaunay.as_secs_f64();
         st.time_oracle_s = self.t_oracle.as_secs_f64();
-        st.time_queue_s = self.t_queue.as_secs_f64();
+        st.time_queue_s = (st.time_total_s - st.time_delaunay_s - st.time_oracle_s).max(0.0);
         st.max_r_over_sigma = max_rs;
         st.max_distance_ratio = max_dist;
         st.min_angle_deg = if min_angle.is_finite() {
