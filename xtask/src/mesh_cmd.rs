@@ -142,31 +142,28 @@ pub fn run(a: &MeshArgs) -> Result<()> {
             notes.push(format!("sigma = {e} * d_M^inf ({dm:.4}) = {:.5}", e * dm));
             e * dm
         }
-        (None, None) => {
-            let s = match (opened.dm_inf, opened.default_size) {
-                (_, Some(d)) => {
-                    notes.push(format!(
-                        "no --size: using the input's suggested size {d:.5}"
-                    ));
-                    d
-                }
-                (Some(dm), None) => {
-                    notes.push(format!(
-                        "no --size: using sigma = 0.09 * d_M^inf = {:.5}",
-                        0.09 * dm
-                    ));
+        (None, None) => match (opened.dm_inf, opened.default_size) {
+            (_, Some(d)) => {
+                notes.push(format!(
+                    "no --size: using the input's suggested size {d:.5}"
+                ));
+                d
+            }
+            (Some(dm), None) => {
+                notes.push(format!(
+                    "no --size: using sigma = 0.09 * d_M^inf = {:.5}",
                     0.09 * dm
-                }
-                (None, None) => {
-                    let r = surface.bounding_sphere().radius / 20.0;
-                    notes.push(format!(
-                        "no --size: using sigma = bounding radius / 20 = {r:.5}"
-                    ));
-                    r
-                }
-            };
-            s
-        }
+                ));
+                0.09 * dm
+            }
+            (None, None) => {
+                let r = surface.bounding_sphere().radius / 20.0;
+                notes.push(format!(
+                    "no --size: using sigma = bounding radius / 20 = {r:.5}"
+                ));
+                r
+            }
+        },
     };
     let initial_points = match &a.initial_points {
         Some(p) => read_xyz(p)?,
@@ -213,11 +210,10 @@ pub fn run(a: &MeshArgs) -> Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/{}.ply", opened.name)));
-    if let Some(dir) = out_path.parent() {
-        if !dir.as_os_str().is_empty() {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("cannot create {}", dir.display()))?;
-        }
+    if let Some(dir) = out_path.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     meshio::write(&out_path, &result.mesh)
         .with_context(|| format!("writing {}", out_path.display()))?;

@@ -118,7 +118,7 @@ pub fn triangle_circumcircle(t: [DVec3; 3]) -> (DVec3, f64) {
     let b = t[2] - t[0];
     let axb = a.cross(b);
     let d = 2.0 * axb.length_squared();
-    if !(d > 0.0) {
+    if d.is_nan() || d <= 0.0 {
         return (t[0], f64::INFINITY);
     }
     let v = (b * a.length_squared() - a * b.length_squared()).cross(axb) / d;

@@ -280,18 +280,18 @@ pub fn audit(surface: &dyn Surface, opts: &MeshOptions) -> Result<usize, MeshErr
 
 fn validate(opts: &MeshOptions) -> Result<(), MeshError> {
     let c = &opts.criteria;
-    if let Some(crate::Sizing::Constant(s)) = &c.size {
-        if !(*s > 0.0 && s.is_finite()) {
-            return Err(MeshError::InvalidSize(*s));
-        }
+    if let Some(crate::Sizing::Constant(s)) = &c.size
+        && !(*s > 0.0 && s.is_finite())
+    {
+        return Err(MeshError::InvalidSize(*s));
     }
     if !(c.min_angle_deg >= 0.0 && c.min_angle_deg < 35.0) {
         return Err(MeshError::InvalidAngle(c.min_angle_deg));
     }
-    if let Some(d) = c.max_distance {
-        if !(d > 0.0 && d.is_finite()) {
-            return Err(MeshError::InvalidDistance(d));
-        }
+    if let Some(d) = c.max_distance
+        && !(d > 0.0 && d.is_finite())
+    {
+        return Err(MeshError::InvalidDistance(d));
     }
     if c.size.is_none() && c.min_angle_deg == 0.0 && c.max_distance.is_none() && !opts.manifold {
         return Err(MeshError::NoCriterion);
@@ -498,7 +498,7 @@ impl<'a> Refiner<'a> {
                 // Normal out of f.cell.
                 let n = (b - a).cross(c - a);
                 let nl = n.length();
-                if !(nl > 0.0) {
+                if nl.is_nan() || nl <= 0.0 {
                     return None;
                 }
                 let n = n / nl;
@@ -734,17 +734,17 @@ impl<'a> Refiner<'a> {
     }
 
     fn budget_exceeded(&mut self) -> bool {
-        if let Some(m) = self.opts.max_vertices {
-            if self.tri.num_vertices() >= m {
-                self.stats.stopped_by = Some(format!("max_vertices ({m})"));
-                return true;
-            }
+        if let Some(m) = self.opts.max_vertices
+            && self.tri.num_vertices() >= m
+        {
+            self.stats.stopped_by = Some(format!("max_vertices ({m})"));
+            return true;
         }
-        if let Some(t) = self.opts.time_limit {
-            if self.start.elapsed() >= t {
-                self.stats.stopped_by = Some(format!("time_limit ({:.3} s)", t.as_secs_f64()));
-                return true;
-            }
+        if let Some(t) = self.opts.time_limit
+            && self.start.elapsed() >= t
+        {
+            self.stats.stopped_by = Some(format!("time_limit ({:.3} s)", t.as_secs_f64()));
+            return true;
         }
         false
     }
@@ -821,11 +821,11 @@ impl<'a> Refiner<'a> {
                 self.crossing_calls += 1;
                 self.s.crossings(a, b, &mut buf);
                 self.t_oracle += t.elapsed();
-                if let Some(&c) = buf.first() {
-                    if self.insert(c, None)? {
-                        self.stats.ray_insertions += 1;
-                        any = true;
-                    }
+                if let Some(&c) = buf.first()
+                    && self.insert(c, None)?
+                {
+                    self.stats.ray_insertions += 1;
+                    any = true;
                 }
             }
         }

@@ -104,42 +104,6 @@ fn is_single_cycle(
     len == n
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn two_tets_sharing_a_vertex_is_nonmanifold_vertex() {
-        let mut t = vec![[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
-        t.extend([[0, 4, 5], [0, 4, 6], [0, 5, 6], [4, 5, 6]]);
-        let (e, v) = nonmanifold_elements(&t);
-        assert!(e.is_empty());
-        assert_eq!(v, vec![0]);
-    }
-
-    #[test]
-    fn octahedron_is_manifold() {
-        let t = [
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        assert_eq!(nonmanifold_elements(&t), (vec![], vec![]));
-    }
-
-    #[test]
-    fn three_facets_on_an_edge() {
-        let t = [[0, 1, 2], [0, 1, 3], [0, 1, 4]];
-        let (e, _) = nonmanifold_elements(&t);
-        assert!(e.contains(&[0, 1]));
-    }
-}
-
 /// Up to `per_component` well-spread vertices (farthest-point order) of every connected
 /// component of a triangle mesh, in a deterministic order.
 pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -> Vec<glam::DVec3> {
@@ -192,4 +156,40 @@ pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_tets_sharing_a_vertex_is_nonmanifold_vertex() {
+        let mut t = vec![[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
+        t.extend([[0, 4, 5], [0, 4, 6], [0, 5, 6], [4, 5, 6]]);
+        let (e, v) = nonmanifold_elements(&t);
+        assert!(e.is_empty());
+        assert_eq!(v, vec![0]);
+    }
+
+    #[test]
+    fn octahedron_is_manifold() {
+        let t = [
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        assert_eq!(nonmanifold_elements(&t), (vec![], vec![]));
+    }
+
+    #[test]
+    fn three_facets_on_an_edge() {
+        let t = [[0, 1, 2], [0, 1, 3], [0, 1, 4]];
+        let (e, _) = nonmanifold_elements(&t);
+        assert!(e.contains(&[0, 1]));
+    }
 }
