@@ -15,6 +15,10 @@ fn main() {
         ..Default::default()
     };
     let t = std::time::Instant::now();
+    use oracle::Surface;
+    let n = surf.seed_points(0).len();
+    println!("seed_points: {n} in {:.3} s", t.elapsed().as_secs_f64());
+    let t = std::time::Instant::now();
     let out = mesh(&surf, &opts).unwrap();
     println!(
         "{} vertices in {:.3} s: {:?}",
@@ -23,3 +27,5 @@ fn main() {
         out.stats
     );
 }
+#[allow(dead_code)]
+fn seeds_time() {}

@@ -153,7 +153,7 @@ pub struct Stats {
     pub time_total_s: f64,
     pub time_delaunay_s: f64,
     pub time_oracle_s: f64,
-    /// Everything else: queue, restricted-complex bookkeeping, criteria.
+    /// Everything else: circumcenters, restricted-facet tests and bookkeeping, criteria, queue.
     pub time_queue_s: f64,
     /// max over the output facets of r / sigma(c) (<= 1 when the size criterion holds).
     pub max_r_over_sigma: Option<f64>,
@@ -437,11 +437,10 @@ impl<'a> Refiner<'a> {
         self.ensure_vertex_slots();
         // Full scan of Del(E).
         let cells: Vec<CellId> = self.tri.finite_cells().collect();
-        let t = Instant::now();
         for &c in &cells {
             self.update_cell(c)?;
         }
-        self.t_oracle += t.elapsed();
+        self.eval_cells(&cells)?;
         for &c in &cells {
             for i in 0..4u8 {
                 let f = Facet { cell: c, index: i };
@@ -467,12 +466,27 @@ impl<'a> Refiner<'a> {
             return Ok(());
         }
         let cc = self.tri.circumcenter(c);
+        // NaN marks "value not evaluated yet" (see `eval_cells`).
         let f = if cc.is_finite() && self.ball.contains(cc) {
-            self.eval(cc)?
+            f64::NAN
         } else {
             f64::INFINITY
         };
         self.cells[idx] = CellInfo { cc, f };
+        Ok(())
+    }
+
+    /// Evaluate the surface at the circumcenters of `cells` left pending by `update_cell`
+    /// (timed as oracle time).
+    fn eval_cells(&mut self, cells: &[CellId]) -> Result<(), MeshError> {
+        let t = Instant::now();
+        for &c in cells {
+            let info = self.cells[c as usize];
+            if info.f.is_nan() {
+                self.cells[c as usize].f = self.eval(info.cc)?;
+            }
+        }
+        self.t_oracle += t.elapsed();
         Ok(())
     }
 
@@ -703,14 +717,13 @@ impl<'a> Refiner<'a> {
             }
         }
         self.round = self.round.wrapping_add(1);
-        let t = Instant::now();
         for &c in &changes.created {
             self.update_cell(c)?;
             if let Some(m) = self.facet_mask.get_mut(c as usize) {
                 *m = 0;
             }
         }
-        self.t_oracle += t.elapsed();
+        self.eval_cells(&changes.created)?;
         for &c in &changes.created {
             let idx = c as usize;
             if idx >= self.created_stamp.len() {
@@ -889,6 +902,7 @@ impl<'a> Refiner<'a> {
         for &c in &cells {
             self.update_cell(c)?;
         }
+        self.eval_cells(&cells)?;
         for &c in &cells {
             for i in 0..4u8 {
                 let f = Facet { cell: c, index: i };
