@@ -158,12 +158,14 @@ fn bench_delaunay(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
         let pts = random_points(n, 1, dist);
         let mut times = Vec::new();
         let mut cells = 0;
+        let mut bytes = 0;
         for _ in 0..a.runs {
             let t = Instant::now();
             let mut tri = delaunay3::Triangulation::new();
             tri.insert_bulk(&pts).context("insert_bulk")?;
             times.push(t.elapsed().as_secs_f64());
             cells = tri.num_finite_cells();
+            bytes = tri.memory_bytes();
         }
         let case = format!("{n} {dist}");
         let med = median(&mut times.clone());
@@ -175,7 +177,7 @@ fn bench_delaunay(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             runs: times,
             size: n,
             size_unit: "points".into(),
-            extra: serde_json::json!({"finite_cells": cells, "points_per_s": n as f64 / med}),
+            extra: serde_json::json!({"finite_cells": cells, "points_per_s": n as f64 / med, "bytes_per_point": bytes as f64 / n as f64}),
         });
         if a.vs_cgal {
             rows.push(cgal_rows(
