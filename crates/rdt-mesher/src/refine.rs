@@ -436,6 +436,12 @@ impl<'a> Refiner<'a> {
         self.stats.control_points = self.control.len();
         self.ensure_vertex_slots();
         // Full scan of Del(E).
+        self.full_scan()?;
+        Ok(())
+    }
+
+    /// Compute every cell's circumcenter and value, and test every facet of Del(E) once.
+    fn full_scan(&mut self) -> Result<(), MeshError> {
         let cells: Vec<CellId> = self.tri.finite_cells().collect();
         for &c in &cells {
             self.update_cell(c)?;
@@ -898,20 +904,7 @@ impl<'a> Refiner<'a> {
             *v = 0;
         }
         self.queue.clear();
-        let cells: Vec<CellId> = self.tri.finite_cells().collect();
-        for &c in &cells {
-            self.update_cell(c)?;
-        }
-        self.eval_cells(&cells)?;
-        for &c in &cells {
-            for i in 0..4u8 {
-                let f = Facet { cell: c, index: i };
-                let m = self.tri.mirror_facet(f);
-                if self.tri.is_infinite(m.cell) || c < m.cell {
-                    self.test_facet(f)?;
-                }
-            }
-        }
+        self.full_scan()?;
         let after = self.sorted_facets();
         let a: Vec<_> = before.iter().map(|x| x.0).collect();
         let b: Vec<_> = after.iter().map(|x| x.0).collect();
