@@ -785,3 +785,65 @@ fn delaunay_bad_line_names_file_and_line() {
     let out = xtask(&d, &["delaunay"]);
     mentions(&failure(&out, true), &["--random"]);
 }
+
+#[test]
+fn mesh_point_set_xyz() {
+    let d = scratch("point_set");
+    // 2000 points on the unit sphere (golden-spiral, deterministic), no normals.
+    let n = 2000;
+    let mut s = String::new();
+    for i in 0..n {
+        let z = 1.0 - (2 * i + 1) as f64 / n as f64;
+        let r = (1.0 - z * z).sqrt();
+        let t = i as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        s.push_str(&format!("{} {} {}\n", r * t.cos(), r * t.sin(), z));
+    }
+    std::fs::write(d.join("sph.xyz"), s).unwrap();
+    let (stdout, report) = mesh_ok(&d, &["sph.xyz", "--size", "0.15"]);
+    assert!(
+        stdout.contains("closed manifold") && stdout.contains("genus [0]"),
+        "{stdout}"
+    );
+    let bad = not_passed(&report);
+    assert!(bad.is_empty(), "{bad:#?}");
+    // The MLS surface of points on the unit sphere stays close to it.
+    let m = meshio::read(d.join("out.ply")).unwrap();
+    for p in &m.vertices {
+        assert!(
+            (p.length() - 1.0).abs() < 0.02,
+            "vertex at radius {}",
+            p.length()
+        );
+    }
+    // A bad line is named with file:line.
+    std::fs::write(d.join("bad.xyz"), "1 2 3\n4 5\n").unwrap();
+    let e = failure(&xtask(&d, &["mesh", "-q", "bad.xyz", "-o", "x.ply"]), true);
+    mentions(&e, &["bad.xyz:2"]);
+}
+
+#[test]
+#[ignore = "bug: on a polyhedron with sharp edges (fixtures/meshes/cube.off) the manifold patch never converges: >100k vertices, NOT a closed manifold (rdt-mesher refine.rs push_nonmanifold)"]
+fn mesh_cube_terminates_with_a_closed_manifold() {
+    let d = scratch("cube");
+    let cube = root().join("fixtures/meshes/cube.off");
+    let out = xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            cube.to_str().unwrap(),
+            "--size",
+            "0.1",
+            "--time-limit",
+            "20",
+            "-o",
+            "c.ply",
+        ],
+    );
+    let s = ok(&out);
+    assert!(!s.contains("stopped by"), "{s}");
+    assert!(
+        s.contains("closed manifold") && s.contains("genus [0]"),
+        "{s}"
+    );
+}
