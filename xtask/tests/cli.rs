@@ -1,0 +1,849 @@
+//! End-to-end tests of the command line: they run the built `xtask` binary (the one
+//! `cargo xtask` runs) on small cases and on bad inputs.
+//!
+//! Every bad input must give a non-zero exit status and one readable `error:` line on stderr
+//! that names the problem (the file, the value, the column), never a panic or a backtrace.
+//! Every case here is small (meshes of a few hundred vertices): the whole file runs in a few
+//! seconds in release.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh, empty scratch directory for one test (under cargo's per-target tmp dir).
+fn scratch(test: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("xtask-cli")
+        .join(test);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The repository root (the tests read committed fixtures only).
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+/// Runs `xtask ARGS` in `dir` (so a default `out/` path would land in the scratch directory).
+fn xtask(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(args)
+        .current_dir(dir)
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("cannot run the xtask binary")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// Asserts success and returns stdout.
+fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "expected success, got {:?}\nstdout:\n{}\nstderr:\n{}",
+        out.status,
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    assert_no_panic(out);
+    text(&out.stdout)
+}
+
+fn assert_no_panic(out: &Output) {
+    let err = text(&out.stderr);
+    assert!(
+        !err.contains("panicked") && !err.contains("stack backtrace"),
+        "panic or backtrace on stderr:\n{err}"
+    );
+    // 101 is the exit status of a Rust panic.
+    assert_ne!(out.status.code(), Some(101), "exit status of a panic");
+}
+
+/// Asserts a non-zero exit without a panic and returns the `error:` line. `strict`: stderr holds
+/// exactly one line apart from `note:` lines (the project's rule for bad input).
+fn failure(out: &Output, strict: bool) -> String {
+    assert!(
+        !out.status.success(),
+        "expected a non-zero exit, got success\nstdout:\n{}\nstderr:\n{}",
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    assert_no_panic(out);
+    let err = text(&out.stderr);
+    let lines: Vec<&str> = err
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with("note:"))
+        .collect();
+    assert!(
+        lines.first().is_some_and(|l| l.starts_with("error: ")),
+        "stderr does not start with an `error:` line:\n{err}"
+    );
+    if strict {
+        assert_eq!(
+            lines.len(),
+            1,
+            "expected ONE error line on stderr, got {}:\n{err}",
+            lines.len()
+        );
+    }
+    lines[0].to_string()
+}
+
+/// Asserts that `line` contains every needle (case-sensitive).
+fn mentions(line: &str, needles: &[&str]) {
+    for n in needles {
+        assert!(
+            line.contains(n),
+            "error line does not mention {n:?}:\n{line}"
+        );
+    }
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    let s = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("cannot read report {}: {e}", path.display()));
+    serde_json::from_str(&s)
+        .unwrap_or_else(|e| panic!("report {} is not JSON: {e}", path.display()))
+}
+
+/// Mesh `args` into `dir/out.ply` with a report; returns (stdout, report).
+fn mesh_ok(dir: &Path, args: &[&str]) -> (String, serde_json::Value) {
+    let mut a = vec!["mesh", "--quiet", "-o", "out.ply", "--report", "r.json"];
+    a.extend_from_slice(args);
+    let stdout = ok(&xtask(dir, &a));
+    (stdout, json(&dir.join("r.json")))
+}
+
+/// The checks of a verification report that did not PASS (INFO lines are information only).
+fn not_passed(report: &serde_json::Value) -> Vec<String> {
+    let checks = report["verify"]["checks"]
+        .as_array()
+        .expect("report.verify.checks is an array");
+    assert!(checks.len() >= 10, "too few checks: {checks:?}");
+    checks
+        .iter()
+        .filter(|c| c["status"] != "PASS" && c["status"] != "INFO")
+        .map(|c| format!("{} {}: {}", c["status"], c["name"], c["detail"]))
+        .collect()
+}
+
+fn status_of<'a>(report: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    let checks = report["verify"]["checks"].as_array().unwrap();
+    &checks
+        .iter()
+        .find(|c| c["name"] == name)
+        .unwrap_or_else(|| panic!("no check named {name}"))["status"]
+}
+
+/// The common part of the sphere cases: the summary line, the report and the PLY agree.
+/// `certified`: the surface gives d_M (catalog), so the loose-epsilon certificate runs; an
+/// expression has no d_M estimate and its certificate checks are SKIPped.
+fn check_sphere_run(dir: &Path, stdout: &str, report: &serde_json::Value, certified: bool) {
+    let st = &report["stats"];
+    let v = st["vertices"].as_u64().expect("stats.vertices");
+    let f = st["facets"].as_u64().expect("stats.facets");
+    // A closed genus-0 triangulation: V - E + F = 2 with E = 3F/2.
+    assert_eq!(
+        2 * v as i64 - f as i64,
+        4,
+        "Euler characteristic of a sphere"
+    );
+    assert!(v > 50, "{v} vertices for a unit sphere at size 0.2");
+    assert_eq!(st["criteria_met"], true);
+    assert!(st["max_r_over_sigma"].as_f64().unwrap() <= 1.0 + 1e-9);
+    assert!(st["min_angle_deg"].as_f64().unwrap() >= 30.0 - 1e-9);
+    assert_eq!(report["sigma"], 0.2);
+    assert_eq!(report["manifold"], true);
+    let mut bad = not_passed(report);
+    if !certified {
+        assert_eq!(status_of(report, "loose-epsilon"), "SKIP");
+        bad.retain(|c| {
+            !c.starts_with("\"SKIP\" \"loose-epsilon\"")
+                && !c.starts_with("\"SKIP\" \"theorem-4.7\"")
+        });
+    }
+    assert!(bad.is_empty(), "checks that did not pass: {bad:#?}");
+    for name in [
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "self-intersections",
+        "angles",
+    ] {
+        assert_eq!(status_of(report, name), "PASS", "check {name}");
+    }
+    if certified {
+        assert_eq!(status_of(report, "loose-epsilon"), "PASS");
+        let eps = report["verify"]["certificate"]["eps_achieved"]
+            .as_f64()
+            .unwrap();
+        assert!(
+            eps > 0.0 && eps <= 0.2 + 1e-9,
+            "achieved eps {eps} at sigma 0.2, d_M 1"
+        );
+    }
+    assert!(stdout.contains(&format!("{v} vertices")), "{stdout}");
+    assert!(
+        stdout.contains("closed manifold") && stdout.contains("genus [0]"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("verify: PASS"), "{stdout}");
+    // The output file is a mesh that meshio reads back with the same counts.
+    let m = meshio::read(dir.join("out.ply")).expect("output PLY readable by meshio");
+    assert_eq!(m.vertices.len() as u64, v);
+    assert_eq!(m.triangles.len() as u64, f);
+    // Every vertex lies on the unit sphere (the oracle's crossings are within tolerance).
+    let worst = m
+        .vertices
+        .iter()
+        .map(|p| (p.length() - 1.0).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-6, "a vertex is {worst} off the unit sphere");
+}
+
+#[test]
+fn mesh_catalog_sphere_report_and_ply() {
+    let d = scratch("catalog_sphere");
+    let (stdout, report) = mesh_ok(&d, &["implicit:sphere", "--size", "0.2"]);
+    assert_eq!(report["input"], "implicit:sphere");
+    check_sphere_run(&d, &stdout, &report, true);
+}
+
+#[test]
+fn mesh_expression_with_bounding_sphere() {
+    let d = scratch("expression");
+    let (stdout, report) = mesh_ok(
+        &d,
+        &[
+            "implicit:x^2+y^2+z^2-1",
+            "--bounding-sphere",
+            "0,0,0,2",
+            "--size",
+            "0.2",
+        ],
+    );
+    check_sphere_run(&d, &stdout, &report, false);
+    // Same surface, same seed: the same mesh as the catalog sphere (determinism).
+    let d2 = scratch("expression_vs_catalog");
+    let (_, cat) = mesh_ok(&d2, &["implicit:sphere", "--size", "0.2"]);
+    assert_eq!(report["stats"]["vertices"], cat["stats"]["vertices"]);
+    assert_eq!(report["stats"]["facets"], cat["stats"]["facets"]);
+}
+
+#[test]
+fn mesh_is_deterministic_and_writes_other_formats() {
+    let d = scratch("formats");
+    let mut counts = Vec::new();
+    for out in ["a.off", "b.obj", "c.stl", "d.ply"] {
+        let s = ok(&xtask(
+            &d,
+            &[
+                "mesh",
+                "-q",
+                "implicit:torus",
+                "--size",
+                "0.1",
+                "--no-verify",
+                "-o",
+                out,
+            ],
+        ));
+        assert!(s.contains("not verified"), "{s}");
+        let m = meshio::read(d.join(out)).unwrap_or_else(|e| panic!("{out}: {e}"));
+        counts.push(m.triangles.len());
+    }
+    assert!(
+        counts.iter().all(|&c| c == counts[0] && c > 100),
+        "{counts:?}"
+    );
+}
+
+#[test]
+fn mesh_raw_volume() {
+    let d = scratch("raw");
+    // A 20^3 u8 volume: 255 inside a ball of radius 6 voxels, 0 outside.
+    let n = 20usize;
+    let mut vox = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let c = |t: usize| t as f64 - 9.5;
+                let r2 = c(i).powi(2) + c(j).powi(2) + c(k).powi(2);
+                vox.push(if r2 < 36.0 { 255u8 } else { 0 });
+            }
+        }
+    }
+    std::fs::write(d.join("ball.raw"), &vox).unwrap();
+    let (stdout, report) = mesh_ok(
+        &d,
+        &[
+            "ball.raw",
+            "--dims",
+            "20,20,20",
+            "--dtype",
+            "u8",
+            "--spacing",
+            "0.5,0.5,0.5",
+            "--size",
+            "0.4",
+        ],
+    );
+    assert!(
+        stdout.contains("closed manifold") && stdout.contains("genus [0]"),
+        "{stdout}"
+    );
+    assert_eq!(status_of(&report, "closed"), "PASS");
+    assert_eq!(status_of(&report, "self-intersections"), "PASS");
+    // The ball has radius about 6 voxels * 0.5 = 3 world units.
+    let m = meshio::read(d.join("out.ply")).unwrap();
+    let c = m.vertices.iter().copied().sum::<glam::DVec3>() / m.vertices.len() as f64;
+    for p in &m.vertices {
+        let r = (*p - c).length();
+        assert!(
+            (2.4..3.6).contains(&r),
+            "vertex at distance {r} from the center"
+        );
+    }
+    // Missing --dtype: named.
+    let e = failure(
+        &xtask(
+            &d,
+            &[
+                "mesh", "-q", "ball.raw", "--dims", "20,20,20", "-o", "x.ply",
+            ],
+        ),
+        true,
+    );
+    mentions(&e, &["--dtype"]);
+    // Wrong dims: the byte counts are named.
+    let e = failure(
+        &xtask(
+            &d,
+            &[
+                "mesh", "-q", "ball.raw", "--dims", "20,20,21", "--dtype", "u8", "-o", "x.ply",
+            ],
+        ),
+        true,
+    );
+    mentions(&e, &["ball.raw", "8400", "8000"]);
+}
+
+#[test]
+fn verify_command_on_a_good_mesh_and_on_its_report() {
+    let d = scratch("verify_good");
+    ok(&xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:sphere",
+            "--size",
+            "0.2",
+            "--no-verify",
+            "-o",
+            "s.ply",
+        ],
+    ));
+    let out = xtask(
+        &d,
+        &[
+            "verify",
+            "s.ply",
+            "--against",
+            "implicit:sphere",
+            "--report",
+            "v.json",
+        ],
+    );
+    let s = ok(&out);
+    assert!(s.contains("PASS closed"), "{s}");
+    assert!(s.contains("verdict: PASS"), "{s}");
+    let v = json(&d.join("v.json"));
+    let checks = v["checks"].as_array().unwrap();
+    assert!(checks.iter().all(|c| c["status"] != "FAIL"), "{checks:?}");
+}
+
+#[test]
+fn verify_mesh_with_boundary_fails() {
+    let d = scratch("verify_boundary");
+    // A tetrahedron without its bottom face: three boundary edges.
+    std::fs::write(
+        d.join("open.off"),
+        "OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n",
+    )
+    .unwrap();
+    let out = xtask(&d, &["verify", "open.off"]);
+    let e = failure(&out, true);
+    mentions(&e, &["open.off", "FAIL", "closed"]);
+    let s = text(&out.stdout);
+    assert!(
+        s.contains("FAIL closed") && s.contains("3 boundary edges"),
+        "{s}"
+    );
+    assert!(s.contains("verdict: FAIL"), "{s}");
+    // The closed tetrahedron passes.
+    std::fs::write(
+        d.join("tet.off"),
+        "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n",
+    )
+    .unwrap();
+    ok(&xtask(&d, &["verify", "tet.off"]));
+}
+
+#[test]
+fn expression_that_does_not_parse_names_the_column() {
+    let d = scratch("bad_expr");
+    for (expr, col, what) in [
+        ("x^2+y^2+*z^2-1", "column 9", "'*'"),
+        ("x^2+y^2+foo(z)-1", "column 9", "foo"),
+        ("x^2+y^2+w^2-1", "column 9", "'w'"),
+        ("(x^2+y^2+z^2-1", "column", "')'"),
+    ] {
+        let spec = format!("implicit:{expr}");
+        let out = xtask(
+            &d,
+            &[
+                "mesh",
+                "-q",
+                &spec,
+                "--bounding-sphere",
+                "0,0,0,2",
+                "-o",
+                "x.ply",
+            ],
+        );
+        let e = failure(&out, false);
+        mentions(&e, &[col, what, expr]);
+    }
+}
+
+#[test]
+#[ignore = "bug: the parse error is two lines (caret line, misaligned under the prefixed message) and calls the expression a 'catalog surface' (oracle/src/expr.rs, catalog.rs)"]
+fn expression_parse_error_is_one_line() {
+    let d = scratch("bad_expr_one_line");
+    let out = xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:x^2+y^2+*z^2-1",
+            "--bounding-sphere",
+            "0,0,0,2",
+        ],
+    );
+    let e = failure(&out, true);
+    assert!(!e.contains("catalog surface"), "{e}");
+}
+
+#[test]
+fn unknown_catalog_name_lists_the_names() {
+    let d = scratch("bad_name");
+    let e = failure(
+        &xtask(&d, &["mesh", "-q", "implicit:sphree", "-o", "x.ply"]),
+        true,
+    );
+    mentions(&e, &["sphree", "sphere", "torus", "--bounding-sphere"]);
+}
+
+#[test]
+fn bounding_sphere_crossed_by_the_surface() {
+    let d = scratch("bad_bounding_sphere");
+    for r in ["0.5", "1"] {
+        let bs = format!("0,0,0,{r}");
+        let out = xtask(
+            &d,
+            &[
+                "mesh",
+                "-q",
+                "implicit:x^2+y^2+z^2-1",
+                "--bounding-sphere",
+                &bs,
+                "-o",
+                "x.ply",
+            ],
+        );
+        let e = failure(&out, true);
+        mentions(&e, &["bounding sphere", &format!("radius {r}"), "enlarge"]);
+    }
+    // Malformed spheres.
+    for (bs, needle) in [("0,0,0", "4 numbers"), ("0,0,a,1", "'a'")] {
+        let out = xtask(
+            &d,
+            &[
+                "mesh",
+                "-q",
+                "implicit:x^2+y^2+z^2-1",
+                "--bounding-sphere",
+                bs,
+                "-o",
+                "x.ply",
+            ],
+        );
+        mentions(&failure(&out, true), &["--bounding-sphere", needle]);
+    }
+}
+
+#[test]
+fn function_returning_nan_inside_the_ball() {
+    let d = scratch("nan");
+    // sqrt(x) is NaN for x < 0, i.e. in half of the ball.
+    for expr in ["sqrt(x)+y^2+z^2-1", "ln(x)+y^2+z^2-1"] {
+        let spec = format!("implicit:{expr}");
+        let out = xtask(
+            &d,
+            &[
+                "mesh",
+                "-q",
+                &spec,
+                "--bounding-sphere",
+                "0,0,0,2",
+                "-o",
+                "x.ply",
+            ],
+        );
+        mentions(&failure(&out, true), &["NaN", "fix the function"]);
+    }
+    assert!(
+        !d.join("x.ply").exists(),
+        "a mesh was written for a NaN surface"
+    );
+}
+
+#[test]
+fn size_must_be_positive() {
+    let d = scratch("bad_size");
+    for s in [
+        "--size=0",
+        "--size=-1",
+        "--size=nan",
+        "--size=inf",
+        "--epsilon=0",
+    ] {
+        let out = xtask(&d, &["mesh", "-q", "implicit:sphere", s, "-o", "x.ply"]);
+        let e = failure(&out, true);
+        mentions(&e, &["must be a positive number"]);
+    }
+    let out = xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:sphere",
+            "--size",
+            "0",
+            "-o",
+            "x.ply",
+        ],
+    );
+    mentions(&failure(&out, true), &["--size 0", "positive"]);
+    let out = xtask(&d, &["mesh", "-q", "implicit:sphere", "--size", "abc"]);
+    mentions(&failure(&out, false), &["abc"]);
+}
+
+#[test]
+#[ignore = "bug: `--size -1` (with a space) is parsed by clap as an unknown flag '-1': add allow_negative_numbers to MeshArgs (xtask/src/mesh_cmd.rs)"]
+fn negative_size_with_a_space() {
+    let d = scratch("bad_size_space");
+    let out = xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:sphere",
+            "--size",
+            "-1",
+            "-o",
+            "x.ply",
+        ],
+    );
+    mentions(&failure(&out, true), &["--size -1", "positive"]);
+}
+
+#[test]
+fn missing_input_file() {
+    let d = scratch("missing");
+    let e = failure(
+        &xtask(&d, &["mesh", "-q", "no_such_file.ply", "-o", "x.ply"]),
+        true,
+    );
+    mentions(&e, &["no_such_file.ply"]);
+    let e = failure(&xtask(&d, &["verify", "no_such_file.off"]), true);
+    mentions(&e, &["no_such_file.off"]);
+}
+
+#[test]
+fn files_that_are_not_meshes() {
+    let d = scratch("not_mesh");
+    std::fs::write(d.join("a.ply"), "hello, I am not a mesh\n").unwrap();
+    std::fs::write(d.join("b.off"), "hello\n").unwrap();
+    std::fs::write(d.join("c.obj"), "garbage line\n").unwrap();
+    std::fs::write(d.join("d.stl"), [7u8; 100]).unwrap();
+    std::fs::write(d.join("e.txt"), "hello\n").unwrap();
+    for f in ["a.ply", "b.off", "c.obj", "d.stl", "e.txt"] {
+        for cmd in ["mesh", "verify"] {
+            let out = xtask(&d, &[cmd, f]);
+            mentions(&failure(&out, true), &[f]);
+        }
+    }
+    assert!(
+        !d.join("out").exists(),
+        "an output was written for a bad input"
+    );
+}
+
+#[test]
+fn truncated_binary_ply() {
+    let d = scratch("truncated");
+    ok(&xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:sphere",
+            "--size",
+            "0.2",
+            "--no-verify",
+            "-o",
+            "s.ply",
+        ],
+    ));
+    let bytes = std::fs::read(d.join("s.ply")).unwrap();
+    assert!(bytes.starts_with(b"ply\nformat binary_little_endian"));
+    std::fs::write(d.join("cut.ply"), &bytes[..bytes.len() / 2]).unwrap();
+    for cmd in ["mesh", "verify"] {
+        let e = failure(&xtask(&d, &[cmd, "cut.ply"]), false);
+        mentions(&e, &["cut.ply", "truncated"]);
+    }
+}
+
+#[test]
+#[ignore = "bug: the truncated-PLY error embeds ply-rs's multi-line message ('\\n\\tError: failed to fill whole buffer') (meshio/src, PLY reader)"]
+fn truncated_binary_ply_is_one_line() {
+    let d = scratch("truncated_one_line");
+    ok(&xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:sphere",
+            "--size",
+            "0.2",
+            "--no-verify",
+            "-o",
+            "s.ply",
+        ],
+    ));
+    let bytes = std::fs::read(d.join("s.ply")).unwrap();
+    std::fs::write(d.join("cut.ply"), &bytes[..bytes.len() / 2]).unwrap();
+    failure(&xtask(&d, &["verify", "cut.ply"]), true);
+}
+
+#[test]
+fn faces_indexing_missing_vertices() {
+    let d = scratch("bad_index");
+    std::fs::write(
+        d.join("a.off"),
+        "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2 7\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("b.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+         0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("c.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap();
+    for (f, idx, n) in [
+        ("a.off", "7", "4"),
+        ("b.ply", "5", "3"),
+        ("c.obj", "4", "3"),
+    ] {
+        for cmd in ["mesh", "verify"] {
+            let e = failure(&xtask(&d, &[cmd, f]), true);
+            mentions(
+                &e,
+                &[f, &format!("index {idx}"), &format!("only {n} vertices")],
+            );
+        }
+    }
+}
+
+#[test]
+fn image_needs_an_iso_value() {
+    let d = scratch("image_iso");
+    let img = root().join("fixtures/images/phantom_i16_32.nii.gz");
+    let e = failure(&xtask(&d, &["mesh", "-q", img.to_str().unwrap()]), true);
+    mentions(&e, &["iso", "[-5, 605]"]);
+    let img = root().join("fixtures/images/phantom_i16_32_truncated.nii.gz");
+    let e = failure(
+        &xtask(&d, &["mesh", "-q", img.to_str().unwrap(), "--iso", "300"]),
+        true,
+    );
+    mentions(&e, &["phantom_i16_32_truncated.nii.gz", "truncated"]);
+}
+
+#[test]
+fn initial_points_bad_line() {
+    let d = scratch("initial_points");
+    std::fs::write(d.join("e0.xyz"), "1 0 0\n0 1 zz\n").unwrap();
+    let out = xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:sphere",
+            "--initial-points",
+            "e0.xyz",
+            "-o",
+            "x.ply",
+        ],
+    );
+    mentions(&failure(&out, true), &["e0.xyz:2"]);
+}
+
+#[test]
+fn delaunay_random_sphere_is_valid() {
+    let d = scratch("delaunay_random");
+    let args = [
+        "delaunay",
+        "--random",
+        "1000",
+        "--seed",
+        "1",
+        "--distribution",
+        "sphere",
+    ];
+    let s = ok(&xtask(&d, &args));
+    let v: serde_json::Value = serde_json::from_str(s.trim()).expect("one JSON object");
+    assert_eq!(v["valid"], true);
+    assert_eq!(v["points"], 1000);
+    assert_eq!(v["vertices"], 1000);
+    assert_eq!(v["distribution"], "sphere");
+    // Points on a sphere are all on the hull: F = 2V - 4 hull triangles, and the number of
+    // finite cells is at least V - 3.
+    assert!(v["finite_cells"].as_u64().unwrap() >= 997, "{v}");
+    // Same seed, same triangulation.
+    let s2 = ok(&xtask(&d, &args));
+    let v2: serde_json::Value = serde_json::from_str(s2.trim()).unwrap();
+    assert_eq!(v["finite_cells"], v2["finite_cells"]);
+}
+
+#[test]
+fn delaunay_point_file() {
+    let d = scratch("delaunay_file");
+    std::fs::write(
+        d.join("p.xyz"),
+        "# a tetrahedron and one point beyond a face\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n\n1 1 1\n",
+    )
+    .unwrap();
+    let s = ok(&xtask(
+        &d,
+        &["delaunay", "--input", "p.xyz", "--output", "t.txt"],
+    ));
+    let v: serde_json::Value = serde_json::from_str(s.trim()).unwrap();
+    assert_eq!(v["valid"], true);
+    assert_eq!(v["points"], 5);
+    let tets = std::fs::read_to_string(d.join("t.txt")).unwrap();
+    let mut lines: Vec<Vec<u32>> = tets
+        .lines()
+        .map(|l| {
+            let mut t: Vec<u32> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            t.sort();
+            t
+        })
+        .collect();
+    lines.sort();
+    assert_eq!(lines.len() as u64, v["finite_cells"].as_u64().unwrap());
+    // The 5 points (a bipyramid over triangle 1 2 3) give two tetrahedra.
+    assert_eq!(lines, vec![vec![0, 1, 2, 3], vec![1, 2, 3, 4]]);
+}
+
+#[test]
+fn delaunay_bad_line_names_file_and_line() {
+    let d = scratch("delaunay_bad");
+    for (content, needle) in [
+        ("0 0 0\n1 0 0\n0 1 zz\n", "p.xyz:3"),
+        ("0 0 0\n\n# c\n0 1\n", "p.xyz:4"),
+        ("0 0 0\n1 0 nan\n", "p.xyz:2"),
+    ] {
+        std::fs::write(d.join("p.xyz"), content).unwrap();
+        let out = xtask(&d, &["delaunay", "--input", "p.xyz", "--output", "t.txt"]);
+        mentions(&failure(&out, true), &[needle]);
+    }
+    let out = xtask(
+        &d,
+        &["delaunay", "--input", "nope.xyz", "--output", "t.txt"],
+    );
+    mentions(&failure(&out, true), &["nope.xyz"]);
+    let out = xtask(&d, &["delaunay"]);
+    mentions(&failure(&out, true), &["--random"]);
+}
+
+#[test]
+fn mesh_point_set_xyz() {
+    let d = scratch("point_set");
+    // 2000 points on the unit sphere (golden-spiral, deterministic), no normals.
+    let n = 2000;
+    let mut s = String::new();
+    for i in 0..n {
+        let z = 1.0 - (2 * i + 1) as f64 / n as f64;
+        let r = (1.0 - z * z).sqrt();
+        let t = i as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        s.push_str(&format!("{} {} {}\n", r * t.cos(), r * t.sin(), z));
+    }
+    std::fs::write(d.join("sph.xyz"), s).unwrap();
+    let (stdout, report) = mesh_ok(&d, &["sph.xyz", "--size", "0.15"]);
+    assert!(
+        stdout.contains("closed manifold") && stdout.contains("genus [0]"),
+        "{stdout}"
+    );
+    let bad = not_passed(&report);
+    assert!(bad.is_empty(), "{bad:#?}");
+    // The MLS surface of points on the unit sphere stays close to it.
+    let m = meshio::read(d.join("out.ply")).unwrap();
+    for p in &m.vertices {
+        assert!(
+            (p.length() - 1.0).abs() < 0.02,
+            "vertex at radius {}",
+            p.length()
+        );
+    }
+    // A bad line is named with file:line.
+    std::fs::write(d.join("bad.xyz"), "1 2 3\n4 5\n").unwrap();
+    let e = failure(&xtask(&d, &["mesh", "-q", "bad.xyz", "-o", "x.ply"]), true);
+    mentions(&e, &["bad.xyz:2"]);
+}
+
+#[test]
+#[ignore = "bug: on a polyhedron with sharp edges (fixtures/meshes/cube.off) the manifold patch never converges: >100k vertices, NOT a closed manifold (rdt-mesher refine.rs push_nonmanifold)"]
+fn mesh_cube_terminates_with_a_closed_manifold() {
+    let d = scratch("cube");
+    let cube = root().join("fixtures/meshes/cube.off");
+    let out = xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            cube.to_str().unwrap(),
+            "--size",
+            "0.1",
+            "--time-limit",
+            "20",
+            "-o",
+            "c.ply",
+        ],
+    );
+    let s = ok(&out);
+    assert!(!s.contains("stopped by"), "{s}");
+    assert!(
+        s.contains("closed manifold") && s.contains("genus [0]"),
+        "{s}"
+    );
+}
