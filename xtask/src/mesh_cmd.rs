@@ -16,6 +16,7 @@ pub enum OracleArg {
 }
 
 #[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct MeshArgs {
     /// Surface to mesh: `implicit:NAME` (catalog), `implicit:"EXPR"` (with --bounding-sphere),
     /// an image (.nii, .nii.gz, a folder of slices, .raw), a mesh (.ply .off .obj .stl) or a

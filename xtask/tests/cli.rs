@@ -424,7 +424,6 @@ fn expression_that_does_not_parse_names_the_column() {
 }
 
 #[test]
-#[ignore = "bug: the parse error is two lines (caret line, misaligned under the prefixed message) and calls the expression a 'catalog surface' (oracle/src/expr.rs, catalog.rs)"]
 fn expression_parse_error_is_one_line() {
     let d = scratch("bad_expr_one_line");
     let out = xtask(
@@ -547,7 +546,6 @@ fn size_must_be_positive() {
 }
 
 #[test]
-#[ignore = "bug: `--size -1` (with a space) is parsed by clap as an unknown flag '-1': add allow_negative_numbers to MeshArgs (xtask/src/mesh_cmd.rs)"]
 fn negative_size_with_a_space() {
     let d = scratch("bad_size_space");
     let out = xtask(
@@ -623,7 +621,6 @@ fn truncated_binary_ply() {
 }
 
 #[test]
-#[ignore = "bug: the truncated-PLY error embeds ply-rs's multi-line message ('\\n\\tError: failed to fill whole buffer') (meshio/src, PLY reader)"]
 fn truncated_binary_ply_is_one_line() {
     let d = scratch("truncated_one_line");
     ok(&xtask(
@@ -822,7 +819,6 @@ fn mesh_point_set_xyz() {
 }
 
 #[test]
-#[ignore = "bug: on a polyhedron with sharp edges (fixtures/meshes/cube.off) the manifold patch never converges: >100k vertices, NOT a closed manifold (rdt-mesher refine.rs push_nonmanifold)"]
 fn mesh_cube_terminates_with_a_closed_manifold() {
     let d = scratch("cube");
     let cube = root().join("fixtures/meshes/cube.off");

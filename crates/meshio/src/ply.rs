@@ -127,13 +127,16 @@ impl PropertyAccess for Skip {
 }
 
 fn map_parse_error(path: &Path, e: ply_rs_bw::parser::ParseError) -> MeshIoError {
+    // ply-rs's messages span several lines; keep one line.
+    let one_line = |s: String| s.split_whitespace().collect::<Vec<_>>().join(" ");
     if e.kind() == std::io::ErrorKind::UnexpectedEof {
         MeshIoError::Truncated {
             path: path.to_owned(),
-            detail: e.to_string(),
+            detail: "the file ends before all vertices and faces announced in its header"
+                .to_string(),
         }
     } else {
-        MeshIoError::not_a_mesh(path, Format::Ply, e.to_string())
+        MeshIoError::not_a_mesh(path, Format::Ply, one_line(e.to_string()))
     }
 }
 

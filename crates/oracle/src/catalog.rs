@@ -72,7 +72,7 @@ pub enum CatalogError {
         "'{expression}' is an expression, not a catalog surface: give its bounding sphere (cx,cy,cz,r) too"
     )]
     MissingBoundingSphere { expression: String },
-    #[error("catalog surface '{name}': {source}")]
+    #[error("surface '{name}': {source}")]
     Implicit {
         name: String,
         #[source]

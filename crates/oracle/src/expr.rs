@@ -65,9 +65,10 @@ pub enum ExprErrorKind {
 }
 
 /// A parse error: its kind, the 1-based column (in characters) where it was detected, and the
-/// input. Displays as `KIND at column N: INPUT` followed by a caret line under the column.
+/// input. Displays on one line as `KIND at column N: INPUT` with `>>` marking the column,
+/// e.g. `unexpected '*' at column 9: x^2+y^2+>>*z^2-1`.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{kind} at column {column}: {input}\n{caret}")]
+#[error("{kind} at column {column}: {caret}")]
 pub struct ExprError {
     pub kind: ExprErrorKind,
     /// 1-based column; `input.chars().count() + 1` for "end of input".
@@ -78,8 +79,9 @@ pub struct ExprError {
 
 impl ExprError {
     fn new(kind: ExprErrorKind, column: usize, input: &str) -> Self {
-        let prefix = format!("{kind} at column {column}: ");
-        let caret = format!("{}^", " ".repeat(prefix.chars().count() + column - 1));
+        let before: String = input.chars().take(column.saturating_sub(1)).collect();
+        let after: String = input.chars().skip(column.saturating_sub(1)).collect();
+        let caret = format!("{before}>>{after}");
         ExprError {
             kind,
             column,

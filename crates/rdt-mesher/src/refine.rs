@@ -232,6 +232,9 @@ impl PartialOrd for QEntry {
     }
 }
 
+/// Manifold passes without a decrease of the non-manifold count before the patch gives up.
+const MANIFOLD_STALL_PASSES: u32 = 6;
+
 #[inline]
 fn inside(f: f64) -> bool {
     f < 0.0
@@ -315,6 +318,8 @@ pub(crate) struct Refiner<'a> {
     /// Set on both cells of a facet when it is registered; a set bit without an entry is
     /// harmless (a missed lookup), a registered facet always has its bits set.
     facet_mask: Vec<u8>,
+    manifold_best: usize,
+    manifold_stall: u32,
     round: u32,
     crossings_buf: Vec<DVec3>,
     control: Vec<VertexId>,
@@ -342,6 +347,8 @@ impl<'a> Refiner<'a> {
             changes: Changes::default(),
             created_stamp: Vec::new(),
             facet_mask: Vec::new(),
+            manifold_best: usize::MAX,
+            manifold_stall: 0,
             round: 0,
             crossings_buf: Vec::new(),
             control: Vec::new(),
@@ -471,7 +478,10 @@ impl<'a> Refiner<'a> {
             };
             return Ok(());
         }
-        let cc = self.tri.circumcenter(c);
+        let mut cc = self.tri.circumcenter(c);
+        if !cc.is_finite() {
+            cc = self.flat_cell_center(c);
+        }
         // NaN marks "value not evaluated yet" (see `eval_cells`).
         let f = if cc.is_finite() && self.ball.contains(cc) {
             f64::NAN
@@ -480,6 +490,31 @@ impl<'a> Refiner<'a> {
         };
         self.cells[idx] = CellInfo { cc, f };
         Ok(())
+    }
+
+    /// A stand-in circumcenter for a cell whose four vertices are exactly coplanar (it exists
+    /// under the symbolic perturbation; common on planar parts of polyhedra). Its circumsphere
+    /// degenerates to the plane, and its center goes to infinity along the plane's normal, on
+    /// the side fixed by the cell's (perturbed, positive) orientation: return a point on that
+    /// side far outside the bounding ball, so that the duals of its facets behave as rays.
+    fn flat_cell_center(&self, c: CellId) -> DVec3 {
+        let p = self.tri.cell_vertices(c).map(|v| self.tri.point(v));
+        let (a, b, d) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
+        let (bd, da, ab) = (b.cross(d), d.cross(a), a.cross(b));
+        let mut n = bd;
+        for x in [da, ab] {
+            if x.length_squared() > n.length_squared() {
+                n = x;
+            }
+        }
+        let n = n.normalize_or_zero();
+        let num = bd * a.length_squared() + da * b.length_squared() + ab * d.length_squared();
+        let s = num.dot(n);
+        // cc - p0 = num / (2 det) with det -> 0 from below (positive cells have det < 0).
+        let dir = if s > 0.0 { -n } else { n };
+        let centroid = (p[0] + p[1] + p[2] + p[3]) * 0.25;
+        let far = 4.0 * self.ball.radius + (centroid - self.ball.center).length();
+        centroid + dir * far
     }
 
     /// Evaluate the surface at the circumcenters of `cells` left pending by `update_cell`
@@ -784,7 +819,7 @@ impl<'a> Refiner<'a> {
                 if self.budget_exceeded() {
                     return Ok(());
                 }
-                if e.forced && rf.radius < 100.0 * self.s.tolerance() {
+                if e.forced && rf.radius < self.manifold_floor(rf.center) {
                     continue;
                 }
                 if self.insert(rf.center, Some(rf.facet.cell))? {
@@ -868,6 +903,26 @@ impl<'a> Refiner<'a> {
                 keys.push(k);
             }
         }
+        // Termination (section 6.6.1's patch can refine forever at sharp edges and singular
+        // points): stop when the count of bad elements has not decreased for
+        // `MANIFOLD_STALL_PASSES` passes, and never force facets smaller than the floor.
+        let bad = bad_edges.len() + bad_vertices.len();
+        if bad < self.manifold_best {
+            self.manifold_best = bad;
+            self.manifold_stall = 0;
+        } else {
+            self.manifold_stall += 1;
+            if self.manifold_stall >= MANIFOLD_STALL_PASSES {
+                self.stats.stopped_by = Some(format!(
+                    "manifold patch: no progress in {MANIFOLD_STALL_PASSES} passes ({bad} non-manifold elements left)"
+                ));
+                return 0;
+            }
+        }
+        keys.retain(|k| {
+            let rf = &self.restricted[k];
+            rf.radius >= self.manifold_floor(rf.center)
+        });
         let n = keys.len();
         for key in keys {
             let rf = self.restricted[&key];
@@ -879,6 +934,17 @@ impl<'a> Refiner<'a> {
             });
         }
         n
+    }
+
+    /// Facets smaller than this are not refined by the manifold patch: a tenth of sigma(c)
+    /// with a size criterion, else 1e-3 of the bounding radius (and always 100 x the oracle's
+    /// tolerance).
+    fn manifold_floor(&self, c: DVec3) -> f64 {
+        let base = match &self.opts.criteria.size {
+            Some(s) => 0.1 * s.at(c),
+            None => 1e-3 * self.ball.radius,
+        };
+        base.max(100.0 * self.s.tolerance())
     }
 
     fn sorted_facets(&self) -> Vec<([VertexId; 3], RFacet)> {
