@@ -1,0 +1,599 @@
+//! `cargo xtask regress [--quick] [--update-golden] [--json out.json]`: the regression suite.
+//!
+//! Every catalog surface (plus `heart` with a constant sigma in manifold mode and two disjoint
+//! spheres) at two sizes (~2k and ~50k vertices; `--quick`: ~2k only) with both oracles. Each
+//! case is meshed (angle 30, constant sigma, seed 0), verified with `verify::check_against`, and
+//! checked against the guarantees of the paper:
+//!
+//! - closed, oriented 2-manifold; genus per component equal to the catalog's;
+//! - every facet angle >= 30 degrees; every surface Delaunay ball radius <= sigma
+//!   (recomputed here from the mesher's balls, not taken from its stats);
+//! - Hausdorff distance: <= sigma always (every facet lies in its surface Delaunay ball, whose
+//!   center is on S and radius <= sigma), and theorem 4.7's 4.5 eps^2 d_M^sup when d_M is known
+//!   and eps < 0.096 (`verify`'s `theorem-4.7` check);
+//! - loose epsilon-sample certificate (eps = sigma / d_M^inf) where d_M is known;
+//! - every control point is a vertex and every seed point of S is near the mesh;
+//! - both oracles give the same topology;
+//! - vertex / facet counts within `--tolerance` (5%) of the golden JSON file
+//!   `fixtures/golden/CASE-ORACLE.json`, which `--update-golden` rewrites.
+//!
+//! It prints one table and a summary line, and exits non-zero on any failure.
+
+use anyhow::{Context, Result, bail};
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use oracle::{BoundingSphere, Surface, implicit::ImplicitSurface};
+use rdt_mesher::{Criteria, MeshOptions, OracleKind, Sizing};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+#[derive(clap::Args, Debug)]
+pub struct RegressArgs {
+    /// Only the ~2k-vertex size (CI; well under two minutes).
+    #[arg(long)]
+    pub quick: bool,
+    /// Rewrite the golden files of the cases run instead of comparing with them.
+    #[arg(long)]
+    pub update_golden: bool,
+    /// Write every row (and the verify failures) as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Relative tolerance on vertex and facet counts against the golden files.
+    #[arg(long, default_value_t = 0.05)]
+    pub tolerance: f64,
+    /// Only the cases whose name contains this string (e.g. `torus`, `-2k`).
+    #[arg(long)]
+    pub filter: Option<String>,
+    /// Folder of the golden files (default: fixtures/golden of the workspace).
+    #[arg(long)]
+    pub golden_dir: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// One surface of the suite and its two sizes (sigma for ~2k and ~50k vertices, chosen
+/// empirically with `cargo xtask mesh implicit:NAME --size S --no-verify`).
+struct SurfaceCase {
+    name: &'static str,
+    sizes: [(&'static str, f64); 2],
+    /// Verify checks that may fail without a guarantee being broken, with the reason.
+    expected_fail: &'static [(&'static str, &'static str, &'static str)],
+}
+
+/// (name, ~2k sigma, ~50k sigma).
+const SURFACES: &[SurfaceCase] = &[
+    SurfaceCase {
+        name: "sphere",
+        sizes: [("2k", 0.065), ("50k", 0.013)],
+        expected_fail: &[],
+    },
+    SurfaceCase {
+        name: "ellipsoid",
+        sizes: [("2k", 0.042), ("50k", 0.0084)],
+        expected_fail: &[],
+    },
+    SurfaceCase {
+        name: "torus",
+        sizes: [("2k", 0.063), ("50k", 0.0126)],
+        expected_fail: &[],
+    },
+    SurfaceCase {
+        name: "double_torus",
+        sizes: [("2k", 0.043), ("50k", 0.0087)],
+        expected_fail: &[],
+    },
+    SurfaceCase {
+        name: "tanglecube",
+        sizes: [("2k", 0.18), ("50k", 0.036)],
+        expected_fail: &[],
+    },
+    SurfaceCase {
+        name: "chair",
+        sizes: [("2k", 0.29), ("50k", 0.058)],
+        expected_fail: &[(
+            "2k",
+            "normals",
+            "chair at sigma 0.29 is too coarse for a normal guarantee (facets near the saddles \
+             face inward; none from sigma 0.2 down); no guarantee applies: d_M unknown",
+        )],
+    },
+    SurfaceCase {
+        name: "blobs",
+        sizes: [("2k", 0.039), ("50k", 0.0078)],
+        expected_fail: &[],
+    },
+    SurfaceCase {
+        name: "heart",
+        sizes: [("2k", 0.062), ("12k", 0.025)],
+        expected_fail: &[(
+            "",
+            "normals",
+            "heart is not smooth: the gradient vanishes at its two singular points",
+        )],
+    },
+    SurfaceCase {
+        name: "two_spheres",
+        sizes: [("2k", 0.092), ("50k", 0.0184)],
+        expected_fail: &[],
+    },
+];
+
+/// Two disjoint unit spheres centered at (+-1.5, 0, 0): d_M^inf = 0.5 (the bisector plane).
+pub fn two_spheres() -> Result<ImplicitSurface> {
+    let (c1, c2) = (DVec3::new(-1.5, 0.0, 0.0), DVec3::new(1.5, 0.0, 0.0));
+    let bs = BoundingSphere {
+        center: DVec3::ZERO,
+        radius: 3.0,
+    };
+    ImplicitSurface::builder(move |p| (p - c1).length().min((p - c2).length()) - 1.0, bs)
+        .dm_inf_hint(0.5)
+        .build()
+        .context("building the two-spheres surface")
+}
+
+fn open(name: &str) -> Result<(Box<dyn Surface>, Vec<i64>, bool)> {
+    if name == "two_spheres" {
+        return Ok((Box::new(two_spheres()?), vec![0, 0], true));
+    }
+    let e = oracle::catalog::entry(name).with_context(|| format!("no catalog entry {name}"))?;
+    let s = oracle::catalog::surface(name)?;
+    let genus = vec![e.genus.unwrap_or(0) as i64; e.components.unwrap_or(1) as usize];
+    Ok((Box::new(s), genus, e.smooth))
+}
+
+/// Golden counts of one case.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Golden {
+    pub case: String,
+    pub oracle: String,
+    pub sigma: f64,
+    pub angle: f64,
+    pub seed: u64,
+    pub vertices: usize,
+    pub facets: usize,
+    pub genus: Vec<i64>,
+}
+
+/// One row of the table.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub case: String,
+    pub oracle: String,
+    pub sigma: f64,
+    pub vertices: usize,
+    pub facets: usize,
+    pub time_s: f64,
+    pub min_angle_deg: f64,
+    pub max_r_over_sigma: f64,
+    pub hausdorff: Option<f64>,
+    pub hausdorff_bound: f64,
+    pub eps_achieved: Option<f64>,
+    pub genus: Vec<i64>,
+    pub genus_ok: bool,
+    pub manifold_ok: bool,
+    pub verify_ok: bool,
+    pub verify_failures: Vec<String>,
+    pub expected_failures: Vec<String>,
+    pub golden: String,
+    pub golden_ok: bool,
+    /// Every reason this row fails (empty: the row passes).
+    pub failures: Vec<String>,
+}
+
+struct Job {
+    surface: &'static SurfaceCase,
+    size: &'static str,
+    sigma: f64,
+    oracle: OracleKind,
+}
+
+fn oracle_name(o: OracleKind) -> &'static str {
+    match o {
+        OracleKind::Bipolar => "bipolar",
+        OracleKind::Intersection => "intersection",
+    }
+}
+
+fn golden_dir(a: &RegressArgs) -> PathBuf {
+    a.golden_dir.clone().unwrap_or_else(|| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join("fixtures")
+            .join("golden")
+    })
+}
+
+fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
+    let case = format!("{}-{}", j.surface.name, j.size);
+    let oname = oracle_name(j.oracle);
+    let (surface, genus_expected, _smooth) = open(j.surface.name)?;
+    let surface = surface.as_ref();
+    let opts = MeshOptions {
+        criteria: Criteria {
+            size: Some(Sizing::Constant(j.sigma)),
+            min_angle_deg: 30.0,
+            max_distance: None,
+        },
+        oracle: j.oracle,
+        manifold: true,
+        seed: 0,
+        ..Default::default()
+    };
+    let res = rdt_mesher::mesh(surface, &opts).with_context(|| format!("meshing {case}"))?;
+    let st = &res.stats;
+    let max_r = res
+        .balls
+        .iter()
+        .map(|b| b.radius / j.sigma)
+        .fold(0.0, f64::max);
+    let dm = surface.dm_inf_hint();
+    let balls = res
+        .balls
+        .iter()
+        .enumerate()
+        .map(|(i, b)| verify::SurfaceBall {
+            facet: i,
+            center: b.center,
+            radius: b.radius,
+        })
+        .collect();
+    let vopts = verify::Options {
+        samples_per_edge: 2,
+        surface_balls: Some(balls),
+        epsilon: dm.map(|d| j.sigma / d),
+        min_angle_deg: Some(30.0 - 1e-9),
+        max_hausdorff: Some(j.sigma),
+        seed: 0,
+        ..Default::default()
+    };
+    let rep = verify::check_against(&res.mesh, surface, &vopts);
+    let mut failures = Vec::new();
+    let topo = rep.topology.as_ref();
+    let manifold_ok = topo.is_some_and(|t| t.is_closed_oriented_manifold());
+    let mut genus: Vec<i64> = topo
+        .map(|t| t.genera().iter().map(|g| g.unwrap_or(-1)).collect())
+        .unwrap_or_default();
+    genus.sort_unstable();
+    let genus_ok = genus == genus_expected;
+    if !manifold_ok {
+        failures.push("not a closed oriented manifold".to_string());
+    }
+    if !genus_ok {
+        failures.push(format!("genus {genus:?}, expected {genus_expected:?}"));
+    }
+    if res.mesh.triangles.is_empty() || st.min_angle_deg < 30.0 {
+        failures.push(format!("min angle {:.3} < 30", st.min_angle_deg));
+    }
+    if max_r > 1.0 + 1e-9 {
+        failures.push(format!("max r/sigma {max_r:.4} > 1"));
+    }
+    if st.control_points_missing > 0 {
+        failures.push(format!(
+            "{} control points are not vertices",
+            st.control_points_missing
+        ));
+    }
+    if let Some(s) = &st.stopped_by {
+        failures.push(format!("stopped by {s}"));
+    }
+    if !st.unmet.is_empty() {
+        failures.push(format!("unmet: {}", st.unmet.join("; ")));
+    }
+    // The checks that must have run (a SKIP would hide a guarantee).
+    let mut required = vec![
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "self-intersections",
+        "angles",
+        "hausdorff",
+        "components-sampled",
+    ];
+    if dm.is_some() {
+        required.push("loose-epsilon");
+    }
+    for name in required {
+        if rep.status(name) != Some(verify::Status::Pass) {
+            failures.push(format!("verify check {name} did not pass"));
+        }
+    }
+    let mut verify_failures = Vec::new();
+    let mut expected_failures = Vec::new();
+    for f in rep.failures() {
+        let expected = j
+            .surface
+            .expected_fail
+            .iter()
+            .any(|(size, check, _)| (size.is_empty() || *size == j.size) && *check == f);
+        if expected {
+            expected_failures.push(f.to_string());
+        } else {
+            verify_failures.push(f.to_string());
+        }
+    }
+    let verify_ok = verify_failures.is_empty();
+    if !verify_ok {
+        failures.push(format!("verify FAIL: {}", verify_failures.join(", ")));
+    }
+    let hausdorff = rep.geometry.as_ref().map(|g| g.hausdorff);
+    let th47 = rep
+        .hausdorff_bound
+        .as_ref()
+        .filter(|h| h.applicable)
+        .map(|h| h.bound);
+    let hausdorff_bound = th47.map_or(j.sigma, |b| b.min(j.sigma));
+
+    // Golden file.
+    let gpath = gdir.join(format!("{case}-{oname}.json"));
+    let current = Golden {
+        case: case.clone(),
+        oracle: oname.to_string(),
+        sigma: j.sigma,
+        angle: 30.0,
+        seed: 0,
+        vertices: st.vertices,
+        facets: st.facets,
+        genus: genus.clone(),
+    };
+    let (golden, golden_ok) = if a.update_golden {
+        let text = serde_json::to_string_pretty(&current)? + "\n";
+        std::fs::write(&gpath, text).with_context(|| format!("writing {}", gpath.display()))?;
+        ("written".to_string(), true)
+    } else {
+        match std::fs::read_to_string(&gpath) {
+            Err(_) => (
+                format!(
+                    "missing {} (run `cargo xtask regress --update-golden`)",
+                    gpath.display()
+                ),
+                false,
+            ),
+            Ok(text) => match serde_json::from_str::<Golden>(&text) {
+                Err(e) => (
+                    format!("{}: not a golden file: {e}", gpath.display()),
+                    false,
+                ),
+                Ok(g) => compare_golden(&g, &current, a.tolerance),
+            },
+        }
+    };
+    if !golden_ok {
+        failures.push(format!("golden: {golden}"));
+    }
+    Ok(Row {
+        case,
+        oracle: oname.to_string(),
+        sigma: j.sigma,
+        vertices: st.vertices,
+        facets: st.facets,
+        time_s: st.time_total_s,
+        min_angle_deg: st.min_angle_deg,
+        max_r_over_sigma: max_r,
+        hausdorff,
+        hausdorff_bound,
+        eps_achieved: rep.certificate.as_ref().map(|c| c.eps_achieved),
+        genus,
+        genus_ok,
+        manifold_ok,
+        verify_ok,
+        verify_failures,
+        expected_failures,
+        golden,
+        golden_ok,
+        failures,
+    })
+}
+
+/// Compare counts with the golden file: (description, ok).
+pub fn compare_golden(g: &Golden, cur: &Golden, tol: f64) -> (String, bool) {
+    if g.sigma != cur.sigma || g.angle != cur.angle || g.seed != cur.seed {
+        return (
+            format!(
+                "golden made with sigma {} angle {} seed {}, case now sigma {} angle {} seed {}: \
+                 run --update-golden",
+                g.sigma, g.angle, g.seed, cur.sigma, cur.angle, cur.seed
+            ),
+            false,
+        );
+    }
+    let rel = |a: usize, b: usize| (a as f64 - b as f64).abs() / (b.max(1) as f64);
+    let (dv, df) = (rel(cur.vertices, g.vertices), rel(cur.facets, g.facets));
+    let ok = dv <= tol && df <= tol && g.genus == cur.genus;
+    let desc = format!(
+        "V {:+.1}% F {:+.1}% vs {}/{}{}",
+        100.0 * (cur.vertices as f64 / g.vertices.max(1) as f64 - 1.0),
+        100.0 * (cur.facets as f64 / g.facets.max(1) as f64 - 1.0),
+        g.vertices,
+        g.facets,
+        if g.genus == cur.genus {
+            String::new()
+        } else {
+            format!(", genus {:?} vs golden {:?}", cur.genus, g.genus)
+        }
+    );
+    (desc, ok)
+}
+
+fn yes(b: bool) -> &'static str {
+    if b { "yes" } else { "NO" }
+}
+
+pub fn run(a: &RegressArgs) -> Result<()> {
+    let mut gdir = golden_dir(a);
+    if a.update_golden {
+        std::fs::create_dir_all(&gdir)
+            .with_context(|| format!("cannot create {}", gdir.display()))?;
+    }
+    if let Ok(c) = gdir.canonicalize() {
+        gdir = c;
+    }
+    if !(a.tolerance >= 0.0 && a.tolerance.is_finite()) {
+        bail!(
+            "--tolerance {}: must be a non-negative number, e.g. 0.05",
+            a.tolerance
+        );
+    }
+    let mut jobs = Vec::new();
+    for s in SURFACES {
+        for (i, &(size, sigma)) in s.sizes.iter().enumerate() {
+            if a.quick && i > 0 {
+                continue;
+            }
+            for oracle in [OracleKind::Bipolar, OracleKind::Intersection] {
+                let name = format!("{}-{size}", s.name);
+                if a.filter
+                    .as_ref()
+                    .is_some_and(|f| !name.contains(f.as_str()))
+                {
+                    continue;
+                }
+                jobs.push(Job {
+                    surface: s,
+                    size,
+                    sigma,
+                    oracle,
+                });
+            }
+        }
+    }
+    if jobs.is_empty() {
+        bail!("no case matches --filter {:?}", a.filter);
+    }
+    let bar = if a.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(jobs.len() as u64);
+        b.set_style(
+            ProgressStyle::with_template("{bar:30} {pos}/{len} cases {elapsed} {msg}")
+                .expect("valid template"),
+        );
+        b.enable_steady_tick(Duration::from_millis(200));
+        b
+    };
+    let t0 = std::time::Instant::now();
+    let mut rows = Vec::new();
+    for j in &jobs {
+        bar.set_message(format!(
+            "{}-{} {}",
+            j.surface.name,
+            j.size,
+            oracle_name(j.oracle)
+        ));
+        let row = run_case(j, a, &gdir)?;
+        bar.inc(1);
+        rows.push(row);
+    }
+    bar.finish_and_clear();
+
+    // Same topology with both oracles.
+    let mut cross = Vec::new();
+    for (i, r) in rows.iter().enumerate() {
+        if let Some(o) = rows[i + 1..].iter().find(|o| o.case == r.case)
+            && o.genus != r.genus
+        {
+            cross.push(format!(
+                "{}: genus {:?} (bipolar) vs {:?} (intersection)",
+                r.case, r.genus, o.genus
+            ));
+        }
+    }
+
+    println!(
+        "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7} {:>7} {:>9} {:>9} {:>8} {:>7} {:>5} {:>8} {:>7}  golden",
+        "case",
+        "oracle",
+        "sigma",
+        "verts",
+        "facets",
+        "time s",
+        "min ang",
+        "max r/sig",
+        "Hausdorff",
+        "H bound",
+        "eps",
+        "genus",
+        "manifold",
+        "verify"
+    );
+    for r in &rows {
+        let verify = match (r.verify_ok, r.expected_failures.is_empty()) {
+            (true, true) => "PASS",
+            (true, false) => "PASS*",
+            (false, _) => "FAIL",
+        };
+        println!(
+            "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7.2} {:>7.2} {:>9.4} {:>9} {:>8.2e} {:>7} {:>5} {:>8} {:>7}  {}{}",
+            r.case,
+            r.oracle,
+            r.sigma,
+            r.vertices,
+            r.facets,
+            r.time_s,
+            r.min_angle_deg,
+            r.max_r_over_sigma,
+            r.hausdorff.map_or("-".into(), |h| format!("{h:.2e}")),
+            r.hausdorff_bound,
+            r.eps_achieved.map_or("-".into(), |e| format!("{e:.4}")),
+            yes(r.genus_ok),
+            yes(r.manifold_ok),
+            verify,
+            if r.golden_ok { "ok " } else { "NO " },
+            r.golden
+        );
+    }
+    let mut notes: Vec<String> = Vec::new();
+    for s in SURFACES {
+        for (size, check, why) in s.expected_fail {
+            if rows.iter().any(|r| {
+                r.case.starts_with(s.name) && r.expected_failures.iter().any(|f| f == check)
+            }) {
+                let sz = if size.is_empty() { "all sizes" } else { size };
+                notes.push(format!(
+                    "* {} ({sz}): {check} fails as expected: {why}",
+                    s.name
+                ));
+            }
+        }
+    }
+    for n in &notes {
+        println!("{n}");
+    }
+    let failed: Vec<&Row> = rows.iter().filter(|r| !r.failures.is_empty()).collect();
+    for r in &failed {
+        println!("FAIL {} {}: {}", r.case, r.oracle, r.failures.join("; "));
+    }
+    for c in &cross {
+        println!("FAIL oracles disagree: {c}");
+    }
+    if let Some(p) = &a.json {
+        let j = serde_json::json!({ "rows": rows, "oracle_disagreements": cross });
+        std::fs::write(p, serde_json::to_string_pretty(&j)?)
+            .with_context(|| format!("cannot write {}", p.display()))?;
+    }
+    let nfail = failed.len() + cross.len();
+    println!(
+        "regress{}: {} cases, {} passed, {} failed{} in {:.1} s{}",
+        if a.quick { " --quick" } else { "" },
+        rows.len(),
+        rows.len() - failed.len(),
+        failed.len(),
+        if cross.is_empty() {
+            String::new()
+        } else {
+            format!(", {} oracle disagreements", cross.len())
+        },
+        t0.elapsed().as_secs_f64(),
+        if a.update_golden {
+            format!("; golden files written to {}", gdir.display())
+        } else {
+            String::new()
+        }
+    );
+    if nfail > 0 {
+        bail!("regression suite: {nfail} failures");
+    }
+    Ok(())
+}
