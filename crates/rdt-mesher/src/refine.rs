@@ -232,6 +232,9 @@ impl PartialOrd for QEntry {
     }
 }
 
+/// Rounds of random rays (section 6.4.3) per control point before it is reported missing.
+const MAX_RAY_ROUNDS: u32 = 16;
+
 /// Manifold passes without a decrease of the non-manifold count before the patch gives up.
 const MANIFOLD_STALL_PASSES: u32 = 6;
 
@@ -320,6 +323,7 @@ pub(crate) struct Refiner<'a> {
     facet_mask: Vec<u8>,
     manifold_best: usize,
     manifold_stall: u32,
+    ray_attempts: Vec<u32>,
     round: u32,
     crossings_buf: Vec<DVec3>,
     control: Vec<VertexId>,
@@ -349,6 +353,7 @@ impl<'a> Refiner<'a> {
             facet_mask: Vec::new(),
             manifold_best: usize::MAX,
             manifold_stall: 0,
+            ray_attempts: Vec::new(),
             round: 0,
             crossings_buf: Vec::new(),
             control: Vec::new(),
@@ -856,10 +861,20 @@ impl<'a> Refiner<'a> {
     fn shoot_control_rays(&mut self) -> Result<bool, MeshError> {
         let mut any = false;
         let control = self.control.clone();
-        for v in control {
+        if self.ray_attempts.len() < control.len() {
+            self.ray_attempts.resize(control.len(), 0);
+        }
+        for (k, v) in control.into_iter().enumerate() {
             if self.vertex_facets.get(v as usize).copied().unwrap_or(0) > 0 {
                 continue;
             }
+            // Lemma 6.6 needs a smooth surface; near a singular point a control point may
+            // never become a vertex and the rays would insert points without end: give up
+            // after a few rounds and report the control point as missing.
+            if self.ray_attempts[k] >= MAX_RAY_ROUNDS {
+                continue;
+            }
+            self.ray_attempts[k] += 1;
             if self.budget_exceeded() {
                 return Ok(false);
             }
