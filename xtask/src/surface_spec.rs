@@ -19,7 +19,7 @@ pub enum AsKind {
 #[derive(clap::Args, Debug, Default, Clone)]
 pub struct SurfaceOptions {
     /// Image iso value (default: halfway for binary images; required otherwise).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub iso: Option<f64>,
     /// Image: mesh the boundary of this label.
     #[arg(long)]
