@@ -11,6 +11,14 @@
 //! volume (CGAL's `seconds` also excludes its INR read). The NIfTI read of the same volume
 //! (`.nii`, uncompressed, from a temporary file), the scan alone and the d_M^inf estimate (not
 //! needed with a given size) are reported separately in `extra` and on stderr.
+//!
+//! Measured 2026-11-22 (`cargo xtask bench image --runs 5 --vs-cgal`, 2 shared vCPUs, load ~6,
+//! so only same-run ratios mean anything): 128^3: 18 479 vertices in 0.56 s vs CGAL 19 493 in
+//! 1.30 s (2.3x); 256^3: 24 647 vertices in 1.47 s vs CGAL 25 869 in 2.62 s (1.8x); separately
+//! .nii read 0.004 / 0.06 s, scan 0.002 / 0.03 s, d_M^inf 0.08 / 1.07 s. The targets
+//! (5x CGAL at 128^3, 256^3 in < 1 s) are not met; a profile of the 128^3 run puts the image
+//! oracle at ~13% of the samples, the mesher's bookkeeping, Delaunay and its per-call timers
+//! (clock_gettime, ~14%) at the rest.
 
 use crate::bench::{BenchArgs, Row, cgal_rows, median};
 use anyhow::{Context, Result};
