@@ -578,7 +578,8 @@ impl Surface for ImageSurface {
     }
 
     /// One point on every surface component found by the voxel scan (see [`Topology`]), plus up
-    /// to 64 more crossing points picked deterministically from `seed`.
+    /// to 64 points in all with crossing points picked deterministically from `seed`
+    /// ([`Topology::seed_points`]).
     fn seed_points(&self, seed: u64) -> Vec<DVec3> {
         self.topology().seed_points(seed)
     }
