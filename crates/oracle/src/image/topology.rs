@@ -60,10 +60,9 @@ impl Topology {
         let n = self.extra_seeds.len();
         if n <= k {
             out.extend_from_slice(&self.extra_seeds);
-        } else if k > 0 {
+        } else if let Some(step) = n.checked_div(k) {
             let mut rng = SplitMix64(seed ^ 0x001A_A6E5_EED5);
             let start = (rng.next_u64() % n as u64) as usize;
-            let step = n / k;
             out.extend((0..k).map(|i| self.extra_seeds[(start + i * step) % n]));
         }
         out
