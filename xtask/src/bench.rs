@@ -40,7 +40,7 @@ pub struct Row {
     pub extra: serde_json::Value,
 }
 
-fn median(v: &mut [f64]) -> f64 {
+pub(crate) fn median(v: &mut [f64]) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     if v.is_empty() {
         f64::NAN
@@ -119,7 +119,7 @@ fn run_cgal(prog: &str, args: &[String]) -> Result<serde_json::Value> {
     Ok(serde_json::from_str(line)?)
 }
 
-fn cgal_rows(
+pub(crate) fn cgal_rows(
     group: &str,
     case: &str,
     prog: &str,

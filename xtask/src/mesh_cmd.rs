@@ -15,7 +15,7 @@ pub enum OracleArg {
     Intersection,
 }
 
-#[derive(clap::Args, Debug)]
+#[derive(clap::Args, Debug, Clone)]
 #[command(allow_negative_numbers = true)]
 pub struct MeshArgs {
     /// Surface to mesh: `implicit:NAME` (catalog), `implicit:"EXPR"` (with --bounding-sphere),
@@ -73,6 +73,47 @@ pub struct MeshArgs {
     pub quiet: bool,
     #[command(flatten)]
     pub surface: SurfaceOptions,
+    /// Image: `all` meshes every label present except 0, one file per label
+    /// (NAME_label<L>.ply, or -o's stem with _label<L>).
+    #[arg(long, conflicts_with = "label")]
+    pub labels: Option<String>,
+}
+
+/// `--labels all`: one run (and one output file) per label of the image.
+fn run_labels(a: &MeshArgs, which: &str) -> Result<()> {
+    let spec = a.input.clone().unwrap_or_default();
+    if which != "all" {
+        bail!("--labels {which}: only `--labels all` is supported; use --label L for one label");
+    }
+    let labels = surface_spec::image_labels(&spec, &a.surface)?;
+    if labels.is_empty() {
+        bail!("--labels all: {spec} has no label other than the background 0: nothing to mesh");
+    }
+    eprintln!("note: {} label(s) to mesh: {labels:?}", labels.len());
+    for l in labels {
+        let mut b = a.clone();
+        b.labels = None;
+        b.surface.label = Some(l);
+        let out = a.output.clone().unwrap_or_else(|| {
+            PathBuf::from(format!(
+                "out/{}.ply",
+                surface_spec::stem(std::path::Path::new(&spec))
+            ))
+        });
+        let ext = out
+            .extension()
+            .map_or("ply".into(), |e| e.to_string_lossy().to_string());
+        let stem = out
+            .file_stem()
+            .map_or("mesh".into(), |e| e.to_string_lossy().to_string());
+        b.output = Some(out.with_file_name(format!("{stem}_label{l}.{ext}")));
+        b.report = a
+            .report
+            .as_ref()
+            .map(|r| r.with_extension(format!("label{l}.json")));
+        run(&b).with_context(|| format!("label {l}"))?;
+    }
+    Ok(())
 }
 
 pub fn parse_vec3(s: &str, what: &str) -> Result<Vec<f64>> {
@@ -119,6 +160,9 @@ pub fn read_xyz(path: &PathBuf) -> Result<Vec<DVec3>> {
 }
 
 pub fn run(a: &MeshArgs) -> Result<()> {
+    if let Some(which) = &a.labels {
+        return run_labels(a, which);
+    }
     let spec = a
         .input
         .clone()
@@ -276,6 +320,14 @@ pub fn run(a: &MeshArgs) -> Result<()> {
         genus.join(", "),
         out_path.display()
     );
+    if let (Some(scan), Some(t)) = (opened.components, topo)
+        && t.components.len() < scan as usize
+    {
+        println!(
+            "warning: the mesh has {} of the {scan} surface components found by the voxel scan; components smaller than the size bound may be missed (try a smaller --size)",
+            t.components.len()
+        );
+    }
     if let Some(c) = &check {
         if !c.passed() {
             println!("verify: FAIL: {}", c.failures().join(", "));

@@ -19,7 +19,7 @@ pub enum AsKind {
 #[derive(clap::Args, Debug, Default, Clone)]
 pub struct SurfaceOptions {
     /// Image iso value (default: halfway for binary images; required otherwise).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub iso: Option<f64>,
     /// Image: mesh the boundary of this label.
     #[arg(long)]
@@ -82,7 +82,7 @@ pub fn catalog_surface(name: &str) -> Result<Box<dyn Surface>> {
     Ok(Box::new(oracle::catalog::surface(name)?))
 }
 
-fn stem(p: &Path) -> String {
+pub fn stem(p: &Path) -> String {
     let s = p
         .file_name()
         .map(|s| s.to_string_lossy().to_string())
@@ -91,6 +91,42 @@ fn stem(p: &Path) -> String {
         .rsplit_once('.')
         .map(|(a, _)| a.to_string())
         .unwrap_or(s)
+}
+
+/// Voxel spacing and raw-volume options of an image input.
+fn image_load_options(o: &SurfaceOptions) -> Result<LoadOptions> {
+    let spacing = o
+        .spacing
+        .as_deref()
+        .map(|s| triple::<f64>(s, "--spacing"))
+        .transpose()?;
+    let raw = match (&o.dims, &o.dtype) {
+        (Some(d), Some(t)) => Some(RawOptions {
+            dims: triple::<usize>(d, "--dims")?,
+            dtype: t
+                .parse::<Dtype>()
+                .map_err(|e| anyhow::anyhow!("--dtype {t}: {e}"))?,
+            big_endian: o.big_endian,
+            offset: 0,
+        }),
+        (None, None) => None,
+        _ => bail!("a raw volume needs both --dims nx,ny,nz and --dtype TYPE"),
+    };
+    Ok(LoadOptions { spacing, raw })
+}
+
+/// Labels present in an image (`--labels all`), without the background label 0.
+pub fn image_labels(spec: &str, o: &SurfaceOptions) -> Result<Vec<i64>> {
+    let vol = oracle::image::load_volume(Path::new(spec), &image_load_options(o)?)
+        .with_context(|| format!("opening image {spec}"))?;
+    let labels = vol
+        .labels()
+        .with_context(|| format!("--labels all: {spec} is not a label image"))?;
+    Ok(labels
+        .into_iter()
+        .map(|(l, _)| l)
+        .filter(|&l| l != 0)
+        .collect())
 }
 
 pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Result<Opened> {
@@ -150,24 +186,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
         || lower.ends_with(".raw")
         || o.dims.is_some();
     if is_image {
-        let spacing = o
-            .spacing
-            .as_deref()
-            .map(|s| triple::<f64>(s, "--spacing"))
-            .transpose()?;
-        let raw = match (&o.dims, &o.dtype) {
-            (Some(d), Some(t)) => Some(RawOptions {
-                dims: triple::<usize>(d, "--dims")?,
-                dtype: t
-                    .parse::<Dtype>()
-                    .map_err(|e| anyhow::anyhow!("--dtype {t}: {e}"))?,
-                big_endian: o.big_endian,
-                offset: 0,
-            }),
-            (None, None) => None,
-            _ => bail!("a raw volume needs both --dims nx,ny,nz and --dtype TYPE"),
-        };
-        let load = LoadOptions { spacing, raw };
+        let load = image_load_options(o)?;
         let img = ImageSurface::open(
             path,
             &load,

@@ -1109,3 +1109,26 @@ fn stats_over_many_chunks() {
     let e = vol.stats().unwrap_err();
     assert!(matches!(e, ImageError::NaN { index, .. } if index == vol.unindex(300_001)));
 }
+
+/// Component seeds always come first and are never diluted: seed_points has at most
+/// `Topology::SEED_BUDGET` points when there are fewer components, so the mesher's
+/// farthest-point thinning of control points (64 by default) keeps every component seed.
+#[test]
+fn seed_points_keep_every_component_seed_within_the_budget() {
+    let s = ImageSurface::open(
+        fixtures().join("nilearn_motor_10426.nii.gz"),
+        &Default::default(),
+        &ImageOptions {
+            iso: Some(3.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let t = s.topology();
+    assert!(t.component_seeds.len() >= 2 && t.extra_seeds.len() > 64);
+    for seed in [0, 1, 99] {
+        let p = s.seed_points(seed);
+        assert_eq!(p.len(), oracle::image::Topology::SEED_BUDGET);
+        assert_eq!(p[..t.component_seeds.len()], t.component_seeds[..]);
+    }
+}

@@ -49,20 +49,27 @@ pub struct Topology {
 }
 
 impl Topology {
-    /// All component seeds plus up to 64 extra seeds chosen from `seed` (deterministic).
+    /// All component seeds, then extra seeds chosen from `seed` (deterministic) up to
+    /// [`Topology::SEED_BUDGET`] points in all. The budget matches the mesher's default number
+    /// of control points (`MeshOptions::max_control_points`), which thins longer lists by
+    /// farthest-point selection (that used to drop seeds of small components next to big
+    /// ones): with at most 64 components, every component seed is kept.
     pub fn seed_points(&self, seed: u64) -> Vec<DVec3> {
         let mut out = self.component_seeds.clone();
+        let k = Self::SEED_BUDGET.saturating_sub(out.len());
         let n = self.extra_seeds.len();
-        if n <= 64 {
+        if n <= k {
             out.extend_from_slice(&self.extra_seeds);
-        } else {
+        } else if let Some(step) = n.checked_div(k) {
             let mut rng = SplitMix64(seed ^ 0x001A_A6E5_EED5);
             let start = (rng.next_u64() % n as u64) as usize;
-            let step = n / 64;
-            out.extend((0..64).map(|i| self.extra_seeds[(start + i * step) % n]));
+            out.extend((0..k).map(|i| self.extra_seeds[(start + i * step) % n]));
         }
         out
     }
+
+    /// Total number of seed points [`Topology::seed_points`] aims at.
+    pub const SEED_BUDGET: usize = 64;
 }
 
 struct Dsu(Vec<u32>);
