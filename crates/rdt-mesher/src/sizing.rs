@@ -132,14 +132,47 @@ impl MedialAxisEstimate {
 pub struct TwoPass {
     pub first: MeshResult,
     pub second: MeshResult,
+    /// The constant size of the first pass, eps * d_M^inf.
     pub sigma0: f64,
+    /// The second pass's factor eps' = [`EPS_PRIME_FACTOR`] * eps.
+    pub eps_prime: f64,
     pub medial: Arc<MedialAxisEstimate>,
 }
 
+/// eps' / eps in the second pass (section 6.5: "some eps' slightly smaller than eps").
+pub const EPS_PRIME_FACTOR: f64 = 0.9;
+/// lambda / sigma_0 for the lambda-medial axis of the first-pass sample. Measured (tests/sizing.rs):
+/// at 2.5, d_{M_lambda} is within 7% of the true d_M on the sphere, torus and ellipsoid sampled
+/// at sigma_0 = 0.09 d_M^inf; at 1, sample noise keeps spurious Voronoi vertices near S.
+pub const LAMBDA_FACTOR: f64 = 2.5;
+/// Control points per component of the first-pass mesh (farthest-point spread).
+pub const CONTROL_PER_COMPONENT: usize = 8;
+
+/// The second pass's size field sigma(x) = max(sigma_0, eps' * d_{M_lambda}(x)).
+///
+/// It is 1-Lipschitz: d_{M_lambda} (a distance to a set) is 1-Lipschitz, so eps' d_{M_lambda} is
+/// eps'-Lipschitz with eps' < 1, and the max of an eps'-Lipschitz function and a constant is
+/// eps'-Lipschitz. It is positive (>= sigma_0), as lemma 6.2 needs.
+pub fn adaptive_field(
+    medial: Arc<MedialAxisEstimate>,
+    eps_prime: f64,
+    sigma0: f64,
+) -> Arc<dyn Fn(DVec3) -> f64 + Send + Sync> {
+    Arc::new(move |p: DVec3| (eps_prime * medial.distance(p)).max(sigma0))
+}
+
+fn check_eps(eps: f64) -> Result<(), MeshError> {
+    if !(eps > 0.0 && eps < 1.0) {
+        return Err(MeshError::InvalidSize(eps));
+    }
+    Ok(())
+}
+
 /// Two-pass sizing of section 6.5: a uniform pass with sigma_0 = eps * dm_inf, then the
-/// lambda-medial axis of its sample, then a pass with sigma = max(sigma_0, eps' * d_{M_lambda}),
-/// eps' = 0.9 eps (1-Lipschitz since a distance function is), with control points taken from
-/// the first pass's mesh (spread vertices of every component).
+/// lambda-medial axis (lambda = [`LAMBDA_FACTOR`] sigma_0) of its vertices, then a pass with the
+/// 1-Lipschitz [`adaptive_field`] (eps' = 0.9 eps), with control points taken from the first
+/// pass's mesh ([`CONTROL_PER_COMPONENT`] spread vertices of every component). `eps` must be in
+/// (0, 1) and `dm_inf` positive. `base` gives everything else (oracle, angle, budgets, seed).
 pub fn two_pass(
     surface: &dyn Surface,
     eps: f64,
@@ -147,9 +180,7 @@ pub fn two_pass(
     base: &MeshOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<TwoPass, MeshError> {
-    if !(eps > 0.0 && eps.is_finite()) {
-        return Err(MeshError::InvalidSize(eps));
-    }
+    check_eps(eps)?;
     if !(dm_inf > 0.0 && dm_inf.is_finite()) {
         return Err(MeshError::InvalidSize(dm_inf));
     }
@@ -160,26 +191,83 @@ pub fn two_pass(
         ..base.criteria.clone()
     };
     let first = mesh_with_progress(surface, &o1, progress)?;
-    let lambda = 2.5 * sigma0;
-    let medial = Arc::new(MedialAxisEstimate::new(
-        &first.mesh.vertices,
-        lambda,
-        surface.bounding_sphere(),
-    )?);
-    let m2 = medial.clone();
-    let eps2 = 0.9 * eps;
-    let field = move |p: DVec3| (eps2 * m2.distance(p)).max(sigma0);
-    let mut o2 = base.clone();
-    o2.criteria = Criteria {
-        size: Some(Sizing::Field(Arc::new(field))),
-        ..base.criteria.clone()
-    };
-    o2.control_points = Some(crate::topology::component_representatives(&first.mesh, 8));
-    let second = mesh_with_progress(surface, &o2, progress)?;
+    let (second, medial, eps_prime) = second_pass(surface, &first, eps, sigma0, base, progress)?;
     Ok(TwoPass {
         first,
         second,
         sigma0,
+        eps_prime,
         medial,
     })
+}
+
+/// The second pass of [`two_pass`] from a given first pass (sampled at constant `sigma0`).
+pub fn second_pass(
+    surface: &dyn Surface,
+    first: &MeshResult,
+    eps: f64,
+    sigma0: f64,
+    base: &MeshOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(MeshResult, Arc<MedialAxisEstimate>, f64), MeshError> {
+    check_eps(eps)?;
+    let medial = Arc::new(MedialAxisEstimate::new(
+        &first.mesh.vertices,
+        LAMBDA_FACTOR * sigma0,
+        surface.bounding_sphere(),
+    )?);
+    let eps_prime = EPS_PRIME_FACTOR * eps;
+    let mut o2 = base.clone();
+    o2.criteria = Criteria {
+        size: Some(Sizing::Field(adaptive_field(
+            medial.clone(),
+            eps_prime,
+            sigma0,
+        ))),
+        ..base.criteria.clone()
+    };
+    o2.control_points = Some(crate::topology::component_representatives(
+        &first.mesh,
+        CONTROL_PER_COMPONENT,
+    ));
+    let second = mesh_with_progress(surface, &o2, progress)?;
+    Ok((second, medial, eps_prime))
+}
+
+/// An estimate of d_M^inf for a surface without a known value: mesh it uniformly with
+/// sigma = `bounding radius / 20`, take the minimum over the sample of d_{M_lambda}; while the
+/// sample is too coarse for that estimate (sigma > 0.3 x estimate), mesh again at
+/// sigma = 0.3 x estimate (at most 4 passes). Returns the estimate and the last sigma used.
+/// An estimate, not a bound: it is within a few percent of the truth on the sphere, torus and
+/// ellipsoid (tests/sizing.rs), and meaningless on singular surfaces (d_M^inf = 0 there).
+pub fn estimate_dm_inf(surface: &dyn Surface, base: &MeshOptions) -> Result<(f64, f64), MeshError> {
+    let mut sigma = surface.bounding_sphere().radius / 20.0;
+    let mut est = f64::INFINITY;
+    for _ in 0..4 {
+        let mut o = base.clone();
+        o.criteria = Criteria {
+            size: Some(Sizing::Constant(sigma)),
+            ..base.criteria.clone()
+        };
+        let r = mesh_with_progress(surface, &o, &mut |_| {})?;
+        let m = MedialAxisEstimate::new(
+            &r.mesh.vertices,
+            LAMBDA_FACTOR * sigma,
+            surface.bounding_sphere(),
+        )?;
+        est = r
+            .mesh
+            .vertices
+            .iter()
+            .map(|&p| m.distance(p))
+            .fold(f64::INFINITY, f64::min);
+        if !(est > 0.0 && est.is_finite()) {
+            return Err(MeshError::InvalidSize(est));
+        }
+        if sigma <= 0.3 * est * 1.000_001 {
+            break;
+        }
+        sigma = 0.3 * est;
+    }
+    Ok((est, sigma))
 }
