@@ -37,10 +37,10 @@ pub fn smallest_enclosing_radius(p: &[DVec3]) -> f64 {
     if best.is_finite() {
         return best;
     }
-    if n == 4 {
-        if let Some(c) = tet_circumcenter(p[0], p[1], p[2], p[3]) {
-            return c.distance(p[0]);
-        }
+    if n == 4
+        && let Some(c) = tet_circumcenter(p[0], p[1], p[2], p[3])
+    {
+        return c.distance(p[0]);
     }
     best
 }
