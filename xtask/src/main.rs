@@ -6,6 +6,7 @@ mod bench;
 mod bench_image;
 mod delaunay_cmd;
 mod mesh_cmd;
+mod paper_table;
 mod surface_spec;
 mod verify_cmd;
 
@@ -30,6 +31,8 @@ enum Cmd {
     Delaunay(delaunay_cmd::DelaunayArgs),
     /// Timing tables (medians, ratios against baselines measured in the same run).
     Bench(bench::BenchArgs),
+    /// The paper's Table 1 on this machine (writes docs/paper-table.{json,md}).
+    PaperTable(paper_table::PaperTableArgs),
 }
 
 fn main() {
@@ -39,6 +42,7 @@ fn main() {
         Cmd::Delaunay(a) => delaunay_cmd::run(a),
         Cmd::Verify(a) => verify_cmd::run(a),
         Cmd::Bench(a) => bench::run(a),
+        Cmd::PaperTable(a) => paper_table::run(a),
     };
     if let Err(e) = r {
         // One readable line, non-zero exit.
