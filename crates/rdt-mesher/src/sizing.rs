@@ -61,6 +61,12 @@ fn tet_circumcenter(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Option<DVec3> {
 /// The lambda-medial axis M_lambda(E) of a sample E, approximated by the Voronoi vertices of E
 /// whose nearest sample points (the vertices of their Delaunay cell) have a smallest enclosing
 /// ball of radius >= lambda. The distance to it estimates d_M (section 6.5).
+///
+/// The kept vertices are thinned to one per cell of a grid of step h = lambda / 25 (the first
+/// in cell order), which changes the distance by at most h sqrt(3) / 2 < 0.035 lambda and makes
+/// the nearest-vertex queries of the second pass several times faster (the Voronoi vertices
+/// of a dense sample cluster along the medial axis). The distance to a set is 1-Lipschitz
+/// whatever the set.
 pub struct MedialAxisEstimate {
     vertices: Vec<DVec3>,
     tree: ImmutableKdTree<f64, 3>,
@@ -83,6 +89,8 @@ impl MedialAxisEstimate {
             radius: keep.radius * 3.0,
         };
         let mut vertices = Vec::new();
+        let h = lambda / 25.0;
+        let mut seen = rustc_hash::FxHashSet::default();
         let cells: Vec<_> = tri.finite_cells().collect();
         for c in cells {
             let vs = tri.cell_vertices(c).map(|v| tri.point(v));
@@ -90,7 +98,9 @@ impl MedialAxisEstimate {
             if !cc.is_finite() || !far.contains(cc) {
                 continue;
             }
-            if smallest_enclosing_radius(&vs) >= lambda {
+            if smallest_enclosing_radius(&vs) >= lambda
+                && (h <= 0.0 || seen.insert((cc / h).floor().as_i64vec3().to_array()))
+            {
                 vertices.push(cc);
             }
         }
@@ -116,6 +126,14 @@ impl MedialAxisEstimate {
             .nearest_one::<SquaredEuclidean<f64>>()
             .execute();
         r.distance.sqrt()
+    }
+
+    /// min over `pts` of [`MedialAxisEstimate::distance`] (+inf for no points): the estimate
+    /// of d_M^inf from a sample of S.
+    pub fn min_distance(&self, pts: &[DVec3]) -> f64 {
+        pts.iter()
+            .map(|&p| self.distance(p))
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Number of Voronoi vertices kept.
@@ -255,12 +273,7 @@ pub fn estimate_dm_inf(surface: &dyn Surface, base: &MeshOptions) -> Result<(f64
             LAMBDA_FACTOR * sigma,
             surface.bounding_sphere(),
         )?;
-        est = r
-            .mesh
-            .vertices
-            .iter()
-            .map(|&p| m.distance(p))
-            .fold(f64::INFINITY, f64::min);
+        est = m.min_distance(&r.mesh.vertices);
         if !(est > 0.0 && est.is_finite()) {
             return Err(MeshError::InvalidSize(est));
         }
