@@ -252,35 +252,68 @@ pub fn second_pass(
     Ok((second, medial, eps_prime))
 }
 
-/// An estimate of d_M^inf for a surface without a known value: mesh it uniformly with
-/// sigma = `bounding radius / 20`, take the minimum over the sample of d_{M_lambda}; while the
-/// sample is too coarse for that estimate (sigma > 0.3 x estimate), mesh again at
-/// sigma = 0.3 x estimate (at most 4 passes). Returns the estimate and the last sigma used.
-/// An estimate, not a bound: it is within a few percent of the truth on the sphere, torus and
-/// ellipsoid (tests/sizing.rs), and meaningless on singular surfaces (d_M^inf = 0 there).
-pub fn estimate_dm_inf(surface: &dyn Surface, base: &MeshOptions) -> Result<(f64, f64), MeshError> {
+/// Result of [`estimate_dm_inf`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct DmInfEstimate {
+    /// min over the last complete sample of d_{M_lambda}.
+    pub value: f64,
+    /// Constant size of that sample.
+    pub sigma: f64,
+    /// Its number of vertices.
+    pub vertices: usize,
+    /// `sigma <= DM_INF_SIGMA_RATIO * value` held (else the vertex budget stopped the
+    /// refinement first, and `value` is only an upper estimate: d_{M_lambda} >= lambda always).
+    pub converged: bool,
+}
+
+/// sigma / estimate at which [`estimate_dm_inf`] stops refining.
+pub const DM_INF_SIGMA_RATIO: f64 = 0.1;
+
+/// An estimate of d_M^inf for a surface without a known value (section 6.5 applied to itself):
+/// mesh S uniformly at sigma = bounding radius / 20, take m = min over the sample of
+/// d_{M_lambda} (lambda = 2.5 sigma); while sigma > 0.1 m, mesh again at sigma = 0.1 m (each
+/// pass under `base.max_vertices`; at most 6 passes).
+///
+/// Since every kept Voronoi vertex is at distance >= lambda from the sample, m >= 2.5 sigma: a
+/// coarse sample cannot see a smaller d_M, hence the refinement down to sigma = 0.1 m, where
+/// the estimate is within 7% on the sphere, torus and ellipsoid (tests/sizing.rs). An estimate,
+/// not a bound; meaningless on singular surfaces (d_M^inf = 0 there: it decreases with sigma).
+pub fn estimate_dm_inf(
+    surface: &dyn Surface,
+    base: &MeshOptions,
+) -> Result<DmInfEstimate, MeshError> {
     let mut sigma = surface.bounding_sphere().radius / 20.0;
-    let mut est = f64::INFINITY;
-    for _ in 0..4 {
+    let mut best: Option<DmInfEstimate> = None;
+    for _ in 0..6 {
         let mut o = base.clone();
         o.criteria = Criteria {
             size: Some(Sizing::Constant(sigma)),
             ..base.criteria.clone()
         };
         let r = mesh_with_progress(surface, &o, &mut |_| {})?;
+        if r.stats.stopped_by.is_some() && best.is_some() {
+            break;
+        }
         let m = MedialAxisEstimate::new(
             &r.mesh.vertices,
             LAMBDA_FACTOR * sigma,
             surface.bounding_sphere(),
         )?;
-        est = m.min_distance(&r.mesh.vertices);
-        if !(est > 0.0 && est.is_finite()) {
-            return Err(MeshError::InvalidSize(est));
+        let value = m.min_distance(&r.mesh.vertices);
+        if !(value > 0.0 && value.is_finite()) {
+            return Err(MeshError::InvalidSize(value));
         }
-        if sigma <= 0.3 * est * 1.000_001 {
+        let converged = sigma <= DM_INF_SIGMA_RATIO * value * 1.000_001;
+        best = Some(DmInfEstimate {
+            value,
+            sigma,
+            vertices: r.mesh.vertices.len(),
+            converged,
+        });
+        if converged || r.stats.stopped_by.is_some() {
             break;
         }
-        sigma = 0.3 * est;
+        sigma = DM_INF_SIGMA_RATIO * value;
     }
-    Ok((est, sigma))
+    Ok(best.expect("at least one pass"))
 }
