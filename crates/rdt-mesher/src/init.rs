@@ -33,6 +33,8 @@ pub struct PersistentInit {
     pub facets: Vec<[DVec3; 3]>,
     /// The control point and the radius rho of its ball, per facet.
     pub balls: Vec<(DVec3, f64)>,
+    /// Points added by section 6.4.2 (other crossings of the facets' dual edges).
+    pub bipolar_insertions: usize,
 }
 
 /// The initial sample E_i of section 6.2 built around the control points E'_i (see the module
@@ -136,6 +138,9 @@ pub fn persistent_facets(
     while points.len() + opts.initial_points.len() < 8 && tries < 8 {
         seed = seed.wrapping_add(0x51ED);
         for p in oracle::roots::random_line_seeds(surface, 64, seed) {
+            if points.len() + opts.initial_points.len() >= 8 {
+                break;
+            }
             if balls.iter().all(|(x, r)| p.distance(*x) > 2.0 * r) {
                 points.push(p);
             }
@@ -143,17 +148,20 @@ pub fn persistent_facets(
         tries += 1;
     }
     // Section 6.4.2: make every persistent facet bipolar.
+    let mut bipolar_insertions = 0;
     for _round in 0..8 {
         let extra = non_bipolar_centers(surface, &points, &opts.initial_points, &facets, &balls)?;
         if extra.is_empty() {
             break;
         }
+        bipolar_insertions += extra.len();
         points.extend(extra);
     }
     Ok(PersistentInit {
         points,
         facets,
         balls,
+        bipolar_insertions,
     })
 }
 

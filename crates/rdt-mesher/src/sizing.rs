@@ -63,7 +63,7 @@ fn tet_circumcenter(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Option<DVec3> {
 /// ball of radius >= lambda. The distance to it estimates d_M (section 6.5).
 ///
 /// The kept vertices are thinned to one per cell of a grid of step h = lambda / 25 (the first
-/// in cell order), which changes the distance by at most h sqrt(3) / 2 < 0.035 lambda and makes
+/// in cell order), which changes the distance by at most h sqrt(3) < 0.07 lambda and makes
 /// the nearest-vertex queries of the second pass several times faster (the Voronoi vertices
 /// of a dense sample cluster along the medial axis). The distance to a set is 1-Lipschitz
 /// whatever the set.

@@ -269,6 +269,30 @@ fn persistent_facets_survive_torus() {
     persistent_run("torus", 0.06, OracleKind::Intersection, 1);
 }
 
+/// Two control points on the torus's outer equator: with few points, the dual Voronoi edge of
+/// each persistent facet is long and also crosses the inner side of the tube (not bipolar);
+/// section 6.4.2's step inserts those crossings, and the facets then survive with the bipolar
+/// oracle.
+#[test]
+fn persistent_facets_bipolar_step_is_exercised() {
+    let s = catalog::surface("torus").unwrap();
+    let control = vec![1.3 * DVec3::X, -1.3 * DVec3::X];
+    let opts = MeshOptions {
+        criteria: Criteria::uniform(0.1),
+        initialization: Initialization::PersistentFacets,
+        control_points: Some(control.clone()),
+        ..Default::default()
+    };
+    let init = persistent_facets(&s, &control, &opts).unwrap();
+    assert_eq!(init.facets.len(), 2);
+    assert!(init.bipolar_insertions > 0);
+    let r = mesh(&s, &opts).unwrap();
+    assert!(r.stats.criteria_met);
+    for f in &init.facets {
+        assert!(has_facet(&r.mesh, f));
+    }
+}
+
 /// Section 6.4.1: from random points on the sphere (E_0), refine until no facet is too big or
 /// has an angle below 30 degrees; E_0 is kept.
 #[test]
