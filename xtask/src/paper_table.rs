@@ -18,7 +18,7 @@ use std::time::Duration;
 #[derive(clap::Args, Debug)]
 pub struct PaperTableArgs {
     /// Stop any run at this many sample points.
-    #[arg(long, default_value_t = 60_000)]
+    #[arg(long, default_value_t = 150_000)]
     pub max_vertices: usize,
     /// Stop any run after this many seconds.
     #[arg(long, default_value_t = 60.0)]

@@ -271,8 +271,9 @@ pub const DM_INF_SIGMA_RATIO: f64 = 0.1;
 
 /// An estimate of d_M^inf for a surface without a known value (section 6.5 applied to itself):
 /// mesh S uniformly at sigma = bounding radius / 20, take m = min over the sample of
-/// d_{M_lambda} (lambda = 2.5 sigma); while sigma > 0.1 m, mesh again at sigma = 0.1 m (each
-/// pass under `base.max_vertices`; at most 6 passes).
+/// d_{M_lambda} (lambda = 2.5 sigma); while sigma > 0.1 m, mesh again at sigma = 0.1 m, or at
+/// the smallest sigma expected to fit in 80% of `base.max_vertices` if larger (at most 6
+/// passes; a pass stopped by the budget is discarded).
 ///
 /// Since every kept Voronoi vertex is at distance >= lambda from the sample, m >= 2.5 sigma: a
 /// coarse sample cannot see a smaller d_M, hence the refinement down to sigma = 0.1 m, where
@@ -313,7 +314,17 @@ pub fn estimate_dm_inf(
         if converged || r.stats.stopped_by.is_some() {
             break;
         }
-        sigma = DM_INF_SIGMA_RATIO * value;
+        // Next size: 0.1 m, or the smallest that should fit in 80% of the vertex budget
+        // (vertex count ~ area / sigma^2); stop when that is no finer than this pass.
+        let mut next = DM_INF_SIGMA_RATIO * value;
+        if let Some(m) = base.max_vertices {
+            let fit = sigma * (r.mesh.vertices.len() as f64 / (0.8 * m as f64)).sqrt();
+            if fit >= 0.95 * sigma {
+                break;
+            }
+            next = next.max(fit);
+        }
+        sigma = next;
     }
     Ok(best.expect("at least one pass"))
 }
