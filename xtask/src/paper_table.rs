@@ -424,15 +424,21 @@ fn markdown(rows: &[Row], a: &PaperTableArgs) -> String {
 }
 
 const NOTES: &str = "Notes.\n\n\
-- Smooth surfaces: eps = 0.09 as in the paper where d_M^inf is known (sphere, ellipsoid, torus). \
-Elsewhere d_M^inf is estimated (`rdt_mesher::sizing::estimate_dm_inf`, not timed, like the paper's \
-precalculation) and eps is raised when 0.09 would not fit in half the vertex budget: our catalog \
-d_M^inf estimates (chair ~0.13 or less, tanglecube ~0.20, trefoil ~0.039 for a tube of radius 0.04 to 0.21) \
-are smaller relative to the size than the paper's first-pass sizes imply, so eps = 0.09 would need \
-10^5 to 10^6 points.\n\
+- Smooth surfaces: eps = 0.09 as in the paper where d_M^inf is known (sphere 1, ellipsoid 0.16, \
+torus 0.3). Elsewhere d_M^inf is estimated by `rdt_mesher::sizing::estimate_dm_inf` (not timed, \
+like the paper's precalculation; min of d_(M_lambda) over uniform samples refined toward \
+sigma = 0.1 x estimate within the budget): chair <= ~0.11 (not converged), tanglecube ~0.20, \
+trefoil ~0.038 (our tube's radius varies from 0.04 to 0.21). At eps = 0.09 these need 10^5 to 10^6 \
+points, so eps is raised until the first pass fits in half the vertex budget (the mode column \
+gives it); the certificate is checked at that eps.\n\
+- Chair: at the raised eps (~0.45) lambda = 2.5 sigma_0 exceeds d_M^inf, so the lambda-medial \
+axis misses the thin parts and the adaptive pass is too coarse there: the certificate fails \
+(achieved eps ~0.67). Raise --max-vertices to bring eps down.\n\
 - With a constant d_M (sphere, torus) both passes coincide by construction (sigma_2 = \
 max(sigma_0, 0.9 eps d_M) = sigma_0); the paper's smaller second pass there suggests its first \
-pass used a smaller sigma_0.\n\
+pass used a smaller sigma_0. Our trefoil's d_M varies about 5x along the knot (the paper's \
+sausage is almost constant), hence a ratio well above the paper's 1.24.\n\
 - Singular surfaces at the paper's constant sigma. Our heart gives about 0.36x and our Klein bottle \
 about 2.6x the paper's sizes at the same sigma: the scales of these catalog versions differ from \
-the paper's (size ~ area / sigma^2: heart ~0.6x, Klein ~1.6x in length). Barth's octic matches.\n\n";
+the paper's (size ~ area / sigma^2: heart ~0.6x, Klein ~1.6x in length). Barth's octic matches \
+(13.4-13.7K vs 13.9-14.2K).\n\n";
