@@ -191,6 +191,25 @@ fn check_eps(eps: f64) -> Result<(), MeshError> {
 /// 1-Lipschitz [`adaptive_field`] (eps' = 0.9 eps), with control points taken from the first
 /// pass's mesh ([`CONTROL_PER_COMPONENT`] spread vertices of every component). `eps` must be in
 /// (0, 1) and `dm_inf` positive. `base` gives everything else (oracle, angle, budgets, seed).
+///
+/// ```
+/// use rdt_mesher::{sizing::two_pass, MeshOptions};
+/// use oracle::{BoundingSphere, Surface};
+/// use glam::DVec3;
+/// // Ellipsoid with semi-axes 1, 0.6, 0.4: d_M ranges from 0.16 to 0.4.
+/// struct Ellipsoid;
+/// impl Surface for Ellipsoid {
+///     fn bounding_sphere(&self) -> BoundingSphere {
+///         BoundingSphere { center: DVec3::ZERO, radius: 2.0 }
+///     }
+///     fn value(&self, p: DVec3) -> f64 {
+///         p.x * p.x + (p.y / 0.6).powi(2) + (p.z / 0.4).powi(2) - 1.0
+///     }
+/// }
+/// let tp = two_pass(&Ellipsoid, 0.3, 0.16, &MeshOptions::default(), &mut |_| {}).unwrap();
+/// assert!(tp.second.stats.criteria_met);
+/// assert!(tp.second.mesh.vertices.len() < tp.first.mesh.vertices.len());
+/// ```
 pub fn two_pass(
     surface: &dyn Surface,
     eps: f64,
