@@ -6,6 +6,7 @@ mod bench;
 mod bench_image;
 mod delaunay_cmd;
 mod mesh_cmd;
+mod paper_table;
 mod regress;
 mod surface_spec;
 mod verify_cmd;
@@ -33,6 +34,8 @@ enum Cmd {
     Bench(bench::BenchArgs),
     /// Regression suite over the catalog: guarantees and golden counts.
     Regress(regress::RegressArgs),
+    /// The paper's Table 1 on this machine (writes docs/paper-table.{json,md}).
+    PaperTable(paper_table::PaperTableArgs),
 }
 
 fn main() {
@@ -43,6 +46,7 @@ fn main() {
         Cmd::Verify(a) => verify_cmd::run(a),
         Cmd::Bench(a) => bench::run(a),
         Cmd::Regress(a) => regress::run(a),
+        Cmd::PaperTable(a) => paper_table::run(a),
     };
     if let Err(e) = r {
         // One readable line, non-zero exit.

@@ -25,9 +25,16 @@ pub struct MeshArgs {
     /// Size bound sigma (constant), in the surface's units.
     #[arg(long)]
     pub size: Option<f64>,
-    /// Target epsilon: sigma = epsilon * d_M^inf (uniform), from the backend's estimate.
+    /// Target epsilon: two-pass sizing (section 6.5): a uniform pass at sigma_0 = epsilon *
+    /// d_M^inf, then an adaptive pass at sigma = 0.9 epsilon d_M (lambda-medial axis estimate).
     #[arg(long)]
     pub epsilon: Option<f64>,
+    /// d_M^inf for --epsilon (default: the catalog's or the backend's value).
+    #[arg(long)]
+    pub dm_inf: Option<f64>,
+    /// Initial sample: control points (6.4.3) or persistent facets (6.2).
+    #[arg(long, value_enum, default_value = "control-points")]
+    pub initialization: InitArg,
     /// Facet angle bound in degrees (0 = off).
     #[arg(long, default_value_t = 30.0)]
     pub angle: f64,
@@ -169,6 +176,9 @@ pub fn run(a: &MeshArgs) -> Result<()> {
         .unwrap_or_else(|| "implicit:torus".to_string());
     let opened = surface_spec::open(&spec, a.bounding_sphere.as_deref(), &a.surface)?;
     let surface = opened.surface.as_ref();
+    if let (None, Some(e)) = (a.size, a.epsilon) {
+        return run_two_pass(a, &spec, &opened, e);
+    }
     let mut notes = opened.notes.clone();
     let sigma = match (a.size, a.epsilon) {
         (Some(s), _) => {
@@ -230,6 +240,7 @@ pub fn run(a: &MeshArgs) -> Result<()> {
         time_limit: a.time_limit.map(Duration::from_secs_f64),
         initial_points,
         control_points: opened.control_points.clone(),
+        initialization: a.initialization.into(),
         ..Default::default()
     };
     for n in &notes {
@@ -353,6 +364,150 @@ pub fn run(a: &MeshArgs) -> Result<()> {
             "notes": notes,
             "stats": st,
             "verify": check,
+        });
+        std::fs::write(r, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("cannot write report {}", r.display()))?;
+    }
+    Ok(())
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum InitArg {
+    ControlPoints,
+    PersistentFacets,
+}
+
+impl From<InitArg> for rdt_mesher::Initialization {
+    fn from(a: InitArg) -> Self {
+        match a {
+            InitArg::ControlPoints => rdt_mesher::Initialization::ControlPoints,
+            InitArg::PersistentFacets => rdt_mesher::Initialization::PersistentFacets,
+        }
+    }
+}
+
+/// `--epsilon E` (without --size): the two-pass mode of section 6.5.
+fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64) -> Result<()> {
+    if !(e > 0.0 && e < 1.0) {
+        bail!("--epsilon {e}: epsilon must be in (0, 1), e.g. --epsilon 0.09");
+    }
+    let dm = match (a.dm_inf, opened.dm_inf) {
+        (Some(d), _) if d > 0.0 && d.is_finite() => d,
+        (Some(d), _) => bail!("--dm-inf {d}: must be a positive number"),
+        (None, Some(d)) => d,
+        (None, None) => bail!(
+            "--epsilon needs d_M^inf, which {spec} does not provide: pass --dm-inf VALUE \
+             (`cargo xtask paper-table` prints estimates) or use --size"
+        ),
+    };
+    let surface = opened.surface.as_ref();
+    for n in &opened.notes {
+        eprintln!("note: {n}");
+    }
+    let base = MeshOptions {
+        criteria: Criteria {
+            size: None,
+            min_angle_deg: a.angle,
+            max_distance: a.distance,
+        },
+        oracle: match a.oracle {
+            OracleArg::Bipolar => OracleKind::Bipolar,
+            OracleArg::Intersection => OracleKind::Intersection,
+        },
+        manifold: !a.no_manifold,
+        seed: a.seed,
+        max_vertices: a.max_vertices,
+        time_limit: a.time_limit.map(Duration::from_secs_f64),
+        initial_points: match &a.initial_points {
+            Some(p) => read_xyz(p)?,
+            None => Vec::new(),
+        },
+        control_points: opened.control_points.clone(),
+        initialization: a.initialization.into(),
+        ..Default::default()
+    };
+    let tp = rdt_mesher::sizing::two_pass(surface, e, dm, &base, &mut |_| {})
+        .with_context(|| format!("meshing {spec} (two passes)"))?;
+    let (s1, s2) = (&tp.first.stats, &tp.second.stats);
+    println!(
+        "{spec}: first pass (sigma_0 = {e} * {dm} = {:.5}): {} vertices in {:.3} s; second pass \
+         (sigma = max(sigma_0, {:.4} d_M)): {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, \
+         oracle {:.3} s); ratio {:.2}; {} medial vertices",
+        tp.sigma0,
+        s1.vertices,
+        s1.time_total_s,
+        tp.eps_prime,
+        s2.vertices,
+        s2.facets,
+        s2.time_total_s,
+        s2.time_delaunay_s,
+        s2.time_oracle_s,
+        s1.vertices as f64 / s2.vertices.max(1) as f64,
+        tp.medial.len()
+    );
+    let out_path = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/{}.ply", opened.name)));
+    if let Some(dir) = out_path.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    meshio::write(&out_path, &tp.second.mesh)
+        .with_context(|| format!("writing {}", out_path.display()))?;
+    let check = (!a.no_verify).then(|| {
+        let balls = tp
+            .second
+            .balls
+            .iter()
+            .enumerate()
+            .map(|(i, b)| verify::SurfaceBall {
+                facet: i,
+                center: b.center,
+                radius: b.radius,
+            })
+            .collect();
+        let vopts = verify::Options {
+            samples_per_edge: 2,
+            surface_balls: Some(balls),
+            epsilon: Some(a.certify_epsilon.unwrap_or(e)),
+            dm: verify::DmSource::Poles,
+            surface_samples: Some(tp.first.mesh.vertices.clone()),
+            min_angle_deg: (a.angle > 0.0).then_some(a.angle - 1e-9),
+            component_seeds: opened.control_points.clone(),
+            seed: a.seed,
+            ..Default::default()
+        };
+        verify::check_against(&tp.second.mesh, surface, &vopts)
+    });
+    if let Some(c) = &check {
+        if let Some(l) = c.check("loose-epsilon") {
+            println!(
+                "loose-epsilon (d_M by Voronoi poles of the first pass): {}",
+                l.detail
+            );
+        }
+        if c.passed() {
+            println!(
+                "verify: PASS ({} checks); wrote {}",
+                c.checks.len(),
+                out_path.display()
+            );
+        } else {
+            println!("verify: FAIL: {}", c.failures().join(", "));
+        }
+    }
+    for (name, st) in [("first", s1), ("second", s2)] {
+        if let Some(s) = &st.stopped_by {
+            println!("{name} pass stopped by {s}; unmet: {}", st.unmet.join("; "));
+        }
+    }
+    if let Some(r) = &a.report {
+        let report = serde_json::json!({
+            "input": spec, "output": out_path, "epsilon": e, "dm_inf": dm,
+            "sigma0": tp.sigma0, "eps_prime": tp.eps_prime,
+            "first": s1, "second": s2, "verify": check,
         });
         std::fs::write(r, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("cannot write report {}", r.display()))?;

@@ -61,6 +61,12 @@ fn tet_circumcenter(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Option<DVec3> {
 /// The lambda-medial axis M_lambda(E) of a sample E, approximated by the Voronoi vertices of E
 /// whose nearest sample points (the vertices of their Delaunay cell) have a smallest enclosing
 /// ball of radius >= lambda. The distance to it estimates d_M (section 6.5).
+///
+/// The kept vertices are thinned to one per cell of a grid of step h = lambda / 25 (the first
+/// in cell order), which changes the distance by at most h sqrt(3) < 0.07 lambda and makes
+/// the nearest-vertex queries of the second pass several times faster (the Voronoi vertices
+/// of a dense sample cluster along the medial axis). The distance to a set is 1-Lipschitz
+/// whatever the set.
 pub struct MedialAxisEstimate {
     vertices: Vec<DVec3>,
     tree: ImmutableKdTree<f64, 3>,
@@ -83,6 +89,8 @@ impl MedialAxisEstimate {
             radius: keep.radius * 3.0,
         };
         let mut vertices = Vec::new();
+        let h = lambda / 25.0;
+        let mut seen = rustc_hash::FxHashSet::default();
         let cells: Vec<_> = tri.finite_cells().collect();
         for c in cells {
             let vs = tri.cell_vertices(c).map(|v| tri.point(v));
@@ -90,7 +98,9 @@ impl MedialAxisEstimate {
             if !cc.is_finite() || !far.contains(cc) {
                 continue;
             }
-            if smallest_enclosing_radius(&vs) >= lambda {
+            if smallest_enclosing_radius(&vs) >= lambda
+                && (h <= 0.0 || seen.insert((cc / h).floor().as_i64vec3().to_array()))
+            {
                 vertices.push(cc);
             }
         }
@@ -118,6 +128,14 @@ impl MedialAxisEstimate {
         r.distance.sqrt()
     }
 
+    /// min over `pts` of [`MedialAxisEstimate::distance`] (+inf for no points): the estimate
+    /// of d_M^inf from a sample of S.
+    pub fn min_distance(&self, pts: &[DVec3]) -> f64 {
+        pts.iter()
+            .map(|&p| self.distance(p))
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Number of Voronoi vertices kept.
     pub fn len(&self) -> usize {
         self.vertices.len()
@@ -132,14 +150,66 @@ impl MedialAxisEstimate {
 pub struct TwoPass {
     pub first: MeshResult,
     pub second: MeshResult,
+    /// The constant size of the first pass, eps * d_M^inf.
     pub sigma0: f64,
+    /// The second pass's factor eps' = [`EPS_PRIME_FACTOR`] * eps.
+    pub eps_prime: f64,
     pub medial: Arc<MedialAxisEstimate>,
 }
 
+/// eps' / eps in the second pass (section 6.5: "some eps' slightly smaller than eps").
+pub const EPS_PRIME_FACTOR: f64 = 0.9;
+/// lambda / sigma_0 for the lambda-medial axis of the first-pass sample. Measured (tests/sizing.rs):
+/// at 2.5, d_{M_lambda} is within 7% of the true d_M on the sphere, torus and ellipsoid sampled
+/// at sigma_0 = 0.09 d_M^inf; at 1, sample noise keeps spurious Voronoi vertices near S.
+pub const LAMBDA_FACTOR: f64 = 2.5;
+/// Control points per component of the first-pass mesh (farthest-point spread).
+pub const CONTROL_PER_COMPONENT: usize = 8;
+
+/// The second pass's size field sigma(x) = max(sigma_0, eps' * d_{M_lambda}(x)).
+///
+/// It is 1-Lipschitz: d_{M_lambda} (a distance to a set) is 1-Lipschitz, so eps' d_{M_lambda} is
+/// eps'-Lipschitz with eps' < 1, and the max of an eps'-Lipschitz function and a constant is
+/// eps'-Lipschitz. It is positive (>= sigma_0), as lemma 6.2 needs.
+pub fn adaptive_field(
+    medial: Arc<MedialAxisEstimate>,
+    eps_prime: f64,
+    sigma0: f64,
+) -> Arc<dyn Fn(DVec3) -> f64 + Send + Sync> {
+    Arc::new(move |p: DVec3| (eps_prime * medial.distance(p)).max(sigma0))
+}
+
+fn check_eps(eps: f64) -> Result<(), MeshError> {
+    if !(eps > 0.0 && eps < 1.0) {
+        return Err(MeshError::InvalidSize(eps));
+    }
+    Ok(())
+}
+
 /// Two-pass sizing of section 6.5: a uniform pass with sigma_0 = eps * dm_inf, then the
-/// lambda-medial axis of its sample, then a pass with sigma = max(sigma_0, eps' * d_{M_lambda}),
-/// eps' = 0.9 eps (1-Lipschitz since a distance function is), with control points taken from
-/// the first pass's mesh (spread vertices of every component).
+/// lambda-medial axis (lambda = [`LAMBDA_FACTOR`] sigma_0) of its vertices, then a pass with the
+/// 1-Lipschitz [`adaptive_field`] (eps' = 0.9 eps), with control points taken from the first
+/// pass's mesh ([`CONTROL_PER_COMPONENT`] spread vertices of every component). `eps` must be in
+/// (0, 1) and `dm_inf` positive. `base` gives everything else (oracle, angle, budgets, seed).
+///
+/// ```
+/// use rdt_mesher::{sizing::two_pass, MeshOptions};
+/// use oracle::{BoundingSphere, Surface};
+/// use glam::DVec3;
+/// // Ellipsoid with semi-axes 1, 0.6, 0.4: d_M ranges from 0.16 to 0.4.
+/// struct Ellipsoid;
+/// impl Surface for Ellipsoid {
+///     fn bounding_sphere(&self) -> BoundingSphere {
+///         BoundingSphere { center: DVec3::ZERO, radius: 2.0 }
+///     }
+///     fn value(&self, p: DVec3) -> f64 {
+///         p.x * p.x + (p.y / 0.6).powi(2) + (p.z / 0.4).powi(2) - 1.0
+///     }
+/// }
+/// let tp = two_pass(&Ellipsoid, 0.3, 0.16, &MeshOptions::default(), &mut |_| {}).unwrap();
+/// assert!(tp.second.stats.criteria_met);
+/// assert!(tp.second.mesh.vertices.len() < tp.first.mesh.vertices.len());
+/// ```
 pub fn two_pass(
     surface: &dyn Surface,
     eps: f64,
@@ -147,9 +217,7 @@ pub fn two_pass(
     base: &MeshOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<TwoPass, MeshError> {
-    if !(eps > 0.0 && eps.is_finite()) {
-        return Err(MeshError::InvalidSize(eps));
-    }
+    check_eps(eps)?;
     if !(dm_inf > 0.0 && dm_inf.is_finite()) {
         return Err(MeshError::InvalidSize(dm_inf));
     }
@@ -160,26 +228,122 @@ pub fn two_pass(
         ..base.criteria.clone()
     };
     let first = mesh_with_progress(surface, &o1, progress)?;
-    let lambda = 2.5 * sigma0;
-    let medial = Arc::new(MedialAxisEstimate::new(
-        &first.mesh.vertices,
-        lambda,
-        surface.bounding_sphere(),
-    )?);
-    let m2 = medial.clone();
-    let eps2 = 0.9 * eps;
-    let field = move |p: DVec3| (eps2 * m2.distance(p)).max(sigma0);
-    let mut o2 = base.clone();
-    o2.criteria = Criteria {
-        size: Some(Sizing::Field(Arc::new(field))),
-        ..base.criteria.clone()
-    };
-    o2.control_points = Some(crate::topology::component_representatives(&first.mesh, 8));
-    let second = mesh_with_progress(surface, &o2, progress)?;
+    let (second, medial, eps_prime) = second_pass(surface, &first, eps, sigma0, base, progress)?;
     Ok(TwoPass {
         first,
         second,
         sigma0,
+        eps_prime,
         medial,
     })
+}
+
+/// The second pass of [`two_pass`] from a given first pass (sampled at constant `sigma0`).
+pub fn second_pass(
+    surface: &dyn Surface,
+    first: &MeshResult,
+    eps: f64,
+    sigma0: f64,
+    base: &MeshOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(MeshResult, Arc<MedialAxisEstimate>, f64), MeshError> {
+    check_eps(eps)?;
+    let medial = Arc::new(MedialAxisEstimate::new(
+        &first.mesh.vertices,
+        LAMBDA_FACTOR * sigma0,
+        surface.bounding_sphere(),
+    )?);
+    let eps_prime = EPS_PRIME_FACTOR * eps;
+    let mut o2 = base.clone();
+    o2.criteria = Criteria {
+        size: Some(Sizing::Field(adaptive_field(
+            medial.clone(),
+            eps_prime,
+            sigma0,
+        ))),
+        ..base.criteria.clone()
+    };
+    o2.control_points = Some(crate::topology::component_representatives(
+        &first.mesh,
+        CONTROL_PER_COMPONENT,
+    ));
+    let second = mesh_with_progress(surface, &o2, progress)?;
+    Ok((second, medial, eps_prime))
+}
+
+/// Result of [`estimate_dm_inf`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct DmInfEstimate {
+    /// min over the last complete sample of d_{M_lambda}.
+    pub value: f64,
+    /// Constant size of that sample.
+    pub sigma: f64,
+    /// Its number of vertices.
+    pub vertices: usize,
+    /// `sigma <= DM_INF_SIGMA_RATIO * value` held (else the vertex budget stopped the
+    /// refinement first, and `value` is only an upper estimate: d_{M_lambda} >= lambda always).
+    pub converged: bool,
+}
+
+/// sigma / estimate at which [`estimate_dm_inf`] stops refining.
+pub const DM_INF_SIGMA_RATIO: f64 = 0.1;
+
+/// An estimate of d_M^inf for a surface without a known value (section 6.5 applied to itself):
+/// mesh S uniformly at sigma = bounding radius / 20, take m = min over the sample of
+/// d_{M_lambda} (lambda = 2.5 sigma); while sigma > 0.1 m, mesh again at sigma = 0.1 m, or at
+/// the smallest sigma expected to fit in 80% of `base.max_vertices` if larger (at most 6
+/// passes; a pass stopped by the budget is discarded).
+///
+/// Since every kept Voronoi vertex is at distance >= lambda from the sample, m >= 2.5 sigma: a
+/// coarse sample cannot see a smaller d_M, hence the refinement down to sigma = 0.1 m, where
+/// the estimate is within 7% on the sphere, torus and ellipsoid (tests/sizing.rs). An estimate,
+/// not a bound; meaningless on singular surfaces (d_M^inf = 0 there: it decreases with sigma).
+pub fn estimate_dm_inf(
+    surface: &dyn Surface,
+    base: &MeshOptions,
+) -> Result<DmInfEstimate, MeshError> {
+    let mut sigma = surface.bounding_sphere().radius / 20.0;
+    let mut best: Option<DmInfEstimate> = None;
+    for _ in 0..6 {
+        let mut o = base.clone();
+        o.criteria = Criteria {
+            size: Some(Sizing::Constant(sigma)),
+            ..base.criteria.clone()
+        };
+        let r = mesh_with_progress(surface, &o, &mut |_| {})?;
+        if r.stats.stopped_by.is_some() && best.is_some() {
+            break;
+        }
+        let m = MedialAxisEstimate::new(
+            &r.mesh.vertices,
+            LAMBDA_FACTOR * sigma,
+            surface.bounding_sphere(),
+        )?;
+        let value = m.min_distance(&r.mesh.vertices);
+        if !(value > 0.0 && value.is_finite()) {
+            return Err(MeshError::InvalidSize(value));
+        }
+        let converged = sigma <= DM_INF_SIGMA_RATIO * value * 1.000_001;
+        best = Some(DmInfEstimate {
+            value,
+            sigma,
+            vertices: r.mesh.vertices.len(),
+            converged,
+        });
+        if converged || r.stats.stopped_by.is_some() {
+            break;
+        }
+        // Next size: 0.1 m, or the smallest that should fit in 80% of the vertex budget
+        // (vertex count ~ area / sigma^2); stop when that is no finer than this pass.
+        let mut next = DM_INF_SIGMA_RATIO * value;
+        if let Some(m) = base.max_vertices {
+            let fit = sigma * (r.mesh.vertices.len() as f64 / (0.8 * m as f64)).sqrt();
+            if fit >= 0.95 * sigma {
+                break;
+            }
+            next = next.max(fit);
+        }
+        sigma = next;
+    }
+    Ok(best.expect("at least one pass"))
 }
