@@ -298,9 +298,15 @@ pub fn run(a: &BenchArgs) -> Result<()> {
 }
 
 fn print_table(rows: &[Row]) {
-    println!(
+    outln!(
         "{:<9} {:<26} {:<5} {:>10} {:>10} {:>12} {:>9}",
-        "group", "case", "tool", "median s", "size", "size/s", "vs cgal"
+        "group",
+        "case",
+        "tool",
+        "median s",
+        "size",
+        "size/s",
+        "vs cgal"
     );
     for r in rows {
         let cg = rows
@@ -310,7 +316,7 @@ fn print_table(rows: &[Row]) {
             Some(c) if r.tool != "cgal" => format!("{:.2}x", c.median_s / r.median_s),
             _ => String::from("-"),
         };
-        println!(
+        outln!(
             "{:<9} {:<26} {:<5} {:>10.4} {:>10} {:>12.0} {:>9}",
             r.group,
             r.case,
@@ -325,7 +331,7 @@ fn print_table(rows: &[Row]) {
             ratio
         );
     }
-    println!(
+    outln!(
         "(medians of the runs; 'vs cgal' = CGAL median / our median, measured in this run: >1 means we are faster)"
     );
 }

@@ -166,7 +166,7 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
         } else {
             None
         };
-        println!(
+        outln!(
             "{}",
             serde_json::json!({
                 "points": pts.len(),
@@ -198,7 +198,7 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
     } else {
         None
     };
-    println!(
+    outln!(
         "{}",
         serde_json::json!({
             "points": n,

@@ -314,7 +314,7 @@ pub fn run(a: &MeshArgs) -> Result<()> {
                 .collect()
         })
         .unwrap_or_default();
-    println!(
+    outln!(
         "{spec}: {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, oracle {:.3} s); min angle {:.2} deg; max r/sigma {:.3}; {}; genus [{}]; wrote {}",
         st.vertices,
         st.facets,
@@ -334,22 +334,22 @@ pub fn run(a: &MeshArgs) -> Result<()> {
     if let (Some(scan), Some(t)) = (opened.components, topo)
         && t.components.len() < scan as usize
     {
-        println!(
+        outln!(
             "warning: the mesh has {} of the {scan} surface components found by the voxel scan; components smaller than the size bound may be missed (try a smaller --size)",
             t.components.len()
         );
     }
     if let Some(c) = &check {
         if !c.passed() {
-            println!("verify: FAIL: {}", c.failures().join(", "));
+            outln!("verify: FAIL: {}", c.failures().join(", "));
         } else {
-            println!("verify: PASS ({} checks)", c.checks.len());
+            outln!("verify: PASS ({} checks)", c.checks.len());
         }
     }
     if let Some(s) = &st.stopped_by {
-        println!("stopped by {s}; unmet: {}", st.unmet.join("; "));
+        outln!("stopped by {s}; unmet: {}", st.unmet.join("; "));
     } else if !st.unmet.is_empty() {
-        println!("unmet: {}", st.unmet.join("; "));
+        outln!("unmet: {}", st.unmet.join("; "));
     }
     if let Some(r) = &a.report {
         let report = serde_json::json!({
@@ -429,7 +429,7 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
     let tp = rdt_mesher::sizing::two_pass(surface, e, dm, &base, &mut |_| {})
         .with_context(|| format!("meshing {spec} (two passes)"))?;
     let (s1, s2) = (&tp.first.stats, &tp.second.stats);
-    println!(
+    outln!(
         "{spec}: first pass (sigma_0 = {e} * {dm} = {:.5}): {} vertices in {:.3} s; second pass \
          (sigma = max(sigma_0, {:.4} d_M)): {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, \
          oracle {:.3} s); ratio {:.2}; {} medial vertices",
@@ -483,24 +483,24 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
     });
     if let Some(c) = &check {
         if let Some(l) = c.check("loose-epsilon") {
-            println!(
+            outln!(
                 "loose-epsilon (d_M by Voronoi poles of the first pass): {}",
                 l.detail
             );
         }
         if c.passed() {
-            println!(
+            outln!(
                 "verify: PASS ({} checks); wrote {}",
                 c.checks.len(),
                 out_path.display()
             );
         } else {
-            println!("verify: FAIL: {}", c.failures().join(", "));
+            outln!("verify: FAIL: {}", c.failures().join(", "));
         }
     }
     for (name, st) in [("first", s1), ("second", s2)] {
         if let Some(s) = &st.stopped_by {
-            println!("{name} pass stopped by {s}; unmet: {}", st.unmet.join("; "));
+            outln!("{name} pass stopped by {s}; unmet: {}", st.unmet.join("; "));
         }
     }
     if let Some(r) = &a.report {

@@ -305,7 +305,7 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
         rows.push(row);
     }
     let md = markdown(&rows, a);
-    println!("{md}");
+    outln!("{md}");
     std::fs::create_dir_all(&a.out_dir)
         .with_context(|| format!("cannot create {}", a.out_dir.display()))?;
     let jp = a.out_dir.join("paper-table.json");

@@ -501,7 +501,7 @@ pub fn run(a: &RegressArgs) -> Result<()> {
         }
     }
 
-    println!(
+    outln!(
         "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7} {:>7} {:>9} {:>9} {:>8} {:>7} {:>5} {:>8} {:>7}  golden",
         "case",
         "oracle",
@@ -524,7 +524,7 @@ pub fn run(a: &RegressArgs) -> Result<()> {
             (true, false) => "PASS*",
             (false, _) => "FAIL",
         };
-        println!(
+        outln!(
             "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7.2} {:>7.2} {:>9.4} {:>9} {:>8.2e} {:>7} {:>5} {:>8} {:>7}  {}{}",
             r.case,
             r.oracle,
@@ -559,14 +559,14 @@ pub fn run(a: &RegressArgs) -> Result<()> {
         }
     }
     for n in &notes {
-        println!("{n}");
+        outln!("{n}");
     }
     let failed: Vec<&Row> = rows.iter().filter(|r| !r.failures.is_empty()).collect();
     for r in &failed {
-        println!("FAIL {} {}: {}", r.case, r.oracle, r.failures.join("; "));
+        outln!("FAIL {} {}: {}", r.case, r.oracle, r.failures.join("; "));
     }
     for c in &cross {
-        println!("FAIL oracles disagree: {c}");
+        outln!("FAIL oracles disagree: {c}");
     }
     if let Some(p) = &a.json {
         let j = serde_json::json!({ "rows": rows, "oracle_disagreements": cross });
@@ -574,7 +574,7 @@ pub fn run(a: &RegressArgs) -> Result<()> {
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
     let nfail = failed.len() + cross.len();
-    println!(
+    outln!(
         "regress{}: {} cases, {} passed, {} failed{} in {:.1} s{}",
         if a.quick { " --quick" } else { "" },
         rows.len(),

@@ -49,7 +49,7 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
         }
         None => verify::check(&mesh, &opts),
     };
-    print!("{}", report.summary());
+    out!("{}", report.summary());
     if let Some(p) = &a.report {
         report
             .write_json(p)
