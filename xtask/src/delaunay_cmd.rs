@@ -75,7 +75,7 @@ pub fn random_points(n: usize, seed: u64, dist: Distribution) -> Vec<DVec3> {
                 loop {
                     let p = DVec3::new(r.unit(), r.unit(), r.unit()) * 2.0 - DVec3::ONE;
                     let l = p.length_squared();
-                    if l > 1e-6 && l <= 1.0 {
+                    if l > 0.0 && l <= 1.0 {
                         break p / l.sqrt();
                     }
                 }
