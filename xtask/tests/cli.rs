@@ -522,11 +522,14 @@ fn size_must_be_positive() {
         "--size=-1",
         "--size=nan",
         "--size=inf",
-        "--epsilon=0",
     ] {
         let out = xtask(&d, &["mesh", "-q", "implicit:sphere", s, "-o", "x.ply"]);
         let e = failure(&out, true);
         mentions(&e, &["must be a positive number"]);
+    }
+    for s in ["--epsilon=0", "--epsilon=-0.1", "--epsilon=1.5"] {
+        let out = xtask(&d, &["mesh", "-q", "implicit:sphere", s, "-o", "x.ply"]);
+        mentions(&failure(&out, true), &["--epsilon", "epsilon must be in (0, 1)"]);
     }
     let out = xtask(
         &d,
