@@ -23,6 +23,9 @@
 
 pub(crate) mod bvh;
 mod predicates;
+mod smooth;
+
+pub use smooth::{DEFAULT_SAMPLES, SmoothPolyhedron};
 
 use crate::roots::{SplitMix64, bisect};
 use crate::{BoundingSphere, Surface};
