@@ -406,6 +406,12 @@ impl PointSetSurface {
         (self.lo, self.hi)
     }
 
+    /// Largest kernel support radius: farther than this from every point, the value is the
+    /// far field (signed by the winding number).
+    pub fn max_radius(&self) -> f64 {
+        self.max_radius
+    }
+
     /// Default sizing: 1/50 of the bounding box diagonal.
     pub fn suggested_size(&self) -> f64 {
         (self.hi - self.lo).length() / 50.0

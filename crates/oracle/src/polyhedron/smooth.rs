@@ -24,6 +24,10 @@ use glam::DVec3;
 /// Default number of samples of [`SmoothPolyhedron::new`].
 pub const DEFAULT_SAMPLES: usize = 100_000;
 
+/// Default kernel radius of [`SmoothPolyhedron::new`], in sample spacings (the samples are
+/// noise-free, so less averaging than for scanned points is needed).
+pub const DEFAULT_BANDWIDTH: f64 = 3.0;
+
 /// A polyhedron seen through a smooth IMLS approximation. See the module documentation.
 ///
 /// ```
@@ -60,8 +64,21 @@ impl SmoothPolyhedron {
     /// area, by error diffusion, deterministic) with the outward face normals, and fit the IMLS
     /// surface on them.
     pub fn new(exact: PolyhedronSurface, samples: usize) -> Result<Self, PointSetError> {
+        let params = PointSetParams {
+            bandwidth: DEFAULT_BANDWIDTH,
+            ..PointSetParams::default()
+        };
+        Self::with_params(exact, samples, &params)
+    }
+
+    /// As [`SmoothPolyhedron::new`] with explicit IMLS parameters.
+    pub fn with_params(
+        exact: PolyhedronSurface,
+        samples: usize,
+        params: &PointSetParams,
+    ) -> Result<Self, PointSetError> {
         let (pts, nrm) = exact.area_samples(samples.max(crate::pointset::MIN_POINTS));
-        let imls = PointSetSurface::new(&pts, Some(&nrm), &PointSetParams::default())?;
+        let imls = PointSetSurface::new(&pts, Some(&nrm), params)?;
         Ok(SmoothPolyhedron { exact, imls })
     }
 
@@ -119,7 +136,23 @@ impl Surface for SmoothPolyhedron {
     fn bounding_sphere(&self) -> BoundingSphere {
         self.imls.bounding_sphere()
     }
+    /// The IMLS value within the largest kernel radius `R` of the input triangles. Farther,
+    /// for watertight inputs, the exact polyhedron's value (signed distance, or its sign by
+    /// ray parity), which has the same sign there and is cheaper than the IMLS far field.
     fn value(&self, p: DVec3) -> f64 {
+        if self.exact.is_watertight() && p.is_finite() {
+            let r = self.imls.max_radius();
+            if self.exact.bvh.closest_within(p, r * r).is_none() {
+                let d = self.exact.value(p);
+                if self.imls.bounding_sphere().contains(p) {
+                    if d < 0.0 {
+                        return d.min(-r);
+                    } else if d > 0.0 {
+                        return d.max(r);
+                    }
+                }
+            }
+        }
         self.imls.value(p)
     }
     fn tolerance(&self) -> f64 {
