@@ -406,6 +406,13 @@ impl PointSetSurface {
         (self.lo, self.hi)
     }
 
+    /// The IMLS value `Σ φ n·(x − p) / Σ φ` where the total kernel weight is at least the
+    /// blending threshold (near the points); `None` elsewhere.
+    pub(crate) fn near_value(&self, x: DVec3) -> Option<f64> {
+        let (num, den, _) = self.sums(x);
+        (den >= MIN_WEIGHT).then(|| num / den)
+    }
+
     /// Largest kernel support radius: farther than this from every point, the value is the
     /// far field (signed by the winding number).
     pub fn max_radius(&self) -> f64 {
