@@ -231,3 +231,22 @@ fn bad_inputs_give_clear_errors() {
     assert!(e.to_string().contains("coplanar"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Fertility (genus 4, fixtures/models/fertility.ply from the shared models) remeshed coarse
+/// (~2k vertices) keeps its genus and stays close to the input.
+#[test]
+fn fertility_remesh_keeps_genus_4() {
+    let input = meshio::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/models/fertility.ply"
+    ))
+    .expect("fertility fixture");
+    let d = diag(&input);
+    let exact = PolyhedronSurface::new(&input).unwrap();
+    let smooth = SmoothPolyhedron::new(exact.clone(), 60_000).unwrap();
+    let out = remesh(&smooth, 4.5);
+    let (samples, _) = exact.area_samples(10_000);
+    let r = check_closed_genus(&out, &exact, Some(samples), 4);
+    let h = r.geometry.as_ref().unwrap().hausdorff;
+    assert!(h < 0.01 * d, "Hausdorff {h:.3e} vs diagonal {d:.3e}");
+}
