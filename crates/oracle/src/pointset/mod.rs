@@ -100,7 +100,7 @@ pub struct PointSetParams {
 impl Default for PointSetParams {
     fn default() -> Self {
         PointSetParams {
-            k_normals: 12,
+            k_normals: 24,
             k_spacing: 8,
             bandwidth: 3.0,
         }
