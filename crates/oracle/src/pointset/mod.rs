@@ -413,6 +413,23 @@ impl PointSetSurface {
         (den >= MIN_WEIGHT).then(|| num / den)
     }
 
+    /// The value inside the bounding sphere, with the far field (`∓ max_radius`, given the
+    /// total kernel weight) from `far`.
+    pub(crate) fn value_with_far(&self, x: DVec3, far: impl FnOnce(f64) -> f64) -> f64 {
+        let (num, den, _) = self.sums(x);
+        if den >= MIN_WEIGHT {
+            return num / den;
+        }
+        let far = far(den);
+        if den <= 0.0 {
+            return far;
+        }
+        // Smooth blend between the two (they have the same sign away from the surface).
+        let a = den / MIN_WEIGHT;
+        let a = a * a * (3.0 - 2.0 * a);
+        a * (num / den) + (1.0 - a) * far
+    }
+
     /// Largest kernel support radius: farther than this from every point, the value is the
     /// far field (signed by the winding number).
     pub fn max_radius(&self) -> f64 {
@@ -725,18 +742,7 @@ impl Surface for PointSetSurface {
             // Positive on and outside the bounding sphere (far from every point).
             return dc - self.sphere.radius + self.max_radius;
         }
-        let (num, den, _) = self.sums(x);
-        if den >= MIN_WEIGHT {
-            return num / den;
-        }
-        let far = self.far_value(x, den);
-        if den <= 0.0 {
-            return far;
-        }
-        // Smooth blend between the two (they have the same sign away from the surface).
-        let a = den / MIN_WEIGHT;
-        let a = a * a * (3.0 - 2.0 * a);
-        a * (num / den) + (1.0 - a) * far
+        self.value_with_far(x, |den| self.far_value(x, den))
     }
 
     /// Points on the MLS surface: the highest and lowest input points of each component
@@ -854,7 +860,14 @@ impl Surface for PointSetSurface {
 /// Illinois root finding on `[a, b]` (`fa`, `fb` of opposite signs), safeguarded by bisection
 /// steps when the bracket shrinks slowly. Returns a point within `tol` of a sign change (or
 /// where `|f| < tol`, for functions close to a distance).
-fn illinois(f: impl Fn(DVec3) -> f64, a: DVec3, fa: f64, b: DVec3, fb: f64, tol: f64) -> DVec3 {
+pub(crate) fn illinois(
+    f: impl Fn(DVec3) -> f64,
+    a: DVec3,
+    fa: f64,
+    b: DVec3,
+    fb: f64,
+    tol: f64,
+) -> DVec3 {
     let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
     let mut side = 0i8;
     let mut prev_len = (b - a).length();
