@@ -471,8 +471,20 @@ impl PointSetSurface {
     /// Far-field value: `∓ max_radius`, negative where the point-cloud winding number is
     /// above 1/2 (inside). `den` is the total kernel weight at `x`.
     fn far_value(&self, x: DVec3, den: f64) -> f64 {
+        if den == 0.0 {
+            // Beyond every kernel: when the direction from the nearest point is clearly along
+            // its normal (cosine above 0.7), the side of that normal; otherwise (near the
+            // medial axis, at corners) the winding number decides.
+            let (j, d2) = self.nearest(x);
+            let c = self.normals[j].dot(x - self.points[j]) / d2.sqrt();
+            if c > 0.7 {
+                return self.max_radius;
+            } else if c < -0.7 {
+                return -self.max_radius;
+            }
+        }
         let coarse = match &self.gwn_coarse {
-            Some(c) if den == 0.0 => Some(c.winding_number(x)),
+            Some(c) => Some(c.winding_number(x)),
             _ => None,
         };
         let w = match coarse {
