@@ -162,6 +162,73 @@ pub struct PointSetSurface {
     /// Subsampled copy of `gwn` (large inputs only).
     gwn_coarse: Option<Bvh>,
     lfs: OnceLock<LfsSample>,
+    /// Far-field signs of the cells of a coarse grid that no kernel reaches.
+    far_cache: FarCache,
+}
+
+/// Cells per axis of [`FarCache`].
+const FAR_CELLS: usize = 32;
+
+/// A `FAR_CELLS`³ grid over the bounding sphere's box. A cell whose center is farther than
+/// its half diagonal plus the largest kernel radius from every point contains no point of the
+/// surface and no kernel support, so the far-field sign is constant on it: stored as ±1 (0
+/// for the other cells). Deterministic (each cell computed independently).
+#[derive(Clone, Debug, Default)]
+struct FarCache {
+    lo: DVec3,
+    inv: f64,
+    sign: Vec<i8>,
+}
+
+impl FarCache {
+    fn build(s: &PointSetSurface) -> FarCache {
+        let r = s.sphere.radius;
+        let lo = s.sphere.center - DVec3::splat(r);
+        let cell = 2.0 * r / FAR_CELLS as f64;
+        if !(cell > 0.0 && cell.is_finite()) {
+            return FarCache::default();
+        }
+        let half_diag = 0.5 * 3f64.sqrt() * cell;
+        let clear = half_diag + s.max_radius;
+        let sign = (0..FAR_CELLS * FAR_CELLS * FAR_CELLS)
+            .into_par_iter()
+            .map(|i| {
+                let (x, y, z) = (
+                    i % FAR_CELLS,
+                    (i / FAR_CELLS) % FAR_CELLS,
+                    i / (FAR_CELLS * FAR_CELLS),
+                );
+                let c = lo + cell * DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5);
+                let (_, d2) = s.nearest(c);
+                if d2 <= clear * clear {
+                    return 0;
+                }
+                if s.far_value_uncached(c, 0.0) < 0.0 {
+                    -1
+                } else {
+                    1
+                }
+            })
+            .collect();
+        FarCache {
+            lo,
+            inv: 1.0 / cell,
+            sign,
+        }
+    }
+
+    /// The cached sign at `x` (0 if unknown).
+    fn get(&self, x: DVec3) -> i8 {
+        if self.sign.is_empty() {
+            return 0;
+        }
+        let g = (x - self.lo) * self.inv;
+        if !(g.min_element() >= 0.0 && g.max_element() < FAR_CELLS as f64) {
+            return 0;
+        }
+        let (i, j, k) = (g.x as usize, g.y as usize, g.z as usize);
+        self.sign[(k * FAR_CELLS + j) * FAR_CELLS + i]
+    }
 }
 
 /// Local feature size estimated on a subsample.
@@ -364,7 +431,7 @@ impl PointSetSurface {
             median_spacing: med_spacing,
             median_radius: median(&radius),
         };
-        Ok(PointSetSurface {
+        let mut surface = PointSetSurface {
             points: points.to_vec(),
             normals,
             max_radius,
@@ -378,7 +445,10 @@ impl PointSetSurface {
             gwn,
             gwn_coarse,
             lfs: OnceLock::new(),
-        })
+            far_cache: FarCache::default(),
+        };
+        surface.far_cache = FarCache::build(&surface);
+        Ok(surface)
     }
 
     /// [`PointSetSurface::new`] from a [`PointCloud`] (e.g. from [`read_xyz`]).
@@ -472,19 +542,18 @@ impl PointSetSurface {
     /// above 1/2 (inside). `den` is the total kernel weight at `x`.
     fn far_value(&self, x: DVec3, den: f64) -> f64 {
         if den == 0.0 {
-            // Beyond every kernel: when the direction from the nearest point is clearly along
-            // its normal (cosine above 0.7), the side of that normal; otherwise (near the
-            // medial axis, at corners) the winding number decides.
-            let (j, d2) = self.nearest(x);
-            let c = self.normals[j].dot(x - self.points[j]) / d2.sqrt();
-            if c > 0.7 {
-                return self.max_radius;
-            } else if c < -0.7 {
-                return -self.max_radius;
+            match self.far_cache.get(x) {
+                1 => return self.max_radius,
+                -1 => return -self.max_radius,
+                _ => {}
             }
         }
+        self.far_value_uncached(x, den)
+    }
+
+    fn far_value_uncached(&self, x: DVec3, den: f64) -> f64 {
         let coarse = match &self.gwn_coarse {
-            Some(c) => Some(c.winding_number(x)),
+            Some(c) if den == 0.0 => Some(c.winding_number(x)),
             _ => None,
         };
         let w = match coarse {

@@ -141,10 +141,14 @@ impl Surface for SmoothPolyhedron {
     /// ray parity), which has the same sign there and is cheaper than the IMLS far field.
     fn value(&self, p: DVec3) -> f64 {
         if self.exact.is_watertight() && p.is_finite() {
-            if self.imls.bounding_sphere().contains(p) {
-                if let Some(v) = self.imls.near_value(p) {
-                    return v;
-                }
+            if let Some(v) = self
+                .imls
+                .bounding_sphere()
+                .contains(p)
+                .then(|| self.imls.near_value(p))
+                .flatten()
+            {
+                return v;
             }
             let r = self.imls.max_radius();
             if self.exact.bvh.closest_within(p, r * r).is_none() {
