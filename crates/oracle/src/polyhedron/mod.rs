@@ -18,6 +18,10 @@
 //!   bisection on the winding number as a fallback (e.g. through a hole).
 //! - P1 ([`Surface::seed_points`]): triangle centroids, at least one per connected component.
 //!
+//! - [`SmoothPolyhedron`]: the oracle used for remeshing (`cargo xtask mesh model.ply`): an
+//!   IMLS approximation of the triangles, so that the manifold patch terminates at creases
+//!   (see its module documentation); projection stays exact onto the input.
+//!
 //! Invariants kept by [`PolyhedronSurface`]: every stored triangle is non-degenerate (exactly)
 //! and has finite vertices within the exact range of the predicates.
 
