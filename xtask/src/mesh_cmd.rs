@@ -274,6 +274,33 @@ pub fn run(a: &MeshArgs) -> Result<()> {
     meshio::write(&out_path, &result.mesh)
         .with_context(|| format!("writing {}", out_path.display()))?;
     let st = &result.stats;
+    if !opened.sharp_edges.is_empty() {
+        // Sharp-edge deviation: the largest distance from the input's sharp edges to the output.
+        let dev = oracle::polyhedron::PolyhedronSurface::new(&result.mesh).map(|out| {
+            oracle::polyhedron::sharp_edge_deviation(&opened.sharp_edges, &out, sigma / 4.0)
+        });
+        let (lo, hi) = opened.sharp_edges.iter().fold(
+            (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |(lo, hi), &(a, b)| (lo.min(a).min(b), hi.max(a).max(b)),
+        );
+        let diag = result
+            .mesh
+            .vertices
+            .iter()
+            .fold((lo, hi), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let diag = (diag.1 - diag.0).length();
+        let n = match dev {
+            Ok(d) => format!(
+                "sharp edges: {} input edges (normals > {} deg apart), largest distance to the output {d:.3e} ({:.3}% of the output's bbox diagonal)",
+                opened.sharp_edges.len(),
+                surface_spec::SHARP_DEG,
+                100.0 * d / diag
+            ),
+            Err(e) => format!("sharp edges: deviation not measured ({e})"),
+        };
+        println!("{n}");
+        notes.push(n);
+    }
     let check = if a.no_verify {
         None
     } else {

@@ -42,6 +42,10 @@ pub struct SurfaceOptions {
     /// Read a .ply as a triangle mesh or as a point set (default: by its faces).
     #[arg(long = "as", value_enum)]
     pub as_kind: Option<AsKind>,
+    /// Mesh input: mesh the exact polyhedron instead of its smooth IMLS approximation (the
+    /// manifold patch may then not terminate near creases; see oracle::polyhedron::smooth).
+    #[arg(long)]
+    pub exact_polyhedron: bool,
 }
 
 /// An opened surface with what the command needs to know about it.
@@ -59,7 +63,13 @@ pub struct Opened {
     pub components: Option<u32>,
     pub control_points: Option<Vec<DVec3>>,
     pub notes: Vec<String>,
+    /// Mesh input: its sharp edges (normals deviating by more than [`SHARP_DEG`]).
+    pub sharp_edges: Vec<(DVec3, DVec3)>,
 }
+
+/// Sharp-edge threshold: the two face normals differ by more than this (degrees), i.e. the
+/// dihedral angle is below 180° minus it.
+pub const SHARP_DEG: f64 = 30.0;
 
 fn triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3]> {
     let v: Vec<T> = s
@@ -168,6 +178,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
             components: entry.as_ref().and_then(|e| e.components),
             control_points: None,
             notes: vec![],
+            sharp_edges: vec![],
         });
     }
     let path = Path::new(spec);
@@ -217,6 +228,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
             components: Some(comps as u32),
             control_points: None,
             notes,
+            sharp_edges: vec![],
         });
     }
     let as_points = match o.as_kind {
@@ -254,6 +266,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
                     "estimated (PCA + propagation)"
                 }
             )],
+            sharp_edges: vec![],
             surface: Box::new(ps),
         });
     }
@@ -261,7 +274,27 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
     let poly = oracle::polyhedron::PolyhedronSurface::new(&mesh)
         .with_context(|| format!("mesh {spec}"))?;
     let size = poly.suggested_size();
-    let st = poly.stats();
+    let sharp_edges = poly.sharp_edges(SHARP_DEG);
+    let mut notes = vec![format!(
+        "polyhedron: {} vertices, {} triangles ({:?}); {} sharp edges (normals > {SHARP_DEG} deg apart); suggested size {size:.5} (bbox diagonal / 50)",
+        mesh.vertices.len(),
+        mesh.triangles.len(),
+        poly.stats(),
+        sharp_edges.len(),
+    )];
+    let surface: Box<dyn Surface> = if o.exact_polyhedron {
+        notes.push("polyhedron: meshing the exact triangles (--exact-polyhedron)".into());
+        Box::new(poly)
+    } else {
+        let n = oracle::polyhedron::DEFAULT_SAMPLES;
+        let s = oracle::polyhedron::SmoothPolyhedron::new(poly, n)
+            .with_context(|| format!("mesh {spec}: smoothing"))?;
+        notes.push(format!(
+            "polyhedron: meshing its IMLS approximation from {n} area-uniform samples (kernel radius {:.2e}); verification measures the distance to the input triangles",
+            s.imls().stats().median_radius
+        ));
+        Box::new(s)
+    };
     Ok(Opened {
         dm_inf: None,
         name: stem(path),
@@ -269,13 +302,9 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
         genus: None,
         components: None,
         control_points: None,
-        notes: vec![format!(
-            "polyhedron: {} vertices, {} triangles ({:?}); suggested size {size:.5}",
-            mesh.vertices.len(),
-            mesh.triangles.len(),
-            st
-        )],
-        surface: Box::new(poly),
+        notes,
+        sharp_edges,
+        surface,
     })
 }
 

@@ -100,7 +100,7 @@ pub struct PointSetParams {
 impl Default for PointSetParams {
     fn default() -> Self {
         PointSetParams {
-            k_normals: 12,
+            k_normals: 24,
             k_spacing: 8,
             bandwidth: 3.0,
         }
@@ -162,6 +162,73 @@ pub struct PointSetSurface {
     /// Subsampled copy of `gwn` (large inputs only).
     gwn_coarse: Option<Bvh>,
     lfs: OnceLock<LfsSample>,
+    /// Far-field signs of the cells of a coarse grid that no kernel reaches.
+    far_cache: FarCache,
+}
+
+/// Cells per axis of [`FarCache`].
+const FAR_CELLS: usize = 32;
+
+/// A `FAR_CELLS`³ grid over the bounding sphere's box. A cell whose center is farther than
+/// its half diagonal plus the largest kernel radius from every point contains no point of the
+/// surface and no kernel support, so the far-field sign is constant on it: stored as ±1 (0
+/// for the other cells). Deterministic (each cell computed independently).
+#[derive(Clone, Debug, Default)]
+struct FarCache {
+    lo: DVec3,
+    inv: f64,
+    sign: Vec<i8>,
+}
+
+impl FarCache {
+    fn build(s: &PointSetSurface) -> FarCache {
+        let r = s.sphere.radius;
+        let lo = s.sphere.center - DVec3::splat(r);
+        let cell = 2.0 * r / FAR_CELLS as f64;
+        if !(cell > 0.0 && cell.is_finite()) {
+            return FarCache::default();
+        }
+        let half_diag = 0.5 * 3f64.sqrt() * cell;
+        let clear = half_diag + s.max_radius;
+        let sign = (0..FAR_CELLS * FAR_CELLS * FAR_CELLS)
+            .into_par_iter()
+            .map(|i| {
+                let (x, y, z) = (
+                    i % FAR_CELLS,
+                    (i / FAR_CELLS) % FAR_CELLS,
+                    i / (FAR_CELLS * FAR_CELLS),
+                );
+                let c = lo + cell * DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5);
+                let (_, d2) = s.nearest(c);
+                if d2 <= clear * clear {
+                    return 0;
+                }
+                if s.far_value_uncached(c, 0.0) < 0.0 {
+                    -1
+                } else {
+                    1
+                }
+            })
+            .collect();
+        FarCache {
+            lo,
+            inv: 1.0 / cell,
+            sign,
+        }
+    }
+
+    /// The cached sign at `x` (0 if unknown).
+    fn get(&self, x: DVec3) -> i8 {
+        if self.sign.is_empty() {
+            return 0;
+        }
+        let g = (x - self.lo) * self.inv;
+        if !(g.min_element() >= 0.0 && g.max_element() < FAR_CELLS as f64) {
+            return 0;
+        }
+        let (i, j, k) = (g.x as usize, g.y as usize, g.z as usize);
+        self.sign[(k * FAR_CELLS + j) * FAR_CELLS + i]
+    }
 }
 
 /// Local feature size estimated on a subsample.
@@ -364,7 +431,7 @@ impl PointSetSurface {
             median_spacing: med_spacing,
             median_radius: median(&radius),
         };
-        Ok(PointSetSurface {
+        let mut surface = PointSetSurface {
             points: points.to_vec(),
             normals,
             max_radius,
@@ -378,7 +445,10 @@ impl PointSetSurface {
             gwn,
             gwn_coarse,
             lfs: OnceLock::new(),
-        })
+            far_cache: FarCache::default(),
+        };
+        surface.far_cache = FarCache::build(&surface);
+        Ok(surface)
     }
 
     /// [`PointSetSurface::new`] from a [`PointCloud`] (e.g. from [`read_xyz`]).
@@ -404,6 +474,36 @@ impl PointSetSurface {
     /// Axis-aligned bounding box of the points.
     pub fn bbox(&self) -> (DVec3, DVec3) {
         (self.lo, self.hi)
+    }
+
+    /// The IMLS value `Σ φ n·(x − p) / Σ φ` where the total kernel weight is at least the
+    /// blending threshold (near the points); `None` elsewhere.
+    pub(crate) fn near_value(&self, x: DVec3) -> Option<f64> {
+        let (num, den, _) = self.sums(x);
+        (den >= MIN_WEIGHT).then(|| num / den)
+    }
+
+    /// The value inside the bounding sphere, with the far field (`∓ max_radius`, given the
+    /// total kernel weight) from `far`.
+    pub(crate) fn value_with_far(&self, x: DVec3, far: impl FnOnce(f64) -> f64) -> f64 {
+        let (num, den, _) = self.sums(x);
+        if den >= MIN_WEIGHT {
+            return num / den;
+        }
+        let far = far(den);
+        if den <= 0.0 {
+            return far;
+        }
+        // Smooth blend between the two (they have the same sign away from the surface).
+        let a = den / MIN_WEIGHT;
+        let a = a * a * (3.0 - 2.0 * a);
+        a * (num / den) + (1.0 - a) * far
+    }
+
+    /// Largest kernel support radius: farther than this from every point, the value is the
+    /// far field (signed by the winding number).
+    pub fn max_radius(&self) -> f64 {
+        self.max_radius
     }
 
     /// Default sizing: 1/50 of the bounding box diagonal.
@@ -441,6 +541,17 @@ impl PointSetSurface {
     /// Far-field value: `∓ max_radius`, negative where the point-cloud winding number is
     /// above 1/2 (inside). `den` is the total kernel weight at `x`.
     fn far_value(&self, x: DVec3, den: f64) -> f64 {
+        if den == 0.0 {
+            match self.far_cache.get(x) {
+                1 => return self.max_radius,
+                -1 => return -self.max_radius,
+                _ => {}
+            }
+        }
+        self.far_value_uncached(x, den)
+    }
+
+    fn far_value_uncached(&self, x: DVec3, den: f64) -> f64 {
         let coarse = match &self.gwn_coarse {
             Some(c) if den == 0.0 => Some(c.winding_number(x)),
             _ => None,
@@ -712,18 +823,7 @@ impl Surface for PointSetSurface {
             // Positive on and outside the bounding sphere (far from every point).
             return dc - self.sphere.radius + self.max_radius;
         }
-        let (num, den, _) = self.sums(x);
-        if den >= MIN_WEIGHT {
-            return num / den;
-        }
-        let far = self.far_value(x, den);
-        if den <= 0.0 {
-            return far;
-        }
-        // Smooth blend between the two (they have the same sign away from the surface).
-        let a = den / MIN_WEIGHT;
-        let a = a * a * (3.0 - 2.0 * a);
-        a * (num / den) + (1.0 - a) * far
+        self.value_with_far(x, |den| self.far_value(x, den))
     }
 
     /// Points on the MLS surface: the highest and lowest input points of each component
@@ -841,7 +941,14 @@ impl Surface for PointSetSurface {
 /// Illinois root finding on `[a, b]` (`fa`, `fb` of opposite signs), safeguarded by bisection
 /// steps when the bracket shrinks slowly. Returns a point within `tol` of a sign change (or
 /// where `|f| < tol`, for functions close to a distance).
-fn illinois(f: impl Fn(DVec3) -> f64, a: DVec3, fa: f64, b: DVec3, fb: f64, tol: f64) -> DVec3 {
+pub(crate) fn illinois(
+    f: impl Fn(DVec3) -> f64,
+    a: DVec3,
+    fa: f64,
+    b: DVec3,
+    fb: f64,
+    tol: f64,
+) -> DVec3 {
     let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
     let mut side = 0i8;
     let mut prev_len = (b - a).length();

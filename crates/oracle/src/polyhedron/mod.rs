@@ -18,11 +18,18 @@
 //!   bisection on the winding number as a fallback (e.g. through a hole).
 //! - P1 ([`Surface::seed_points`]): triangle centroids, at least one per connected component.
 //!
+//! - [`SmoothPolyhedron`]: the oracle used for remeshing (`cargo xtask mesh model.ply`): an
+//!   IMLS approximation of the triangles, so that the manifold patch terminates at creases
+//!   (see its module documentation); projection stays exact onto the input.
+//!
 //! Invariants kept by [`PolyhedronSurface`]: every stored triangle is non-degenerate (exactly)
 //! and has finite vertices within the exact range of the predicates.
 
 pub(crate) mod bvh;
 mod predicates;
+mod smooth;
+
+pub use smooth::{DEFAULT_SAMPLES, SmoothPolyhedron};
 
 use crate::roots::{SplitMix64, bisect};
 use crate::{BoundingSphere, Surface};
