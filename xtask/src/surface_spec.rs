@@ -42,10 +42,10 @@ pub struct SurfaceOptions {
     /// Read a .ply as a triangle mesh or as a point set (default: by its faces).
     #[arg(long = "as", value_enum)]
     pub as_kind: Option<AsKind>,
-    /// Mesh input: mesh the exact polyhedron instead of its smooth IMLS approximation (the
-    /// manifold patch may then not terminate near creases; see oracle::polyhedron::smooth).
+    /// Mesh input: mesh a smooth IMLS approximation of the polyhedron (rounds sharp edges by
+    /// about one kernel radius) instead of the exact triangles (the default).
     #[arg(long)]
-    pub exact_polyhedron: bool,
+    pub smooth_polyhedron: bool,
 }
 
 /// An opened surface with what the command needs to know about it.
@@ -282,8 +282,8 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
         poly.stats(),
         sharp_edges.len(),
     )];
-    let surface: Box<dyn Surface> = if o.exact_polyhedron {
-        notes.push("polyhedron: meshing the exact triangles (--exact-polyhedron)".into());
+    let surface: Box<dyn Surface> = if !o.smooth_polyhedron {
+        notes.push("polyhedron: meshing the exact triangles (--smooth-polyhedron meshes a smooth approximation)".into());
         Box::new(poly)
     } else {
         let n = oracle::polyhedron::DEFAULT_SAMPLES;

@@ -517,19 +517,17 @@ fn function_returning_nan_inside_the_ball() {
 #[test]
 fn size_must_be_positive() {
     let d = scratch("bad_size");
-    for s in [
-        "--size=0",
-        "--size=-1",
-        "--size=nan",
-        "--size=inf",
-    ] {
+    for s in ["--size=0", "--size=-1", "--size=nan", "--size=inf"] {
         let out = xtask(&d, &["mesh", "-q", "implicit:sphere", s, "-o", "x.ply"]);
         let e = failure(&out, true);
         mentions(&e, &["must be a positive number"]);
     }
     for s in ["--epsilon=0", "--epsilon=-0.1", "--epsilon=1.5"] {
         let out = xtask(&d, &["mesh", "-q", "implicit:sphere", s, "-o", "x.ply"]);
-        mentions(&failure(&out, true), &["--epsilon", "epsilon must be in (0, 1)"]);
+        mentions(
+            &failure(&out, true),
+            &["--epsilon", "epsilon must be in (0, 1)"],
+        );
     }
     let out = xtask(
         &d,

@@ -296,15 +296,19 @@ fn tree() -> impl Strategy<Value = T> {
     })
 }
 
+/// Equal up to a few ulps (integer powers are evaluated as products, whose rounding can differ
+/// from `powf` by an ulp or so).
 fn same(a: f64, b: f64) -> bool {
-    (a.is_nan() && b.is_nan()) || a == b
+    (a.is_nan() && b.is_nan())
+        || a == b
+        || (a - b).abs() <= 8.0 * f64::EPSILON * a.abs().max(b.abs())
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(400))]
 
     /// The compiled program (folding, sharing, powers as products) computes exactly what the
-    /// tree says, bit for bit, at random points.
+    /// tree says, to a few ulps, at random points.
     #[test]
     fn compiled_equals_reference(t in tree(), pts in prop::collection::vec(prop::array::uniform3(-2.0f64..2.0), 8)) {
         let src = t.src();
