@@ -133,6 +133,19 @@ pub fn parse_vec3(s: &str, what: &str) -> Result<Vec<f64>> {
         .collect()
 }
 
+/// The mesher's surface Delaunay balls in `verify`'s form (one per output triangle).
+pub fn verify_balls(balls: &[rdt_mesher::SurfaceBall]) -> Vec<verify::SurfaceBall> {
+    balls
+        .iter()
+        .enumerate()
+        .map(|(i, b)| verify::SurfaceBall {
+            facet: i,
+            center: b.center,
+            radius: b.radius,
+        })
+        .collect()
+}
+
 pub fn read_xyz(path: &PathBuf) -> Result<Vec<DVec3>> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
@@ -298,23 +311,14 @@ pub fn run(a: &MeshArgs) -> Result<()> {
             ),
             Err(e) => format!("sharp edges: deviation not measured ({e})"),
         };
-        println!("{n}");
+        outln!("{n}");
         notes.push(n);
     }
     let check = if a.no_verify {
         None
     } else {
         bar.set_message("verifying");
-        let balls = result
-            .balls
-            .iter()
-            .enumerate()
-            .map(|(i, b)| verify::SurfaceBall {
-                facet: i,
-                center: b.center,
-                radius: b.radius,
-            })
-            .collect();
+        let balls = verify_balls(&result.balls);
         let vopts = verify::Options {
             samples_per_edge: 2,
             surface_balls: Some(balls),
@@ -484,17 +488,7 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
     meshio::write(&out_path, &tp.second.mesh)
         .with_context(|| format!("writing {}", out_path.display()))?;
     let check = (!a.no_verify).then(|| {
-        let balls = tp
-            .second
-            .balls
-            .iter()
-            .enumerate()
-            .map(|(i, b)| verify::SurfaceBall {
-                facet: i,
-                center: b.center,
-                radius: b.radius,
-            })
-            .collect();
+        let balls = verify_balls(&tp.second.balls);
         let vopts = verify::Options {
             samples_per_edge: 2,
             surface_balls: Some(balls),

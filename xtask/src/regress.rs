@@ -229,16 +229,7 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         .map(|b| b.radius / j.sigma)
         .fold(0.0, f64::max);
     let dm = surface.dm_inf_hint();
-    let balls = res
-        .balls
-        .iter()
-        .enumerate()
-        .map(|(i, b)| verify::SurfaceBall {
-            facet: i,
-            center: b.center,
-            radius: b.radius,
-        })
-        .collect();
+    let balls = crate::mesh_cmd::verify_balls(&res.balls);
     let vopts = verify::Options {
         samples_per_edge: 2,
         surface_balls: Some(balls),
