@@ -23,7 +23,7 @@ pub struct MeshArgs {
     /// point set (.xyz, .ply without faces). Default: implicit:torus.
     pub input: Option<String>,
     /// Size bound sigma (constant), in the surface's units.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "epsilon")]
     pub size: Option<f64>,
     /// Target epsilon: two-pass sizing (section 6.5): a uniform pass at sigma_0 = epsilon *
     /// d_M^inf, then an adaptive pass at sigma = 0.9 epsilon d_M (lambda-medial axis estimate).
