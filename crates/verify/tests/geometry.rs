@@ -236,7 +236,6 @@ fn reports_do_not_depend_on_the_thread_count() {
 }
 
 #[test]
-#[ignore = "needs delaunay3"]
 fn voronoi_poles_estimate_dm_on_the_sphere() {
     let samples = fibonacci_sphere(2000);
     let dm = verify::estimate_dm(&samples, None).unwrap();
