@@ -464,7 +464,7 @@ impl<'a> Refiner<'a> {
                 let f = Facet { cell: c, index: i };
                 let m = self.tri.mirror_facet(f);
                 if self.tri.is_infinite(m.cell) || c < m.cell {
-                    self.test_facet(f)?;
+                    self.test_facet(f, m)?;
                 }
             }
         }
@@ -588,18 +588,18 @@ impl<'a> Refiner<'a> {
 
     /// Test the facet `f` and insert its entry if it is restricted. The caller has removed
     /// any previous entry of this facet (all facets of destroyed cells are removed first).
-    fn test_facet(&mut self, f: Facet) -> Result<(), MeshError> {
+    /// `m` is `f`'s mirror facet.
+    fn test_facet(&mut self, f: Facet, m: Facet) -> Result<(), MeshError> {
         // Always look from a finite cell: only finite cells' facet orientation is used.
-        let f = if self.tri.is_infinite(f.cell) {
-            self.tri.mirror_facet(f)
+        let (f, m) = if self.tri.is_infinite(f.cell) {
+            (m, f)
         } else {
-            f
+            (f, m)
         };
         let verts = self.tri.facet_vertices(f);
         if verts.contains(&INFINITE_VERTEX) {
             return Ok(());
         }
-        let m = self.tri.mirror_facet(f);
         if self.opts.oracle == OracleKind::Bipolar {
             // Cheap rejection from the cached signs. An end outside the bounding ball (or a
             // hull facet's ray, which ends outside it) counts as outside, exactly as its
@@ -784,7 +784,7 @@ impl<'a> Refiner<'a> {
                 let m_created = (m.cell as usize) < self.created_stamp.len()
                     && self.created_stamp[m.cell as usize] == self.round;
                 if !m_created || c < m.cell {
-                    self.test_facet(f)?;
+                    self.test_facet(f, m)?;
                 }
             }
         }
