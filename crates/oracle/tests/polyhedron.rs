@@ -9,33 +9,9 @@ use oracle::polyhedron::{
 };
 use proptest::prelude::*;
 
-/// Read a PLY triangle mesh (test helper; the project's reader lives in meshio).
+/// Read a PLY triangle mesh with the project's reader.
 fn read_ply(path: &str) -> TriMesh {
-    use ply_rs_bw::parser::Parser;
-    use ply_rs_bw::ply::{DefaultElement, Property};
-    let mut f = std::io::BufReader::new(std::fs::File::open(path).unwrap());
-    let ply = Parser::<DefaultElement>::new().read_ply(&mut f).unwrap();
-    let num = |p: &Property| match p {
-        Property::Float(x) => *x as f64,
-        Property::Double(x) => *x,
-        other => panic!("unexpected {other:?}"),
-    };
-    let vertices = ply.payload["vertex"]
-        .iter()
-        .map(|v| DVec3::new(num(&v["x"]), num(&v["y"]), num(&v["z"])))
-        .collect();
-    let triangles = ply.payload["face"]
-        .iter()
-        .map(|f| match &f["vertex_indices"] {
-            Property::ListInt(l) => [l[0] as u32, l[1] as u32, l[2] as u32],
-            Property::ListUInt(l) => [l[0], l[1], l[2]],
-            other => panic!("unexpected {other:?}"),
-        })
-        .collect();
-    TriMesh {
-        vertices,
-        triangles,
-    }
+    meshio::read(path).expect("fixture mesh")
 }
 
 fn bunny() -> TriMesh {
