@@ -454,10 +454,10 @@ impl<'a> Refiner<'a> {
 
     /// Compute every cell's circumcenter and value, and test every facet of Del(E) once.
     fn full_scan(&mut self) -> Result<(), MeshError> {
-        let cells: Vec<CellId> = self.tri.finite_cells().collect();
-        for &c in &cells {
-            self.update_cell(c)?;
+        for c in self.tri.live_cells().collect::<Vec<_>>() {
+            self.update_cell(c)?; // infinite cells get f = +inf
         }
+        let cells: Vec<CellId> = self.tri.finite_cells().collect();
         self.eval_cells(&cells)?;
         for &c in &cells {
             for i in 0..4u8 {
@@ -596,23 +596,18 @@ impl<'a> Refiner<'a> {
         } else {
             (f, m)
         };
+        if self.opts.oracle == OracleKind::Bipolar {
+            // Cheap rejection from the cached signs (infinite cells have f = +inf, so a facet
+            // of two infinite cells, which has the infinite vertex, is rejected here). An end
+            // outside the bounding ball (or a hull facet's ray, which ends outside it) counts
+            // as outside, exactly as its clipped end on the ball's boundary would.
+            if inside(self.cells[f.cell as usize].f) == inside(self.cells[m.cell as usize].f) {
+                return Ok(());
+            }
+        }
         let verts = self.tri.facet_vertices(f);
         if verts.contains(&INFINITE_VERTEX) {
             return Ok(());
-        }
-        if self.opts.oracle == OracleKind::Bipolar {
-            // Cheap rejection from the cached signs. An end outside the bounding ball (or a
-            // hull facet's ray, which ends outside it) counts as outside, exactly as its
-            // clipped end on the ball's boundary would.
-            let fa = self.cells[f.cell as usize].f;
-            let fb = if self.tri.is_infinite(m.cell) {
-                f64::INFINITY
-            } else {
-                self.cells[m.cell as usize].f
-            };
-            if inside(fa) == inside(fb) {
-                return Ok(());
-            }
         }
         let key = sorted3(verts);
         let Some((p, fp, q, fq)) = self.clipped_dual(f, m, verts) else {
@@ -777,15 +772,25 @@ impl<'a> Refiner<'a> {
             }
             self.created_stamp[idx] = self.round;
         }
+        let bipolar = self.opts.oracle == OracleKind::Bipolar;
         for &c in &changes.created {
+            let fc = self.cells[c as usize].f;
             for i in 0..4u8 {
+                let n = self.tri.neighbor(c, i as usize);
+                let n_created = (n as usize) < self.created_stamp.len()
+                    && self.created_stamp[n as usize] == self.round;
+                if n_created && n < c {
+                    continue; // tested from n's side
+                }
+                // Invariant (kept by `full_scan` and `update_cell`): every live cell has its
+                // entry in `cells`, with f = +inf for infinite cells. So the bipolar sign
+                // rejection of `test_facet` can run here before the mirror facet is built.
+                if bipolar && inside(fc) == inside(self.cells[n as usize].f) {
+                    continue;
+                }
                 let f = Facet { cell: c, index: i };
                 let m = self.tri.mirror_facet(f);
-                let m_created = (m.cell as usize) < self.created_stamp.len()
-                    && self.created_stamp[m.cell as usize] == self.round;
-                if !m_created || c < m.cell {
-                    self.test_facet(f, m)?;
-                }
+                self.test_facet(f, m)?;
             }
         }
         self.changes = changes;
