@@ -150,6 +150,9 @@ pub struct Stats {
     pub oracle_value_calls: u64,
     /// Oracle crossing (bipolar or intersection) queries.
     pub oracle_crossing_calls: u64,
+    /// Batches of oracle calls that ran on several threads (they are chosen from measured
+    /// call costs, so this varies from run to run; the mesh does not).
+    pub parallel_oracle_batches: u64,
     pub time_total_s: f64,
     pub time_delaunay_s: f64,
     pub time_oracle_s: f64,
@@ -231,6 +234,44 @@ impl PartialOrd for QEntry {
         Some(self.cmp(o))
     }
 }
+
+/// A facet test between its geometric and its oracle half (see `Refiner::test_facets`).
+#[derive(Clone, Copy, Debug)]
+struct PendingFacet {
+    f: Facet,
+    m: Facet,
+    verts: [VertexId; 3],
+    p: DVec3,
+    fp: f64,
+    q: DVec3,
+    fq: f64,
+}
+
+/// Running mean of the wall time of one oracle call (over the last ~thousand batches).
+/// Only used to choose between a sequential and a parallel batch, never for results.
+#[derive(Clone, Copy, Debug, Default)]
+struct CostEstimate {
+    ns: f64,
+    calls: f64,
+}
+
+impl CostEstimate {
+    fn observe(&mut self, dt: Duration, n: usize) {
+        const DECAY: f64 = 0.999;
+        self.ns = self.ns * DECAY + dt.as_nanos() as f64;
+        self.calls = self.calls * DECAY + n as f64;
+    }
+    fn ns_per_call(&self) -> f64 {
+        if self.calls > 0.0 {
+            self.ns / self.calls
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A batch of oracle calls runs in parallel when it is expected to take longer than this.
+const PARALLEL_BATCH_NS: f64 = 60_000.0;
 
 /// Rounds of random rays (section 6.4.3) per control point before it is reported missing.
 const MAX_RAY_ROUNDS: u32 = 16;
@@ -326,6 +367,13 @@ pub(crate) struct Refiner<'a> {
     ray_attempts: Vec<u32>,
     round: u32,
     crossings_buf: Vec<DVec3>,
+    pending_buf: Vec<PendingFacet>,
+    hits_buf: Vec<Option<(DVec3, bool)>>,
+    pairs_buf: Vec<(Facet, Facet)>,
+    /// Measured costs of the oracle's calls, to decide when a batch runs in parallel.
+    value_cost: CostEstimate,
+    crossing_cost: CostEstimate,
+    threads: usize,
     control: Vec<VertexId>,
     rng: SplitMix64,
     stats: Stats,
@@ -356,6 +404,12 @@ impl<'a> Refiner<'a> {
             ray_attempts: Vec::new(),
             round: 0,
             crossings_buf: Vec::new(),
+            pending_buf: Vec::new(),
+            hits_buf: Vec::new(),
+            pairs_buf: Vec::new(),
+            value_cost: CostEstimate::default(),
+            crossing_cost: CostEstimate::default(),
+            threads: rayon::current_num_threads(),
             control: Vec::new(),
             rng: SplitMix64(opts.seed ^ 0xA076_1D64_78BD_642F),
             stats: Stats::default(),
@@ -459,14 +513,18 @@ impl<'a> Refiner<'a> {
         }
         let cells: Vec<CellId> = self.tri.finite_cells().collect();
         self.eval_cells(&cells)?;
+        let mut pairs = Vec::new();
         for &c in &cells {
             for i in 0..4u8 {
                 let f = Facet { cell: c, index: i };
                 let m = self.tri.mirror_facet(f);
                 if self.tri.is_infinite(m.cell) || c < m.cell {
-                    self.test_facet(f, m)?;
+                    pairs.push((f, m));
                 }
             }
+        }
+        for chunk in pairs.chunks(4096) {
+            self.test_facets(chunk)?;
         }
         Ok(())
     }
@@ -526,13 +584,38 @@ impl<'a> Refiner<'a> {
     /// (timed as oracle time).
     fn eval_cells(&mut self, cells: &[CellId]) -> Result<(), MeshError> {
         let t = Instant::now();
-        for &c in cells {
-            let info = self.cells[c as usize];
-            if info.f.is_nan() {
-                self.cells[c as usize].f = self.eval(info.cc)?;
+        let n = cells.len();
+        if self.count_parallel(self.parallel_worthwhile(n, self.value_cost)) {
+            use rayon::prelude::*;
+            let (s, info) = (self.s, &self.cells);
+            let vals: Vec<f64> = cells
+                .par_iter()
+                .map(|&c| {
+                    let i = info[c as usize];
+                    if i.f.is_nan() { s.value(i.cc) } else { i.f }
+                })
+                .collect();
+            for (&c, v) in cells.iter().zip(vals) {
+                let info = self.cells[c as usize];
+                if info.f.is_nan() {
+                    self.values += 1;
+                    if v.is_nan() {
+                        return Err(OracleError::NaN(info.cc.x, info.cc.y, info.cc.z).into());
+                    }
+                    self.cells[c as usize].f = v;
+                }
+            }
+        } else {
+            for &c in cells {
+                let info = self.cells[c as usize];
+                if info.f.is_nan() {
+                    self.cells[c as usize].f = self.eval(info.cc)?;
+                }
             }
         }
-        self.t_oracle += t.elapsed();
+        let dt = t.elapsed();
+        self.t_oracle += dt;
+        self.value_cost.observe(dt, n);
         Ok(())
     }
 
@@ -586,53 +669,58 @@ impl<'a> Refiner<'a> {
         Some((pc, fp, qc, fq))
     }
 
-    /// Test the facet `f` and insert its entry if it is restricted. The caller has removed
-    /// any previous entry of this facet (all facets of destroyed cells are removed first).
-    /// `m` is `f`'s mirror facet.
-    fn test_facet(&mut self, f: Facet, m: Facet) -> Result<(), MeshError> {
+    /// First half of a facet test: orient `(f, m)` from a finite cell, reject it from the
+    /// cached signs (bipolar oracle), and clip its dual. `None` = not restricted.
+    fn prepare_facet(&self, f: Facet, m: Facet) -> Option<PendingFacet> {
         // Always look from a finite cell: only finite cells' facet orientation is used.
         let (f, m) = if self.tri.is_infinite(f.cell) {
             (m, f)
         } else {
             (f, m)
         };
-        if self.opts.oracle == OracleKind::Bipolar {
-            // Cheap rejection from the cached signs (infinite cells have f = +inf, so a facet
-            // of two infinite cells, which has the infinite vertex, is rejected here). An end
-            // outside the bounding ball (or a hull facet's ray, which ends outside it) counts
-            // as outside, exactly as its clipped end on the ball's boundary would.
-            if inside(self.cells[f.cell as usize].f) == inside(self.cells[m.cell as usize].f) {
-                return Ok(());
-            }
+        let bipolar = self.opts.oracle == OracleKind::Bipolar;
+        // Cheap rejection from the cached signs (infinite cells have f = +inf, so a facet of
+        // two infinite cells, which has the infinite vertex, is rejected here). An end outside
+        // the bounding ball (or a hull facet's ray, which ends outside it) counts as outside,
+        // exactly as its clipped end on the ball's boundary would.
+        if bipolar && inside(self.cells[f.cell as usize].f) == inside(self.cells[m.cell as usize].f)
+        {
+            return None;
         }
         let verts = self.tri.facet_vertices(f);
         if verts.contains(&INFINITE_VERTEX) {
-            return Ok(());
+            return None;
         }
-        let key = sorted3(verts);
-        let Some((p, fp, q, fq)) = self.clipped_dual(f, m, verts) else {
-            return Ok(());
-        };
-        let t = Instant::now();
-        let hit = match self.opts.oracle {
+        let (p, fp, q, fq) = self.clipped_dual(f, m, verts)?;
+        if bipolar && inside(fp) == inside(fq) {
+            return None;
+        }
+        Some(PendingFacet {
+            f,
+            m,
+            verts,
+            p,
+            fp,
+            q,
+            fq,
+        })
+    }
+
+    /// The oracle half of a facet test (pure: may run on any thread): the surface Delaunay
+    /// ball's center and whether the dual leaves `f.cell` outward (from inside S to outside).
+    fn resolve_facet(&self, pf: &PendingFacet, buf: &mut Vec<DVec3>) -> Option<(DVec3, bool)> {
+        let PendingFacet { p, fp, q, fq, .. } = *pf;
+        match self.opts.oracle {
             OracleKind::Bipolar => {
-                if inside(fp) == inside(fq) {
-                    None
-                } else {
-                    self.crossing_calls += 1;
-                    // Values on the ball boundary are positive by contract; pass a finite one.
-                    let fpv = if fp.is_finite() { fp } else { 1.0 };
-                    let fqv = if fq.is_finite() { fq } else { 1.0 };
-                    let c = self.s.crossing(p, fpv, q, fqv);
-                    Some((c, inside(fp)))
-                }
+                // Values on the ball boundary are positive by contract; pass a finite one.
+                let fpv = if fp.is_finite() { fp } else { 1.0 };
+                let fqv = if fq.is_finite() { fq } else { 1.0 };
+                Some((self.s.crossing(p, fpv, q, fqv), inside(fp)))
             }
             OracleKind::Intersection => {
-                self.crossing_calls += 1;
-                let mut buf = std::mem::take(&mut self.crossings_buf);
                 buf.clear();
-                self.s.crossings(p, q, &mut buf);
-                let pts = verts.map(|v| self.tri.point(v));
+                self.s.crossings(p, q, buf);
+                let pts = pf.verts.map(|v| self.tri.point(v));
                 let mut best: Option<(DVec3, bool, f64)> = None;
                 for (k, c) in buf.iter().enumerate() {
                     let r = pts.iter().map(|v| v.distance(*c)).fold(0.0, f64::max);
@@ -642,17 +730,78 @@ impl<'a> Refiner<'a> {
                         best = Some((*c, before_inside, r));
                     }
                 }
-                self.crossings_buf = buf;
                 best.map(|(c, o, _)| (c, o))
             }
-        };
-        self.t_oracle += t.elapsed();
-        let Some((center, outward_from_cell)) = hit else {
+        }
+    }
+
+    /// Test the facets `pairs` (each with its mirror facet) and insert an entry for each
+    /// restricted one, in the order given. The caller has removed any previous entry of these
+    /// facets (all facets of destroyed cells are removed first). The oracle calls of one
+    /// batch run in parallel when they are expensive enough to pay for it; the result does
+    /// not depend on it (each call is a pure function of its segment).
+    fn test_facets(&mut self, pairs: &[(Facet, Facet)]) -> Result<(), MeshError> {
+        let mut pending = std::mem::take(&mut self.pending_buf);
+        pending.clear();
+        pending.extend(pairs.iter().filter_map(|&(f, m)| self.prepare_facet(f, m)));
+        if pending.is_empty() {
+            self.pending_buf = pending;
             return Ok(());
-        };
+        }
+        self.crossing_calls += pending.len() as u64;
+        let t = Instant::now();
+        let mut hits = std::mem::take(&mut self.hits_buf);
+        hits.clear();
+        if self.count_parallel(self.parallel_worthwhile(pending.len(), self.crossing_cost)) {
+            use rayon::prelude::*;
+            let this = &*self;
+            pending
+                .par_iter()
+                .map_init(Vec::new, |buf, pf| this.resolve_facet(pf, buf))
+                .collect_into_vec(&mut hits);
+        } else {
+            let mut buf = std::mem::take(&mut self.crossings_buf);
+            for pf in &pending {
+                hits.push(self.resolve_facet(pf, &mut buf));
+            }
+            self.crossings_buf = buf;
+        }
+        let dt = t.elapsed();
+        self.t_oracle += dt;
+        self.crossing_cost.observe(dt, pending.len());
+        for (pf, hit) in pending.iter().zip(&hits) {
+            if let Some(hit) = *hit {
+                self.register_facet(pf, hit)?;
+            }
+        }
+        self.pending_buf = pending;
+        self.hits_buf = hits;
+        Ok(())
+    }
+
+    /// Whether a batch of `n` oracle calls of the measured `cost` is worth spreading over
+    /// threads (only when there are several, and the batch takes long enough to pay rayon's
+    /// fork-join, a few microseconds).
+    fn parallel_worthwhile(&self, n: usize, cost: CostEstimate) -> bool {
+        n >= 2 && self.threads > 1 && cost.ns_per_call() * n as f64 > PARALLEL_BATCH_NS
+    }
+
+    fn count_parallel(&mut self, parallel: bool) -> bool {
+        self.stats.parallel_oracle_batches += parallel as u64;
+        parallel
+    }
+
+    /// Last half of a facet test: register a restricted facet and queue it if bad.
+    fn register_facet(
+        &mut self,
+        pf: &PendingFacet,
+        (center, outward_from_cell): (DVec3, bool),
+    ) -> Result<(), MeshError> {
+        let PendingFacet { f, m, verts, .. } = *pf;
         if !center.is_finite() {
             return Err(OracleError::NaN(center.x, center.y, center.z).into());
         }
+        let key = sorted3(verts);
         let pts = verts.map(|v| self.tri.point(v));
         let radius = pts.iter().map(|v| v.distance(center)).fold(0.0, f64::max);
         if let Some(crate::Sizing::Field(_)) = &self.opts.criteria.size {
@@ -773,6 +922,8 @@ impl<'a> Refiner<'a> {
             self.created_stamp[idx] = self.round;
         }
         let bipolar = self.opts.oracle == OracleKind::Bipolar;
+        let mut pairs = std::mem::take(&mut self.pairs_buf);
+        pairs.clear();
         for &c in &changes.created {
             let fc = self.cells[c as usize].f;
             for i in 0..4u8 {
@@ -789,11 +940,13 @@ impl<'a> Refiner<'a> {
                     continue;
                 }
                 let f = Facet { cell: c, index: i };
-                let m = self.tri.mirror_facet(f);
-                self.test_facet(f, m)?;
+                pairs.push((f, self.tri.mirror_facet(f)));
             }
         }
+        let r = self.test_facets(&pairs);
+        self.pairs_buf = pairs;
         self.changes = changes;
+        r?;
         Ok(true)
     }
 

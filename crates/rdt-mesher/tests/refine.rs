@@ -161,6 +161,49 @@ fn deterministic_bit_for_bit() {
     assert_eq!(a.mesh, b.mesh);
 }
 
+/// An oracle slow enough (~5 us a value) that the mesher runs its batches of oracle calls on
+/// several threads: the mesh must be the same, bit for bit, as on one thread, with both oracles.
+#[test]
+fn parallel_oracle_batches_do_not_change_the_mesh() {
+    let slow_torus = Analytic {
+        f: |p: DVec3| {
+            let mut acc = 0.0f64;
+            for k in 0..400 {
+                acc += std::hint::black_box((k as f64).sqrt());
+            }
+            let q = p.length_squared() + 1.0 - 0.09;
+            q * q - 4.0 * (p.x * p.x + p.y * p.y) + 0.0 * acc
+        },
+        center: DVec3::ZERO,
+        radius: 2.0,
+    };
+    for oracle in [OracleKind::Bipolar, OracleKind::Intersection] {
+        let opts = MeshOptions {
+            criteria: Criteria::uniform(0.15),
+            oracle,
+            seed: 3,
+            ..Default::default()
+        };
+        let in_pool = |n: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+                .install(|| mesh(&slow_torus, &opts).unwrap())
+        };
+        let one = in_pool(1);
+        let four = in_pool(4);
+        assert_eq!(one.stats.parallel_oracle_batches, 0);
+        assert!(
+            four.stats.parallel_oracle_batches > 0,
+            "the parallel path was not exercised ({oracle:?})"
+        );
+        assert_eq!(one.mesh, four.mesh, "{oracle:?}");
+        assert_eq!(one.stats.oracle_value_calls, four.stats.oracle_value_calls);
+        check_closed_manifold(&four, 1);
+    }
+}
+
 #[test]
 fn sign_only_function_meshes_with_bipolar() {
     let s = Analytic {
