@@ -83,4 +83,11 @@ fn main() {
         eprintln!("error: {msg}");
         std::process::exit(1);
     }
+    if let Cmd::Mesh(a) = &cli.cmd
+        && a.strict
+        && mesh_cmd::VERDICT_FAILED.load(std::sync::atomic::Ordering::Relaxed)
+    {
+        eprintln!("error: --strict: the verification failed or a criterion is unmet (see above)");
+        std::process::exit(3);
+    }
 }

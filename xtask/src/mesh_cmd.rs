@@ -7,6 +7,7 @@ use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rdt_mesher::{Criteria, MeshOptions, OracleKind, Sizing};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -72,6 +73,10 @@ pub struct MeshArgs {
     /// quality, Hausdorff against the surface, loose-epsilon certificate).
     #[arg(long)]
     pub no_verify: bool,
+    /// Exit with status 3 (after writing the mesh and the report) when the verification
+    /// fails or a criterion is unmet: for scripts and regression suites.
+    #[arg(long)]
+    pub strict: bool,
     /// Requested epsilon for the certificate (default: sigma / d_M^inf when known).
     #[arg(long)]
     pub certify_epsilon: Option<f64>,
@@ -132,6 +137,10 @@ pub fn parse_vec3(s: &str, what: &str) -> Result<Vec<f64>> {
         })
         .collect()
 }
+
+/// Set when a run prints a failed verdict (verification FAIL, unmet criteria, a budget hit):
+/// with `--strict` the command then exits with status 3 (see `main`).
+pub static VERDICT_FAILED: AtomicBool = AtomicBool::new(false);
 
 /// The mesher's surface Delaunay balls in `verify`'s form (one per output triangle).
 pub fn verify_balls(balls: &[rdt_mesher::SurfaceBall]) -> Vec<verify::SurfaceBall> {
@@ -373,6 +382,7 @@ pub fn run(a: &MeshArgs) -> Result<()> {
     if let Some(c) = &check {
         if !c.passed() {
             outln!("verify: FAIL: {}", c.failures().join(", "));
+            VERDICT_FAILED.store(true, Ordering::Relaxed);
         } else {
             outln!("verify: PASS ({} checks)", c.checks.len());
         }
@@ -381,6 +391,9 @@ pub fn run(a: &MeshArgs) -> Result<()> {
         outln!("stopped by {s}; unmet: {}", st.unmet.join("; "));
     } else if !st.unmet.is_empty() {
         outln!("unmet: {}", st.unmet.join("; "));
+    }
+    if !st.unmet.is_empty() || st.stopped_by.is_some() {
+        VERDICT_FAILED.store(true, Ordering::Relaxed);
     }
     if let Some(r) = &a.report {
         let report = serde_json::json!({
@@ -517,11 +530,13 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
             );
         } else {
             outln!("verify: FAIL: {}", c.failures().join(", "));
+            VERDICT_FAILED.store(true, Ordering::Relaxed);
         }
     }
     for (name, st) in [("first", s1), ("second", s2)] {
         if let Some(s) = &st.stopped_by {
             outln!("{name} pass stopped by {s}; unmet: {}", st.unmet.join("; "));
+            VERDICT_FAILED.store(true, Ordering::Relaxed);
         }
     }
     if let Some(r) = &a.report {

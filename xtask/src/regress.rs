@@ -92,12 +92,7 @@ const SURFACES: &[SurfaceCase] = &[
     SurfaceCase {
         name: "chair",
         sizes: [("2k", 0.29), ("50k", 0.058)],
-        expected_fail: &[(
-            "2k",
-            "normals",
-            "chair at sigma 0.29 is too coarse for a normal guarantee (facets near the saddles \
-             face inward; none from sigma 0.2 down); no guarantee applies: d_M unknown",
-        )],
+        expected_fail: &[],
     },
     SurfaceCase {
         name: "blobs",
@@ -107,11 +102,7 @@ const SURFACES: &[SurfaceCase] = &[
     SurfaceCase {
         name: "heart",
         sizes: [("2k", 0.062), ("12k", 0.025)],
-        expected_fail: &[(
-            "",
-            "normals",
-            "heart is not smooth: the gradient vanishes at its two singular points",
-        )],
+        expected_fail: &[],
     },
     SurfaceCase {
         name: "two_spheres",

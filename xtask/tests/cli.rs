@@ -844,3 +844,47 @@ fn mesh_cube_terminates_with_a_closed_manifold() {
         "{s}"
     );
 }
+
+/// `--strict` turns a failed verdict (here: a vertex budget that stops the run with the size
+/// criterion unmet) into exit status 3, after the mesh and the report are written; the same run
+/// without `--strict` exits 0, and a run whose verdict passes exits 0 with `--strict`.
+#[test]
+fn strict_exit_status_follows_the_verdict() {
+    let dir = scratch("strict");
+    let args = [
+        "mesh",
+        "implicit:sphere",
+        "--size",
+        "0.05",
+        "--max-vertices",
+        "50",
+        "-o",
+        "s.ply",
+        "--report",
+        "s.json",
+        "--quiet",
+    ];
+    let lenient = xtask(&dir, &args);
+    assert!(ok(&lenient).contains("stopped by max_vertices"));
+    let mut strict_args = args.to_vec();
+    strict_args.push("--strict");
+    let strict = xtask(&dir, &strict_args);
+    assert_no_panic(&strict);
+    assert_eq!(strict.status.code(), Some(3), "{}", text(&strict.stderr));
+    assert!(text(&strict.stderr).contains("--strict"));
+    assert!(dir.join("s.ply").exists() && dir.join("s.json").exists());
+    let good = xtask(
+        &dir,
+        &[
+            "mesh",
+            "implicit:sphere",
+            "--size",
+            "0.2",
+            "-o",
+            "g.ply",
+            "--quiet",
+            "--strict",
+        ],
+    );
+    assert!(ok(&good).contains("verify: PASS"));
+}

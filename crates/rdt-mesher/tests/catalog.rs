@@ -242,6 +242,15 @@ fn sphere_certificate_at_sigma_0_09() {
     assert_eq!(rep.status("loose-epsilon"), Some(verify::Status::Pass));
     // Theorem 4.7 applies (eps < 0.096) and holds.
     assert_eq!(rep.status("theorem-4.7"), Some(verify::Status::Pass));
+    // Lemma 3.1 applies (rho < 1/7): facet normals within its bound of the sphere's normals.
+    let bound = verify::certificate::normal_bound_deg(cert.eps_achieved).unwrap();
+    let nd = &rep.geometry.as_ref().unwrap().normals;
+    eprintln!(
+        "sphere normals: max {} deg (bound {bound} deg)",
+        nd.max_line_deg
+    );
+    assert!(nd.max_line_deg <= bound && nd.max_line_deg > 0.0);
+    assert_eq!(rep.status("normals"), Some(verify::Status::Pass));
     // A stricter request fails: the certificate can fail.
     let strict = verify::Options {
         epsilon: Some(0.05),

@@ -233,6 +233,24 @@ pub struct HausdorffBound {
     pub holds: bool,
 }
 
+/// Lemma 3.1's bound, in degrees, on the angle between the line normal to a restricted
+/// facet and the normal to S at any of its vertices, when every surface Delaunay ball
+/// B(c, r) has r <= rho d_M(c) with rho < 1/7: 2 rho / (1 - 7 rho) + asin(rho sqrt(3) / (1 - rho))
+/// (the bound for vertices of any inner angle). `None` when rho is not in [0, 1/7).
+///
+/// ```
+/// let b = verify::certificate::normal_bound_deg(0.09).unwrap();
+/// assert!((b - 37.7).abs() < 0.1);
+/// assert!(verify::certificate::normal_bound_deg(0.15).is_none());
+/// ```
+pub fn normal_bound_deg(rho: f64) -> Option<f64> {
+    if !(0.0..1.0 / 7.0).contains(&rho) {
+        return None;
+    }
+    let a = 2.0 * rho / (1.0 - 7.0 * rho) + (rho * 3f64.sqrt() / (1.0 - rho)).asin();
+    Some(a.to_degrees())
+}
+
 /// Epsilon_1 of theorem 4.4 (approximately 0.096).
 pub const EPSILON_1: f64 = 0.096;
 

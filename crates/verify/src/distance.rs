@@ -174,7 +174,10 @@ pub struct Geometry {
 /// Angle between each facet's normal and the surface gradient at its three vertices.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct NormalDeviation {
+    /// Largest angle between an oriented facet normal and the gradient at one of its vertices.
     pub max_deg: f64,
+    /// Largest angle between the *lines* of the two (min(a, 180 - a)): lemma 3.1's quantity.
+    pub max_line_deg: f64,
     pub mean_deg: f64,
     /// Facets with an angle above 90 degrees at some vertex (facing inward).
     pub inverted_facets: usize,
@@ -290,6 +293,7 @@ pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviatio
         .collect();
     let mut nd = NormalDeviation {
         max_deg: 0.0,
+        max_line_deg: 0.0,
         mean_deg: 0.0,
         inverted_facets: 0,
         undefined: 0,
@@ -301,6 +305,7 @@ pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviatio
             match a {
                 Some(a) => {
                     nd.max_deg = nd.max_deg.max(*a);
+                    nd.max_line_deg = nd.max_line_deg.max(a.min(180.0 - a));
                     nd.mean_deg += a;
                     n += 1;
                 }

@@ -565,15 +565,7 @@ fn against(r: &mut Report, mesh: &TriMesh, bvh: &bvh::Bvh, surface: &dyn Surface
             detail,
         ),
     }
-    r.push(
-        "normals",
-        pass_fail(g.normals.inverted_facets == 0),
-        format!(
-            "facet normal vs surface gradient at vertices: max {:.3} deg, mean {:.3} deg, \
-             {} facets facing inward",
-            g.normals.max_deg, g.normals.mean_deg, g.normals.inverted_facets
-        ),
-    );
+    let normals = g.normals.clone();
     let hausdorff = g.hausdorff;
     r.geometry = Some(g);
 
@@ -689,6 +681,46 @@ fn against(r: &mut Report, mesh: &TriMesh, bvh: &bvh::Bvh, surface: &dyn Surface
                 "needs the certificate's eps and d_M^sup".into(),
             );
         }
+    }
+
+    // Normals, against lemma 3.1 when the certificate gives rho = max r / d_M(c) < 1/7.
+    let rho = r
+        .certificate
+        .as_ref()
+        .map(|c| c.eps_achieved)
+        .filter(|e| e.is_finite());
+    let measured = format!(
+        "facet normal vs surface gradient at vertices: max {:.3} deg (as lines {:.3} deg), \
+         mean {:.3} deg, {} facets facing inward",
+        normals.max_deg, normals.max_line_deg, normals.mean_deg, normals.inverted_facets
+    );
+    let facets = mesh.triangles.len();
+    match rho.and_then(certificate::normal_bound_deg) {
+        // Whatever the sampling, a mesh whose facets mostly face inward is inside out.
+        _ if facets > 0 && 2 * normals.inverted_facets > facets => r.push(
+            "normals",
+            Status::Fail,
+            format!("{measured}: the mesh is inside out (most facets face against the gradient)"),
+        ),
+        Some(bound) => r.push(
+            "normals",
+            pass_fail(normals.inverted_facets == 0 && normals.max_line_deg <= bound),
+            format!(
+                "{measured}; lemma 3.1 bound {bound:.3} deg at rho = {:.4}",
+                rho.unwrap_or(f64::NAN)
+            ),
+        ),
+        None => r.push(
+            "normals",
+            Status::Info,
+            format!(
+                "{measured}; no guarantee: {}",
+                match rho {
+                    Some(e) => format!("the certificate's rho = {e:.4} is not below 1/7"),
+                    None => "no certificate (no d_M)".into(),
+                }
+            ),
+        ),
     }
 
     // Condition 2 of definition 2.2.

@@ -91,7 +91,20 @@ fn hausdorff_of_a_uv_sphere_matches_the_exact_distance_within_5_percent() {
             "{}",
             g.normals.max_deg
         );
-        assert_eq!(r.status("normals"), Some(Status::Pass));
+        // Lemma 3.1 gives a bound only when the certificate's rho is below 1/7.
+        let rho = r.certificate.as_ref().map(|c| c.eps_achieved);
+        let expect = match rho.and_then(verify::certificate::normal_bound_deg) {
+            Some(b) => {
+                assert!(g.normals.max_line_deg <= b, "{nlat}x{nlon}: {g:?}");
+                Status::Pass
+            }
+            None => Status::Info,
+        };
+        assert_eq!(
+            r.status("normals"),
+            Some(expect),
+            "{nlat}x{nlon}: rho {rho:?}"
+        );
     }
 }
 
@@ -344,7 +357,9 @@ fn torus_against_its_analytic_surface() {
         g.hausdorff
     );
     assert_eq!(r.topology.as_ref().unwrap().genera(), vec![Some(1)]);
-    assert_eq!(r.status("normals"), Some(Status::Pass));
+    // A 64 x 24 grid is far from a loose 1/7-sample of this torus: no lemma 3.1 guarantee.
+    assert_eq!(r.status("normals"), Some(Status::Info));
+    assert_eq!(g.normals.inverted_facets, 0);
     assert_eq!(
         r.status("components-sampled"),
         Some(Status::Pass),
