@@ -112,6 +112,7 @@ pub enum Dual {
     Ray { origin: DVec3, direction: DVec3 },
 }
 
+/// What [`Triangulation::insert`] did with a point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Insertion {
     /// A new vertex was created.
@@ -134,6 +135,7 @@ pub struct Changes {
     pub created: Vec<CellId>,
 }
 
+/// Why a point could not be inserted (the triangulation is left unchanged).
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum Error {
     #[error(
@@ -394,6 +396,7 @@ impl Triangulation {
         }
     }
 
+    /// Number of finite vertices (distinct points inserted).
     pub fn num_vertices(&self) -> usize {
         self.points.len()
     }
@@ -408,10 +411,13 @@ impl Triangulation {
         self.points[v as usize]
     }
 
+    /// The four vertices of cell `c`, positively oriented for a finite cell (one of them is
+    /// [`INFINITE_VERTEX`] for an infinite cell).
     pub fn cell_vertices(&self, c: CellId) -> [VertexId; 4] {
         self.cells[c as usize].v
     }
 
+    /// The cell across the facet of `c` opposite its `i`-th vertex.
     pub fn neighbor(&self, c: CellId, i: usize) -> CellId {
         self.cells[c as usize].n[i]
     }
@@ -421,6 +427,7 @@ impl Triangulation {
         self.cells[c as usize].v.iter().position(|&w| w == v)
     }
 
+    /// Whether cell `c` has the infinite vertex (it lies outside the convex hull).
     pub fn is_infinite(&self, c: CellId) -> bool {
         self.cells[c as usize].v.contains(&INFINITE_VERTEX)
     }
@@ -528,6 +535,7 @@ impl Triangulation {
             .filter_map(|(i, c)| (c.v[0] != DEAD).then_some(i as CellId))
     }
 
+    /// Number of live cells without the infinite vertex (tetrahedra of the hull).
     pub fn num_finite_cells(&self) -> usize {
         self.n_finite
     }

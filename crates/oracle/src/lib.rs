@@ -26,6 +26,7 @@ pub struct BoundingSphere {
 }
 
 impl BoundingSphere {
+    /// Whether `p` is in the closed ball.
     pub fn contains(&self, p: DVec3) -> bool {
         (p - self.center).length_squared() <= self.radius * self.radius
     }
