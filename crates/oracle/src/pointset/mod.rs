@@ -22,6 +22,7 @@
 //!   not shrink the balls. (The Delaunay-based λ-medial axis is not used: `delaunay3` was a stub
 //!   when this was written.)
 
+mod far;
 mod grid;
 mod linalg;
 mod xyz;
@@ -31,6 +32,7 @@ pub use xyz::{PointCloud, XyzError, read_xyz, read_xyz_from};
 use crate::polyhedron::bvh::Bvh;
 use crate::roots::SplitMix64;
 use crate::{BoundingSphere, Surface};
+use far::FarCache;
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
@@ -119,6 +121,8 @@ pub struct PointSetStats {
     pub median_spacing: f64,
     /// Median kernel support radius.
     pub median_radius: f64,
+    /// Connected regions that no kernel reaches (outside, inside...), each signed once.
+    pub far_components: usize,
 }
 
 /// A surface defined by a point set (an IMLS surface). See the module documentation.
@@ -162,73 +166,8 @@ pub struct PointSetSurface {
     /// Subsampled copy of `gwn` (large inputs only).
     gwn_coarse: Option<Bvh>,
     lfs: OnceLock<LfsSample>,
-    /// Far-field signs of the cells of a coarse grid that no kernel reaches.
+    /// Far-field signs where no kernel reaches (flood-filled components of a grid).
     far_cache: FarCache,
-}
-
-/// Cells per axis of [`FarCache`].
-const FAR_CELLS: usize = 32;
-
-/// A `FAR_CELLS`³ grid over the bounding sphere's box. A cell whose center is farther than
-/// its half diagonal plus the largest kernel radius from every point contains no point of the
-/// surface and no kernel support, so the far-field sign is constant on it: stored as ±1 (0
-/// for the other cells). Deterministic (each cell computed independently).
-#[derive(Clone, Debug, Default)]
-struct FarCache {
-    lo: DVec3,
-    inv: f64,
-    sign: Vec<i8>,
-}
-
-impl FarCache {
-    fn build(s: &PointSetSurface) -> FarCache {
-        let r = s.sphere.radius;
-        let lo = s.sphere.center - DVec3::splat(r);
-        let cell = 2.0 * r / FAR_CELLS as f64;
-        if !(cell > 0.0 && cell.is_finite()) {
-            return FarCache::default();
-        }
-        let half_diag = 0.5 * 3f64.sqrt() * cell;
-        let clear = half_diag + s.max_radius;
-        let sign = (0..FAR_CELLS * FAR_CELLS * FAR_CELLS)
-            .into_par_iter()
-            .map(|i| {
-                let (x, y, z) = (
-                    i % FAR_CELLS,
-                    (i / FAR_CELLS) % FAR_CELLS,
-                    i / (FAR_CELLS * FAR_CELLS),
-                );
-                let c = lo + cell * DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5);
-                let (_, d2) = s.nearest(c);
-                if d2 <= clear * clear {
-                    return 0;
-                }
-                if s.far_value_uncached(c, 0.0) < 0.0 {
-                    -1
-                } else {
-                    1
-                }
-            })
-            .collect();
-        FarCache {
-            lo,
-            inv: 1.0 / cell,
-            sign,
-        }
-    }
-
-    /// The cached sign at `x` (0 if unknown).
-    fn get(&self, x: DVec3) -> i8 {
-        if self.sign.is_empty() {
-            return 0;
-        }
-        let g = (x - self.lo) * self.inv;
-        if !(g.min_element() >= 0.0 && g.max_element() < FAR_CELLS as f64) {
-            return 0;
-        }
-        let (i, j, k) = (g.x as usize, g.y as usize, g.z as usize);
-        self.sign[(k * FAR_CELLS + j) * FAR_CELLS + i]
-    }
 }
 
 /// Local feature size estimated on a subsample.
@@ -250,8 +189,30 @@ impl std::fmt::Debug for PointSetSurface {
 /// Points in the coarse winding-number tree.
 const GWN_COARSE: usize = 4096;
 
-/// Total kernel weight below which the IMLS blends into the nearest-point signed distance.
+/// Total kernel weight below which the IMLS blends into the far field (`∓ max_radius`).
 const MIN_WEIGHT: f64 = 1.0;
+
+/// Below [`MIN_WEIGHT`], the IMLS value signs the far field where the kernel weight is at
+/// least this (more than one point's tail)...
+const FRINGE_WEIGHT: f64 = 0.003;
+
+/// ...the contributing normals agree to this ratio (`|Σ φ n| / Σ φ`)...
+const COHERENCE: f64 = 0.9;
+
+/// ...and the value is at least this multiple of the median kernel radius away from 0.
+const FRINGE_OFFSET: f64 = 0.25;
+
+/// The value where the kernel weight `den` is below [`MIN_WEIGHT`]: a smooth blend of the
+/// IMLS value `num / den` into the far field `far` (they have the same sign away from the
+/// surface).
+fn blend(num: f64, den: f64, far: f64) -> f64 {
+    if den <= 0.0 {
+        return far;
+    }
+    let a = den / MIN_WEIGHT;
+    let a = a * a * (3.0 - 2.0 * a);
+    a * (num / den) + (1.0 - a) * far
+}
 
 impl PointSetSurface {
     /// Build the surface from points and optional (outward) normals.
@@ -430,6 +391,7 @@ impl PointSetSurface {
             components: roots.len(),
             median_spacing: med_spacing,
             median_radius: median(&radius),
+            far_components: 0,
         };
         let mut surface = PointSetSurface {
             points: points.to_vec(),
@@ -447,7 +409,21 @@ impl PointSetSurface {
             lfs: OnceLock::new(),
             far_cache: FarCache::default(),
         };
-        surface.far_cache = FarCache::build(&surface);
+        surface.far_cache = FarCache::build(
+            surface.sphere.center,
+            surface.sphere.radius,
+            points,
+            &radius,
+            max_radius,
+            |c| {
+                if surface.far_value_uncached(c, 0.0) < 0.0 {
+                    -1
+                } else {
+                    1
+                }
+            },
+        );
+        surface.stats.far_components = surface.far_cache.components;
         Ok(surface)
     }
 
@@ -490,14 +466,7 @@ impl PointSetSurface {
         if den >= MIN_WEIGHT {
             return num / den;
         }
-        let far = far(den);
-        if den <= 0.0 {
-            return far;
-        }
-        // Smooth blend between the two (they have the same sign away from the surface).
-        let a = den / MIN_WEIGHT;
-        let a = a * a * (3.0 - 2.0 * a);
-        a * (num / den) + (1.0 - a) * far
+        blend(num, den, far(den))
     }
 
     /// Largest kernel support radius: farther than this from every point, the value is the
@@ -538,14 +507,26 @@ impl PointSetSurface {
         (num, den, nsum)
     }
 
-    /// Far-field value: `∓ max_radius`, negative where the point-cloud winding number is
-    /// above 1/2 (inside). `den` is the total kernel weight at `x`.
-    fn far_value(&self, x: DVec3, den: f64) -> f64 {
+    /// Far-field value: `∓ max_radius`, negative inside. `(num, den, nsum)` are the kernel
+    /// sums at `x`. Decided, in order, by:
+    /// - zero weight: the flood-filled sign of the region no kernel reaches ([`FarCache`]);
+    /// - low weight (at least [`FRINGE_WEIGHT`]), where the contributing normals agree
+    ///   (`|Σ φ n| ≥ 0.9 Σ φ`) and the IMLS value is clearly off the surface (`|f| ≥` [`FRINGE_OFFSET`] × the median kernel
+    ///   radius): the sign of the IMLS value, which there agrees with the winding number
+    ///   and keeps the blend free of spurious zeros;
+    /// - otherwise the point-cloud winding number at `x` (above 1/2: inside).
+    fn far_value(&self, x: DVec3, num: f64, den: f64, nsum: DVec3) -> f64 {
+        let r = self.max_radius;
         if den == 0.0 {
             match self.far_cache.get(x) {
-                1 => return self.max_radius,
-                -1 => return -self.max_radius,
+                1 => return r,
+                -1 => return -r,
                 _ => {}
+            }
+        } else if den >= FRINGE_WEIGHT && nsum.length_squared() >= (COHERENCE * den).powi(2) {
+            let f = num / den;
+            if f.abs() >= FRINGE_OFFSET * self.stats.median_radius {
+                return if f < 0.0 { -r } else { r };
             }
         }
         self.far_value_uncached(x, den)
@@ -823,7 +804,11 @@ impl Surface for PointSetSurface {
             // Positive on and outside the bounding sphere (far from every point).
             return dc - self.sphere.radius + self.max_radius;
         }
-        self.value_with_far(x, |den| self.far_value(x, den))
+        let (num, den, nsum) = self.sums(x);
+        if den >= MIN_WEIGHT {
+            return num / den;
+        }
+        blend(num, den, self.far_value(x, num, den, nsum))
     }
 
     /// Points on the MLS surface: the highest and lowest input points of each component
