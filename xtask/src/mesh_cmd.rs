@@ -214,12 +214,12 @@ pub fn run(a: &MeshArgs) -> Result<()> {
                 bail!("--epsilon {e}: epsilon must be a positive number, e.g. --epsilon 0.09");
             }
             let dm = opened
-                .dm_inf
+                .dm_inf()
                 .context("--epsilon needs an estimate of d_M^inf, which this input does not provide; pass --size instead")?;
             notes.push(format!("sigma = {e} * d_M^inf ({dm:.4}) = {:.5}", e * dm));
             e * dm
         }
-        (None, None) => match (opened.dm_inf, opened.default_size) {
+        (None, None) => match (opened.dm_inf(), opened.default_size) {
             (_, Some(d)) => {
                 notes.push(format!(
                     "no --size: using the input's suggested size {d:.5}"
@@ -331,7 +331,7 @@ pub fn run(a: &MeshArgs) -> Result<()> {
         let vopts = verify::Options {
             samples_per_edge: 2,
             surface_balls: Some(balls),
-            epsilon: a.certify_epsilon.or(opened.dm_inf.map(|d| sigma / d)),
+            epsilon: a.certify_epsilon.or(opened.dm_inf().map(|d| sigma / d)),
             min_angle_deg: (a.angle > 0.0).then_some(a.angle - 1e-9),
             component_seeds: opened.control_points.clone(),
             seed: a.seed,
@@ -435,7 +435,7 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
     if !(e > 0.0 && e < 1.0) {
         bail!("--epsilon {e}: epsilon must be in (0, 1), e.g. --epsilon 0.09");
     }
-    let dm = match (a.dm_inf, opened.dm_inf) {
+    let dm = match (a.dm_inf, opened.dm_inf()) {
         (Some(d), _) if d > 0.0 && d.is_finite() => d,
         (Some(d), _) => bail!("--dm-inf {d}: must be a positive number"),
         (None, Some(d)) => d,

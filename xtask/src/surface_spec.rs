@@ -54,8 +54,11 @@ pub struct Opened {
     pub surface: Box<dyn Surface>,
     /// Short name for default output paths.
     pub name: String,
-    /// Known or estimated d_M^inf.
+    /// Known or estimated d_M^inf (read it with [`Opened::dm_inf`]).
     pub dm_inf: Option<f64>,
+    /// d_M^inf is the surface's `dm_inf_hint()`, computed on first use only (images: the
+    /// distance-transform estimate costs about 1 s at 256^3 and `--size` does not need it).
+    pub lazy_dm_inf: bool,
     /// A default size when neither --size nor --epsilon is given (otherwise 0.09 d_M^inf).
     pub default_size: Option<f64>,
     /// Catalog genus and component count, if known.
@@ -65,6 +68,17 @@ pub struct Opened {
     pub notes: Vec<String>,
     /// Mesh input: its sharp edges (normals deviating by more than [`SHARP_DEG`]).
     pub sharp_edges: Vec<(DVec3, DVec3)>,
+}
+
+impl Opened {
+    /// Known or estimated d_M^inf (computed now if it is lazy).
+    pub fn dm_inf(&self) -> Option<f64> {
+        if self.lazy_dm_inf {
+            self.surface.dm_inf_hint()
+        } else {
+            self.dm_inf
+        }
+    }
 }
 
 /// Sharp-edge threshold: the two face normals differ by more than this (degrees), i.e. the
@@ -171,6 +185,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
             .unwrap_or_else(|| "implicit".into());
         return Ok(Opened {
             dm_inf: s.dm_inf_hint(),
+            lazy_dm_inf: false,
             surface: Box::new(s),
             name,
             default_size: None,
@@ -210,19 +225,16 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
         )
         .with_context(|| format!("opening image {spec}"))?;
         let comps = img.component_count();
-        let dm = img.dm_inf_hint();
-        let mut notes = vec![format!(
+        let notes = vec![format!(
             "image: {} surface component(s) found by the voxel scan (iso {})",
             comps,
             img.iso()
         )];
-        if let Some(d) = dm {
-            notes.push(format!("image: d_M^inf estimate {d:.4}"));
-        }
         return Ok(Opened {
             surface: Box::new(img),
             name: stem(path),
-            dm_inf: dm,
+            dm_inf: None,
+            lazy_dm_inf: true,
             default_size: None,
             genus: None,
             components: Some(comps as u32),
@@ -252,6 +264,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
         let size = ps.suggested_size();
         return Ok(Opened {
             dm_inf: ps.dm_inf_hint(),
+            lazy_dm_inf: false,
             name: stem(path),
             default_size: Some(size),
             genus: None,
@@ -297,6 +310,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
     };
     Ok(Opened {
         dm_inf: None,
+        lazy_dm_inf: false,
         name: stem(path),
         default_size: Some(size),
         genus: None,

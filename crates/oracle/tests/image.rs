@@ -1132,3 +1132,112 @@ fn seed_points_keep_every_component_seed_within_the_budget() {
         assert_eq!(p[..t.component_seeds.len()], t.component_seeds[..]);
     }
 }
+
+fn circumcentre(q: [DVec3; 4]) -> DVec3 {
+    let (a, b, c) = (q[1] - q[0], q[2] - q[0], q[3] - q[0]);
+    let det = a.dot(b.cross(c));
+    q[0] + (b.cross(c) * a.length_squared()
+        + c.cross(a) * b.length_squared()
+        + a.cross(b) * c.length_squared())
+        / (2.0 * det)
+}
+
+/// Checks the seed tetrahedra of `s`: four points on S whose circumcentre is near them (the
+/// circumradius is at most 10 voxels: the tetrahedron is built within a small component or 3
+/// voxels of a seed) and strictly on one side; returns (tetrahedra, circumcentres inside).
+fn check_tets(s: &ImageSurface) -> (usize, usize) {
+    let t = s.topology();
+    assert_eq!(t.component_tets.len(), t.component_seeds.len());
+    assert_eq!(t.component_edges.len(), t.component_seeds.len());
+    let (mut n, mut inside) = (0, 0);
+    for (seed, tet) in t.component_seeds.iter().zip(&t.component_tets) {
+        if tet.is_empty() {
+            continue;
+        }
+        assert_eq!(tet.len(), 3);
+        let q = [*seed, tet[0], tet[1], tet[2]];
+        let scale = s.volume().spacing().max_element();
+        for p in q {
+            assert!(s.value(p).abs() < 1e-9 * scale, "{p} not on S");
+        }
+        let cc = circumcentre(q);
+        assert!(cc.distance(*seed) < 10.0 * scale, "{cc} far from {seed}");
+        let v = s.value(cc);
+        assert!(v != 0.0);
+        n += 1;
+        inside += (v < 0.0) as usize;
+    }
+    (n, inside)
+}
+
+/// Small components are seeded with a tetrahedron around them (the fix for blobs of one or
+/// two voxels that the mesher's control-point rays used to miss): isolated bright voxels of
+/// various intensities (so the blobs have various sizes and shapes) each get one, with the
+/// circumcentre inside the blob, within a voxel of the bright voxel.
+#[test]
+fn single_voxel_blobs_get_seed_tetrahedra_around_them() {
+    let n = 24;
+    let mut v = vec![0f32; n * n * n];
+    let mut centres = Vec::new();
+    let mut rng = oracle::roots::SplitMix64(5);
+    for k in 0..8 {
+        let c = [3 + 5 * (k % 4), 4 + 8 * (k / 4), 5 + (k % 3) * 6];
+        v[c[0] + n * (c[1] + n * c[2])] = 1.1 + rng.next_f64() as f32 * 3.0;
+        // A dimmer neighbour on some blobs (elongated shapes).
+        if k % 2 == 1 {
+            v[c[0] + 1 + n * (c[1] + n * c[2])] = 0.6 + rng.next_f64() as f32 * 0.8;
+        }
+        centres.push(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
+    }
+    let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+    let s = ImageSurface::new(
+        vol,
+        &ImageOptions {
+            iso: Some(1.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(s.component_count(), 8);
+    let (tets, inside) = check_tets(&s);
+    assert_eq!((tets, inside), (8, 8));
+    let t = s.topology();
+    for (seed, tet) in t.component_seeds.iter().zip(&t.component_tets) {
+        let cc = circumcentre([*seed, tet[0], tet[1], tet[2]]);
+        let d = centres
+            .iter()
+            .map(|c| c.distance(cc))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            d < 1.0,
+            "circumcentre {cc} is {d} voxels from its bright voxel"
+        );
+    }
+    // The seed points put the four points of every tetrahedron first.
+    let p = s.seed_points(0);
+    assert_eq!(p.len(), oracle::image::Topology::SEED_BUDGET);
+    for tet in &t.component_tets {
+        for q in tet {
+            assert!(p[..8 + 3 * 8].contains(q));
+        }
+    }
+}
+
+/// On the nilearn fixture at iso 3 (10 components: 9 blobs, 7 of them 1 to 13 voxels, and a
+/// cavity), every component gets a seed tetrahedron; the circumcentres lie in the blobs
+/// (value < 0) except for the cavity's (value > 0).
+#[test]
+fn nilearn_components_get_seed_tetrahedra() {
+    let s = ImageSurface::open(
+        fixtures().join("nilearn_motor_10426.nii.gz"),
+        &Default::default(),
+        &ImageOptions {
+            iso: Some(3.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let t = s.topology();
+    assert_eq!((t.inside_components, t.outside_components), (9, 2));
+    assert_eq!(check_tets(&s), (10, 9));
+}
