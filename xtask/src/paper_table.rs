@@ -282,7 +282,7 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
                     oracle: kind,
                     ..base.clone()
                 };
-                let (r, _, _) = sizing::second_pass(&s, &first, eps, sigma0, &o, &mut |_| {})?;
+                let r = sizing::second_pass(&s, &first, eps, sigma0, &o, &mut |_| {})?.result;
                 second.push(Pass::of(label, &r.stats));
                 if kind == OracleKind::Bipolar && !a.no_verify {
                     certificate = Some(certify(&s, &first, &r, eps));
