@@ -8,7 +8,8 @@
 //!   tube of constant radius 0.2 around the (2,3) torus knot
 //!   `c(t) = ((1 + 0.5 cos 3t) cos 2t, (1 + 0.5 cos 3t) sin 2t, -0.5 sin 3t)`: `f(p) = dist(p, c) -
 //!   0.2`, evaluated natively (nearest of 128 samples of c, then safeguarded Newton on the curve
-//!   parameter: exact to rounding wherever |f| < 0.13, and > 0.13 elsewhere) with the exact
+//!   parameter: exact to rounding wherever f < 0.13; elsewhere >= 0.13, a lower bound of the
+//!   distance to the curve's torus of revolution far from it) with the exact
 //!   gradient `(p - c(t*)) / |p - c(t*)|`. The curve's reach is 0.416 (half its smallest
 //!   doubly-critical distance, 0.832; its smallest radius of curvature is 0.715), so the tube's
 //!   medial axis is the curve inside and at least 0.216 away outside: d_M = 0.2 on the whole
@@ -222,6 +223,14 @@ pub fn trefoil_nearest(p: DVec3) -> DVec3 {
 }
 
 fn trefoil_native(p: DVec3) -> f64 {
+    // The curve lies on the torus of revolution (R, a): the distance to that torus is a lower
+    // bound of the distance to the curve. Far from it (most points of a segment crossing the
+    // bounding ball) that bound is returned: f >= 0.13 there, no root, and it is 50x cheaper.
+    let rho = (p.x * p.x + p.y * p.y).sqrt() - TREFOIL_R;
+    let lower = ((rho * rho + p.z * p.z).sqrt() - TREFOIL_A).abs();
+    if lower > TREFOIL_TUBE + TREFOIL_EXACT {
+        return lower - TREFOIL_TUBE;
+    }
     p.distance(trefoil_nearest(p)) - TREFOIL_TUBE
 }
 

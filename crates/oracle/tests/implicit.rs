@@ -1047,9 +1047,10 @@ fn catalog_topology_matches_voxel_euler_characteristic() {
     }
 }
 
-/// The trefoil is the tube of radius 0.2 around its curve: the native value is the distance to
-/// the curve (checked against a brute-force minimum over 200 000 curve points, refined) minus
-/// 0.2, its gradient is a unit vector equal to finite differences, and d_M^inf is 0.2.
+/// The trefoil is the tube of radius 0.2 around its curve: where the distance to the curve
+/// (checked against a brute-force minimum over 200 000 curve points, refined) is below 0.33,
+/// the native value is that distance minus 0.2, elsewhere it is at least 0.13; its gradient is
+/// a unit vector equal to finite differences, and d_M^inf is 0.2.
 #[test]
 fn trefoil_is_a_tube_of_constant_radius() {
     use catalog::{TREFOIL_TUBE, trefoil_curve};
@@ -1086,12 +1087,12 @@ fn trefoil_is_a_tube_of_constant_radius() {
             rng.unit_vector() * 2.0 * rng.next_f64().cbrt()
         };
         let (v, b) = (f(p), brute(p) - TREFOIL_TUBE);
-        if b.abs() < 0.13 {
+        if b < 0.13 {
             near += 1;
             assert!((v - b).abs() < 1e-9, "at {p}: native {v}, brute force {b}");
         } else {
             assert!(
-                v >= b - 1e-9 && (v > 0.0) == (b > 0.0),
+                b > 0.0 && v >= 0.13 - 1e-9,
                 "at {p}: native {v}, brute force {b}"
             );
         }
