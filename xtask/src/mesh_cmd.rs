@@ -475,11 +475,12 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
     let (s1, s2) = (&tp.first.stats, &tp.second.stats);
     outln!(
         "{spec}: first pass (sigma_0 = {e} * {dm} = {:.5}): {} vertices in {:.3} s; second pass \
-         (sigma = max(sigma_0, {:.4} d_M)): {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, \
+         (sigma = max({:.5}, {:.4} d_M)): {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, \
          oracle {:.3} s); ratio {:.2}; {} medial vertices",
         tp.sigma0,
         s1.vertices,
         s1.time_total_s,
+        tp.floor,
         tp.eps_prime,
         s2.vertices,
         s2.facets,
@@ -489,6 +490,14 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
         s1.vertices as f64 / s2.vertices.max(1) as f64,
         tp.medial.len()
     );
+    if tp.dm_inf_estimate < 0.9 * dm {
+        outln!(
+            "note: the first pass's d_M estimate has minimum {:.4} < d_M^inf = {dm}: the first \
+             pass is not a uniform {e}-sample (pass a smaller --dm-inf); the second pass \
+             follows the estimate",
+            tp.dm_inf_estimate
+        );
+    }
     let out_path = a
         .output
         .clone()

@@ -1,8 +1,9 @@
 //! `cargo xtask paper-table`: the paper's Table 1 (section 6.6.1) reproduced on this machine.
 //!
 //! Smooth surfaces: two passes (section 6.5) at eps = 0.09: a uniform first pass (bipolar oracle)
-//! at sigma_0 = 0.09 d_M^inf, then the adaptive second pass sigma = max(sigma_0, 0.081 d_{M_lambda})
-//! with each oracle. d_M^inf is the catalog's value (sphere, ellipsoid, torus) or estimated by
+//! at sigma_0 = 0.09 d_M^inf, then the adaptive second pass sigma = max(min(sigma_0, 0.081 m),
+//! 0.081 d) with each oracle (d the d_M estimate of [`rdt_mesher::sizing::MedialAxisEstimate`], m
+//! its minimum). d_M^inf is the catalog's value (sphere, ellipsoid, torus, trefoil) or estimated by
 //! [`rdt_mesher::sizing::estimate_dm_inf`] (not timed, as the paper's "precalculation").
 //! Singular surfaces: one pass per oracle at the paper's constant sigma. Every run has a vertex
 //! and time budget; a run stopped by it is marked in the table.
@@ -282,7 +283,7 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
                     oracle: kind,
                     ..base.clone()
                 };
-                let (r, _, _) = sizing::second_pass(&s, &first, eps, sigma0, &o, &mut |_| {})?;
+                let r = sizing::second_pass(&s, &first, eps, sigma0, &o, &mut |_| {})?.result;
                 second.push(Pass::of(label, &r.stats));
                 if kind == OracleKind::Bipolar && !a.no_verify {
                     certificate = Some(certify(&s, &first, &r, eps));
@@ -425,19 +426,23 @@ fn markdown(rows: &[Row], a: &PaperTableArgs) -> String {
 
 const NOTES: &str = "Notes.\n\n\
 - Smooth surfaces: eps = 0.09 as in the paper where d_M^inf is known (sphere 1, ellipsoid 0.16, \
-torus 0.3). Elsewhere d_M^inf is estimated by `rdt_mesher::sizing::estimate_dm_inf` (not timed, \
-like the paper's precalculation; min of d_(M_lambda) over uniform samples refined toward \
-sigma = 0.1 x estimate within the budget): chair <= ~0.11 (not converged), tanglecube ~0.20, \
-trefoil ~0.038 (our tube's radius varies from 0.04 to 0.21). At eps = 0.09 these need 10^5 to 10^6 \
-points, so eps is raised until the first pass fits in half the vertex budget (the mode column \
-gives it); the certificate is checked at that eps.\n\
-- Chair: at the raised eps (~0.45) lambda = 2.5 sigma_0 exceeds d_M^inf, so the lambda-medial \
-axis misses the thin parts and the adaptive pass is too coarse there: the certificate fails \
-(achieved eps ~0.67). Raise --max-vertices to bring eps down.\n\
-- With a constant d_M (sphere, torus) both passes coincide by construction (sigma_2 = \
-max(sigma_0, 0.9 eps d_M) = sigma_0); the paper's smaller second pass there suggests its first \
-pass used a smaller sigma_0. Our trefoil's d_M varies about 5x along the knot (the paper's \
-sausage is almost constant), hence a ratio well above the paper's 1.24.\n\
+torus 0.3, trefoil 0.2). Elsewhere (chair, tanglecube) d_M^inf is estimated by \
+`rdt_mesher::sizing::estimate_dm_inf` (not timed, like the paper's precalculation; min of the d_M \
+estimate over uniform samples refined toward sigma = 0.1 x estimate within the budget). At \
+eps = 0.09 these need 10^5 to 10^6 points, so eps is raised until the first pass fits in half the \
+vertex budget (the mode column gives it); the certificate is checked at that eps.\n\
+- Second pass: sigma = max(min(sigma_0, eps' m), eps' d), eps' = 0.9 eps, d the distance to the \
+lambda-medial axis (lambda = 2.5 sigma_0) plus the Voronoi poles of the first pass's vertices, m \
+its d_M^inf estimate. The certificate's d_M (Voronoi poles of the same vertices) is >= d, so it \
+passes with achieved eps <= 0.9 eps wherever the estimate sets the size.\n\
+- Constant d_M (sphere, torus, trefoil): the second pass has about 1 / 0.9^2 = 1.23 times the \
+first pass's vertices (sigma = 0.9 eps d_M), ratio ~0.8. The paper's second passes there are smaller \
+than its first ones (sphere 2.6x, torus 1.7x, trefoil 1.24x), which suggests its first pass used a \
+smaller sigma_0 than eps d_M^inf; its trefoil's d_M also varied somewhat. Where d_M varies \
+(ellipsoid, chair, tanglecube) the second pass is the smaller one, as in the paper.\n\
+- Trefoil: a tube of constant radius 0.2 (d_M = 0.2 on the whole surface) around a (2,3) torus \
+knot, the paper's \"sausage\"; built literally as f1^2 + f2^2 = delta, its radius varied fivefold \
+along the knot (pass ratio 5.6).\n\
 - Singular surfaces at the paper's constant sigma. Our heart gives about 0.36x and our Klein bottle \
 about 2.6x the paper's sizes at the same sigma: the scales of these catalog versions differ from \
 the paper's (size ~ area / sigma^2: heart ~0.6x, Klein ~1.6x in length). Barth's octic matches \

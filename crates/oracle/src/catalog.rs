@@ -4,15 +4,21 @@
 //! the shared catalog: `sphere`, `ellipsoid`, `torus`, `double_torus`, `tanglecube`, `chair`,
 //! `blobs`, `heart`) and three surfaces of the paper's section 6 experiments:
 //!
-//! - `trefoil`: the "sausage" trefoil knot of the paper's figure 5, built as the paper describes.
-//!   The trefoil is the link of the singularity `w^2 = z^3` in C^2: the curve
-//!   `F(z, w) = w^2 - z^3 = 0` on the unit sphere S^3 of C^2 = R^4. Pulling `F` back to R^3 by the
-//!   inverse stereographic projection `p -> (2p, |p|^2 - 1) / (|p|^2 + 1)` (pole (0,0,0,1) sent to
-//!   infinity), with `z = X1 + i X2`, `w = X3 + i X4`, gives `f1 = Re F` and `f2 = Im F`, two
-//!   surfaces of R^3 meeting along a trefoil; the surface is `f1^2 + f2^2 = 0.02`, a tube of
-//!   varying radius (about 0.04 to 0.21; strands stay 0.73 apart) around that (2,3) torus knot, which lies on the torus
-//!   of revolution of radii 1.325 and 0.869 around the z axis. Genus 1. The chirality is that
-//!   of this formula (not checked against the paper's "left").
+//! - `trefoil`: the trefoil knot "in sausage format" of the paper's figure 5 (section 6.6.1), as a
+//!   tube of constant radius 0.2 around the (2,3) torus knot
+//!   `c(t) = ((1 + 0.5 cos 3t) cos 2t, (1 + 0.5 cos 3t) sin 2t, -0.5 sin 3t)`: `f(p) = dist(p, c) -
+//!   0.2`, evaluated natively (nearest of 128 samples of c, then safeguarded Newton on the curve
+//!   parameter: exact to rounding wherever f < 0.13; elsewhere >= 0.13, a lower bound of the
+//!   distance to the curve's torus of revolution far from it) with the exact
+//!   gradient `(p - c(t*)) / |p - c(t*)|`. The curve's reach is 0.416 (half its smallest
+//!   doubly-critical distance, 0.832; its smallest radius of curvature is 0.715), so the tube's
+//!   medial axis is the curve inside and at least 0.216 away outside: d_M = 0.2 on the whole
+//!   surface (the catalog's `dm_inf`), like a torus. Genus 1. The paper builds its sausage as
+//!   `f1^2 + f2^2 = delta` from two algebraic surfaces meeting along the knot, and notes that
+//!   its radius is not constant; done literally (stereographic image of `w^2 = z^3` on S^3),
+//!   that tube's radius varies fivefold along the knot, and so does d_M, unlike the paper's
+//!   "almost constant diameter" of Table 1. This one has no closed-form expression
+//!   ([`CatalogEntry::expression`] is `None`; [`surface_from_expression`] refuses it).
 //! - `barth_octic`: the octic with cubic symmetry meshed in the paper's figure 7 (eight pillows at
 //!   the vertices of a cube, joined by two nodes along each edge; 24 singular points):
 //!   with `s = x^2+y^2+z^2`, `q = x^2 y^2 + y^2 z^2 + z^2 x^2` and the golden ratio `phi`,
@@ -48,8 +54,9 @@ pub const CATALOG_JSON: &str = include_str!("../data/implicit_surfaces.json");
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CatalogEntry {
     pub name: &'static str,
-    /// Expression in x, y, z (syntax of [`crate::expr`]); the solid is `f < 0`.
-    pub expression: String,
+    /// Expression in x, y, z (syntax of [`crate::expr`]); the solid is `f < 0`. `None` for a
+    /// surface with a native implementation only (`trefoil`).
+    pub expression: Option<String>,
     pub bounding_sphere: BoundingSphere,
     /// False if the surface has singular points (mesh with a constant size bound).
     pub smooth: bool,
@@ -72,6 +79,10 @@ pub enum CatalogError {
         "'{expression}' is an expression, not a catalog surface: give its bounding sphere (cx,cy,cz,r) too"
     )]
     MissingBoundingSphere { expression: String },
+    #[error(
+        "catalog surface '{name}' has no closed-form expression (it is evaluated natively): use catalog::surface(\"{name}\")"
+    )]
+    NoExpression { name: String },
     #[error("surface '{name}': {source}")]
     Implicit {
         name: String,
@@ -98,19 +109,135 @@ struct RawEntry {
 }
 
 const PHI: f64 = 1.618_033_988_749_895;
-/// Tube parameter of `trefoil`: the surface is `|F|^2 = TREFOIL_DELTA`.
-pub const TREFOIL_DELTA: f64 = 0.02;
+/// Radius of the torus of revolution carrying the `trefoil` curve.
+pub const TREFOIL_R: f64 = 1.0;
+/// Radius of the tube of that torus (the curve winds 3 times around it).
+pub const TREFOIL_A: f64 = 0.5;
+/// Radius of the `trefoil` sausage, equal to its d_M everywhere.
+pub const TREFOIL_TUBE: f64 = 0.2;
+const TREFOIL_SAMPLES: usize = 128;
+/// [`trefoil_nearest`] is exact where |f| < this.
+const TREFOIL_EXACT: f64 = 0.13;
 
-fn trefoil_expression() -> String {
-    let r2 = "(x^2+y^2+z^2)";
-    let d = format!("(1+{r2})");
-    let x1 = format!("(2*x/{d})");
-    let x2 = format!("(2*y/{d})");
-    let x3 = format!("(2*z/{d})");
-    let x4 = format!("(({r2}-1)/{d})");
-    let re = format!("({x3}^2-{x4}^2-{x1}^3+3*{x1}*{x2}^2)");
-    let im = format!("(2*{x3}*{x4}-3*{x1}^2*{x2}+{x2}^3)");
-    format!("{re}^2+{im}^2-{TREFOIL_DELTA}")
+/// The trefoil curve c(t) and its first two derivatives.
+pub fn trefoil_curve(t: f64) -> (DVec3, DVec3, DVec3) {
+    let (s1, c1) = t.sin_cos();
+    let (s2, c2) = (2.0 * s1 * c1, c1 * c1 - s1 * s1);
+    let (s3, c3) = (s1 * (3.0 - 4.0 * s1 * s1), c1 * (4.0 * c1 * c1 - 3.0));
+    let (r, a) = (TREFOIL_R, TREFOIL_A);
+    let rho = r + a * c3;
+    let d_rho = -3.0 * a * s3;
+    let dd_rho = -9.0 * a * c3;
+    (
+        DVec3::new(rho * c2, rho * s2, -a * s3),
+        DVec3::new(
+            d_rho * c2 - 2.0 * rho * s2,
+            d_rho * s2 + 2.0 * rho * c2,
+            -3.0 * a * c3,
+        ),
+        DVec3::new(
+            dd_rho * c2 - 4.0 * d_rho * s2 - 4.0 * rho * c2,
+            dd_rho * s2 + 4.0 * d_rho * c2 - 4.0 * rho * s2,
+            9.0 * a * s3,
+        ),
+    )
+}
+
+/// The point of the trefoil curve nearest to `p` (exact to rounding where dist(p, c) < 0.33;
+/// elsewhere a curve point at distance > 0.33).
+///
+/// The nearest of 128 samples (parameter step h = 2 pi / 128; consecutive samples at most 0.17
+/// apart, so every curve point is within 0.085 of one, and the sample distance exceeds the
+/// true distance d by less than 0.09; only those of nearby azimuth are looked at) is on the
+/// right strand when d < 0.33: the other strands
+/// are at least 0.832 - d away, more than d + 0.17. Its distance above 0.42 means d > 0.33: the
+/// sample is returned. Otherwise the distance has a single minimum within one step of that
+/// sample, found by Newton's method on g'(t) = (c(t) - p) . c'(t), safeguarded by bisection of
+/// the bracket [t_k - h, t_k + h].
+pub fn trefoil_nearest(p: DVec3) -> DVec3 {
+    static SAMPLES: OnceLock<Vec<DVec3>> = OnceLock::new();
+    let h = std::f64::consts::TAU / TREFOIL_SAMPLES as f64;
+    let samples = SAMPLES.get_or_init(|| {
+        (0..TREFOIL_SAMPLES)
+            .map(|k| trefoil_curve(k as f64 * h).0)
+            .collect()
+    });
+    // Only the samples whose azimuth 2t is within 1.2 rad of p's (two windows of the parameter,
+    // one per pass of the knot through that half-plane): a curve point within 0.42 of p is
+    // within asin(0.42 / 0.5) < 1.01 rad of p's azimuth, the curve being at least 0.5 from
+    // the z axis.
+    let n = TREFOIL_SAMPLES as i64;
+    let t0 = p.y.atan2(p.x).rem_euclid(std::f64::consts::TAU) / 2.0;
+    let k0 = (t0 / h).round() as i64;
+    let (mut k, mut best) = (0, f64::INFINITY);
+    for base in [k0, k0 + n / 2] {
+        for i in base - 10..=base + 10 {
+            let i = i.rem_euclid(n) as usize;
+            let d = samples[i].distance_squared(p);
+            if d < best {
+                (k, best) = (i, d);
+            }
+        }
+    }
+    // Far from the curve (the true distance is > sqrt(best) - 0.09, see below): the sample.
+    if best > (TREFOIL_TUBE + TREFOIL_EXACT + 0.09).powi(2) {
+        return samples[k];
+    }
+    let tk = k as f64 * h;
+    let (mut lo, mut hi, mut t) = (tk - h, tk + h, tk);
+    for _ in 0..60 {
+        let (c, d1, d2) = trefoil_curve(t);
+        let w = c - p;
+        let g1 = w.dot(d1);
+        if g1 == 0.0 {
+            break;
+        }
+        if g1 > 0.0 {
+            hi = t;
+        } else {
+            lo = t;
+        }
+        let g2 = d1.length_squared() + w.dot(d2);
+        let step = g1 / g2;
+        // Quadratic convergence: after a step below 1e-9 the error in t is ~1e-18.
+        if g2 > 0.0 && step.abs() <= 1e-9 {
+            t -= step;
+            break;
+        }
+        let next = t - step;
+        t = if g2 > 0.0 && next > lo && next < hi {
+            next
+        } else {
+            0.5 * (lo + hi)
+        };
+        if hi - lo <= 1e-12 {
+            break;
+        }
+    }
+    let c = trefoil_curve(t).0;
+    if c.distance_squared(p) <= best {
+        c
+    } else {
+        samples[k]
+    }
+}
+
+fn trefoil_native(p: DVec3) -> f64 {
+    // The curve lies on the torus of revolution (R, a): the distance to that torus is a lower
+    // bound of the distance to the curve. Far from it (most points of a segment crossing the
+    // bounding ball) that bound is returned: f >= 0.13 there, no root, and it is 50x cheaper.
+    let rho = (p.x * p.x + p.y * p.y).sqrt() - TREFOIL_R;
+    let lower = ((rho * rho + p.z * p.z).sqrt() - TREFOIL_A).abs();
+    if lower > TREFOIL_TUBE + TREFOIL_EXACT {
+        return lower - TREFOIL_TUBE;
+    }
+    p.distance(trefoil_nearest(p)) - TREFOIL_TUBE
+}
+
+fn trefoil_gradient(p: DVec3) -> DVec3 {
+    let w = p - trefoil_nearest(p);
+    let l = w.length();
+    if l > 0.0 { w / l } else { DVec3::Z }
 }
 
 fn octic_coefficients() -> [f64; 6] {
@@ -148,7 +275,7 @@ fn load() -> Vec<CatalogEntry> {
             let name: &'static str = Box::leak(r.name.into_boxed_str());
             CatalogEntry {
                 name,
-                expression: r.f,
+                expression: Some(r.f),
                 bounding_sphere: BoundingSphere {
                     center: DVec3::from_array(r.bounding_sphere.center),
                     radius: r.bounding_sphere.radius,
@@ -167,17 +294,17 @@ fn load() -> Vec<CatalogEntry> {
     };
     out.push(CatalogEntry {
         name: "trefoil",
-        expression: trefoil_expression(),
-        bounding_sphere: ball(3.0),
+        expression: None,
+        bounding_sphere: ball(2.0),
         smooth: true,
         genus: Some(1),
         components: Some(1),
-        dm_inf: None,
+        dm_inf: Some(TREFOIL_TUBE),
         reference: false,
     });
     out.push(CatalogEntry {
         name: "barth_octic",
-        expression: octic_expression(),
+        expression: Some(octic_expression()),
         bounding_sphere: ball(2.0),
         smooth: false,
         genus: None,
@@ -187,8 +314,9 @@ fn load() -> Vec<CatalogEntry> {
     });
     out.push(CatalogEntry {
         name: "klein_bottle",
-        expression: "(x^2+y^2+z^2+2*y-1)*((x^2+y^2+z^2-2*y-1)^2-8*z^2)+16*x*z*(x^2+y^2+z^2-2*y-1)"
-            .into(),
+        expression: Some(
+            "(x^2+y^2+z^2+2*y-1)*((x^2+y^2+z^2-2*y-1)^2-8*z^2)+16*x*z*(x^2+y^2+z^2-2*y-1)".into(),
+        ),
         bounding_sphere: ball(5.0),
         smooth: false,
         genus: None,
@@ -278,21 +406,6 @@ pub fn native_fn(name: &str) -> Option<fn(DVec3) -> f64> {
     })
 }
 
-fn trefoil_native(p: DVec3) -> f64 {
-    let r2 = p.length_squared();
-    let inv = 1.0 / (1.0 + r2);
-    let (x1, x2, x3, x4) = (
-        2.0 * p.x * inv,
-        2.0 * p.y * inv,
-        2.0 * p.z * inv,
-        (r2 - 1.0) * inv,
-    );
-    // F = w^2 - z^3 with z = x1 + i x2, w = x3 + i x4.
-    let re = x3 * x3 - x4 * x4 - (x1 * x1 * x1 - 3.0 * x1 * x2 * x2);
-    let im = 2.0 * x3 * x4 - (3.0 * x1 * x1 * x2 - x2 * x2 * x2);
-    re * re + im * im - TREFOIL_DELTA
-}
-
 /// The catalog surface `name`, evaluated by its native closure, with the exact gradient of its
 /// expression and its known d_M^inf as [`crate::Surface::dm_inf_hint`].
 ///
@@ -315,13 +428,31 @@ pub fn surface(name: &str) -> Result<ImplicitSurface, CatalogError> {
         name: name.to_string(),
         source: Box::new(source),
     };
-    let expr = Arc::new(Expr::parse(&e.expression).map_err(|err| wrap(err.into()))?);
-    let mut b =
-        ImplicitSurface::builder(f, e.bounding_sphere).gradient(move |p| expr.eval_grad(p).1);
+    native_builder(&e, f, e.bounding_sphere, &wrap)?
+        .build()
+        .map_err(wrap)
+}
+
+/// Builder of a catalog surface's native closure with its exact gradient (of the expression, or
+/// native for `trefoil`) and its d_M^inf hint.
+fn native_builder(
+    e: &CatalogEntry,
+    f: fn(DVec3) -> f64,
+    bs: BoundingSphere,
+    wrap: &dyn Fn(ImplicitError) -> CatalogError,
+) -> Result<crate::implicit::ImplicitBuilder, CatalogError> {
+    let mut b = ImplicitSurface::builder(f, bs);
+    b = match &e.expression {
+        Some(x) => {
+            let expr = Arc::new(Expr::parse(x).map_err(|err| wrap(err.into()))?);
+            b.gradient(move |p| expr.eval_grad(p).1)
+        }
+        None => b.gradient(trefoil_gradient),
+    };
     if let Some(d) = e.dm_inf {
         b = b.dm_inf_hint(d);
     }
-    b.build().map_err(wrap)
+    Ok(b)
 }
 
 /// The catalog surface `name` evaluated through its compiled expression (the slow path that a
@@ -335,8 +466,12 @@ pub fn surface_from_expression(name: &str) -> Result<ImplicitSurface, CatalogErr
         name: name.to_string(),
         source: Box::new(source),
     };
-    let mut b =
-        ImplicitSurface::builder_from_expr(&e.expression, e.bounding_sphere).map_err(wrap)?;
+    let Some(x) = &e.expression else {
+        return Err(CatalogError::NoExpression {
+            name: name.to_string(),
+        });
+    };
+    let mut b = ImplicitSurface::builder_from_expr(x, e.bounding_sphere).map_err(wrap)?;
     if let Some(d) = e.dm_inf {
         b = b.dm_inf_hint(d);
     }
@@ -367,12 +502,7 @@ pub fn resolve(spec: &str, bs: Option<BoundingSphere>) -> Result<ImplicitSurface
         let Some(bs) = bs else {
             return surface(spec);
         };
-        let expr = Arc::new(Expr::parse(&e.expression).map_err(|err| wrap(err.into()))?);
-        let mut b = ImplicitSurface::builder(f, bs).gradient(move |p| expr.eval_grad(p).1);
-        if let Some(d) = e.dm_inf {
-            b = b.dm_inf_hint(d);
-        }
-        return b.build().map_err(wrap);
+        return native_builder(&e, f, bs, &wrap)?.build().map_err(wrap);
     }
     let is_word = !spec.is_empty() && spec.chars().all(|c| c.is_alphanumeric() || c == '_');
     let expr = match Expr::parse(spec) {
