@@ -216,6 +216,43 @@ struct Boundary {
     j: u8,
 }
 
+/// The conflict zone of a point, found by [`Triangulation::find_cavity`] (read-only) and
+/// applied by [`Triangulation::insert_cavity`]. Reusable: searches clear it.
+#[derive(Clone, Debug, Default)]
+pub struct Cavity {
+    p: DVec3,
+    cells: Vec<CellId>,
+    boundary: Vec<Boundary>,
+    duplicate: Option<VertexId>,
+    seen: rustc_hash::FxHashMap<CellId, bool>,
+}
+
+impl Cavity {
+    /// The point searched for.
+    pub fn point(&self) -> DVec3 {
+        self.p
+    }
+
+    /// The existing vertex equal to the point, if any (then the zone is empty).
+    pub fn duplicate(&self) -> Option<VertexId> {
+        self.duplicate
+    }
+
+    /// The cells in conflict with the point (destroyed by its insertion).
+    pub fn cells(&self) -> &[CellId] {
+        &self.cells
+    }
+
+    /// The cells in conflict and their neighbors across the zone's boundary: two zones whose
+    /// touched cells are disjoint can be inserted one after the other without searching again.
+    pub fn touched_cells(&self) -> impl Iterator<Item = CellId> + '_ {
+        self.cells
+            .iter()
+            .copied()
+            .chain(self.boundary.iter().map(|b| b.out))
+    }
+}
+
 enum Walk {
     Vertex(VertexId),
     Inside(CellId),
@@ -968,19 +1005,38 @@ impl Triangulation {
                     }
                     self.cells[n as usize].mark = outm;
                 }
-                let cv = self.cells[c as usize].v;
-                let j = self.cells[n as usize]
-                    .n
-                    .iter()
-                    .position(|&x| x == c)
-                    .expect("neighbor symmetry") as u8;
-                boundary.push(Boundary {
-                    v: FACET[i].map(|k| cv[k]),
-                    out: n,
-                    j,
-                });
+                boundary.push(self.boundary_facet(c, i, n));
             }
         }
+        self.cavity = cavity;
+        self.stack = stack;
+        self.boundary = boundary;
+        self.replace_cavity(p, id, changes)
+    }
+
+    /// The facet of cavity cell `c` opposite its vertex `i`, whose other side `n` is outside.
+    fn boundary_facet(&self, c: CellId, i: usize, n: CellId) -> Boundary {
+        let cv = self.cells[c as usize].v;
+        let j = self.cells[n as usize]
+            .n
+            .iter()
+            .position(|&x| x == c)
+            .expect("neighbor symmetry") as u8;
+        Boundary {
+            v: FACET[i].map(|k| cv[k]),
+            out: n,
+            j,
+        }
+    }
+
+    /// Replaces the cells of `self.cavity` (bounded by `self.boundary`) by the star of a new
+    /// vertex at `p`.
+    fn replace_cavity(
+        &mut self,
+        p: DVec3,
+        id: Option<VertexId>,
+        changes: Option<&mut Changes>,
+    ) -> Insertion {
         let v = match id {
             Some(v) => v,
             None => {
@@ -991,23 +1047,103 @@ impl Triangulation {
         };
         let mut created = None;
         if let Some(ch) = changes {
-            for &c in &cavity {
+            for &c in &self.cavity {
                 ch.removed.push(self.cells[c as usize].v);
                 ch.removed_cells.push(c);
             }
             created = Some(&mut ch.created);
         }
-        for &c in &cavity {
+        for k in 0..self.cavity.len() {
+            let c = self.cavity[k];
             self.n_live -= 1;
             if !self.cells[c as usize].v.contains(&INFINITE_VERTEX) {
                 self.n_finite -= 1;
             }
         }
-        self.cavity = cavity;
-        self.stack = stack;
-        self.boundary = boundary;
         self.build_star(v, created);
         Insertion::New(v)
+    }
+
+    /// Finds, without changing the triangulation, the conflict zone of `p`: the cells whose
+    /// circumsphere contains it (perturbed), from a point location started at `hint` with a
+    /// walk randomized by `seed`. Several searches may run at once on a shared triangulation;
+    /// [`Triangulation::insert_cavity`] applies one. The triangulation must be 3D.
+    ///
+    /// Errors: [`Error::InvalidPoint`] for non-finite or out-of-range coordinates.
+    pub fn find_cavity(
+        &self,
+        p: DVec3,
+        hint: Option<CellId>,
+        seed: u64,
+        out: &mut Cavity,
+    ) -> Result<(), Error> {
+        check_point(p)?;
+        assert!(self.built, "find_cavity needs a 3D triangulation");
+        out.p = p;
+        out.cells.clear();
+        out.boundary.clear();
+        out.duplicate = None;
+        out.seen.clear();
+        let mut rng = Rng(seed);
+        let c0 = match self.walk(p, self.start_cell(hint), &mut rng) {
+            Walk::Vertex(v) => {
+                out.duplicate = Some(v);
+                return Ok(());
+            }
+            Walk::Inside(c) | Walk::Outside(c) => c,
+        };
+        out.seen.insert(c0, true);
+        out.cells.push(c0);
+        let mut k = 0;
+        while k < out.cells.len() {
+            let c = out.cells[k];
+            k += 1;
+            for i in 0..4 {
+                let n = self.cells[c as usize].n[i];
+                let inside = match out.seen.get(&n) {
+                    Some(&b) => b,
+                    None => {
+                        let b = self.in_conflict(n, p);
+                        out.seen.insert(n, b);
+                        if b {
+                            out.cells.push(n);
+                        }
+                        b
+                    }
+                };
+                if !inside {
+                    out.boundary.push(self.boundary_facet(c, i, n));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Inserts the point of a conflict zone found by [`Triangulation::find_cavity`] on this
+    /// triangulation. Correct only if no cell of the zone, and no cell just outside it, has
+    /// changed since the search: the caller keeps zones applied together disjoint (cells
+    /// and outside neighbors; see [`Cavity::touched_cells`]). `changes` as for
+    /// [`Triangulation::insert_with`].
+    pub fn insert_cavity(&mut self, cav: &Cavity, changes: Option<&mut Changes>) -> Insertion {
+        let mut changes = changes;
+        if let Some(ch) = changes.as_deref_mut() {
+            ch.removed.clear();
+            ch.removed_cells.clear();
+            ch.created.clear();
+        }
+        if let Some(v) = cav.duplicate {
+            return Insertion::Duplicate(v);
+        }
+        debug_assert!(cav.cells.iter().all(|&c| self.is_cell(c)));
+        let mut cavity = std::mem::take(&mut self.cavity);
+        let mut boundary = std::mem::take(&mut self.boundary);
+        cavity.clear();
+        cavity.extend_from_slice(&cav.cells);
+        boundary.clear();
+        boundary.extend_from_slice(&cav.boundary);
+        self.cavity = cavity;
+        self.boundary = boundary;
+        self.replace_cavity(cav.p, None, changes)
     }
 
     /// Insertion while fewer than four affinely independent points are known.

@@ -408,6 +408,88 @@ fn larger_degenerate_inputs() {
     assert_eq!(tets_by_points(&t), tets_by_points(&b));
 }
 
+/// Inserts `rest` into `t` in batches of `k` through `find_cavity` (all zones searched on the
+/// same state first) and `insert_cavity`, inserting a zone only when its touched cells are
+/// disjoint from those of the zones inserted before it in the batch (the others are retried
+/// in the next batch), as the mesher does.
+fn insert_in_batches(t: &mut Triangulation, rest: &[DVec3], k: usize, seed: u64) -> usize {
+    use std::collections::HashSet;
+    let mut pending: Vec<DVec3> = rest.to_vec();
+    let mut deferred_total = 0;
+    let mut cavs: Vec<delaunay3::Cavity> = (0..k).map(|_| Default::default()).collect();
+    while !pending.is_empty() {
+        let n = pending.len().min(k);
+        let batch: Vec<DVec3> = pending.drain(..n).collect();
+        for (i, p) in batch.iter().enumerate() {
+            t.find_cavity(*p, None, seed ^ i as u64, &mut cavs[i])
+                .unwrap();
+        }
+        let mut touched = HashSet::new();
+        let mut deferred = Vec::new();
+        for (i, p) in batch.iter().enumerate() {
+            let cav = &cavs[i];
+            assert_eq!(cav.point(), *p);
+            if cav.duplicate().is_some() {
+                assert!(matches!(
+                    t.insert_cavity(cav, None),
+                    Insertion::Duplicate(_)
+                ));
+                continue;
+            }
+            if cav.touched_cells().any(|c| touched.contains(&c)) {
+                deferred.push(*p);
+                continue;
+            }
+            touched.extend(cav.touched_cells());
+            let mut ch = Changes::default();
+            assert!(matches!(
+                t.insert_cavity(cav, Some(&mut ch)),
+                Insertion::New(_)
+            ));
+            let mut removed = ch.removed_cells.clone();
+            removed.sort_unstable();
+            let mut zone = cav.cells().to_vec();
+            zone.sort_unstable();
+            assert_eq!(removed, zone);
+        }
+        deferred_total += deferred.len();
+        pending.splice(0..0, deferred);
+    }
+    deferred_total
+}
+
+#[test]
+fn batched_cavities_equal_one_by_one_insertion() {
+    // Random points, points on a sphere (cospherical ties) and a grid (coplanar ties): the
+    // batched insertion gives the same triangulation as inserting one point at a time.
+    let mut r = Rng(5);
+    let random: Vec<DVec3> = (0..2000).map(|_| r.point()).collect();
+    let sphere = sphere_points(129, 1.0, DVec3::new(1.0, 2.0, 3.0));
+    let mut grid = Vec::new();
+    for x in 0..7 {
+        for y in 0..7 {
+            for z in 0..5 {
+                grid.push(DVec3::new(x as f64, y as f64, z as f64));
+            }
+        }
+    }
+    for pts in [random, sphere, grid] {
+        let reference = build_checked(&pts);
+        for k in [2, 8, 32] {
+            let mut t = Triangulation::new();
+            let mut head = 0;
+            while t.dimension() < 3 {
+                t.insert(pts[head]).unwrap();
+                head += 1;
+            }
+            let deferred = insert_in_batches(&mut t, &pts[head..], k, 17);
+            eprintln!("{} points, batch {k}: {deferred} deferred", pts.len());
+            assert!(t.is_valid().is_ok(), "{:?}", t.is_valid());
+            assert_eq!(tets_by_points(&t), tets_by_points(&reference), "batch {k}");
+        }
+    }
+}
+
 fn coord() -> impl Strategy<Value = f64> {
     (-1000i32..1000).prop_map(|i| i as f64 / 64.0)
 }
@@ -462,6 +544,23 @@ proptest! {
         let mut rev = pts.clone();
         rev.reverse();
         prop_assert_eq!(tets_by_points(&a), tets_by_points(&build_checked(&rev)));
+    }
+
+    #[test]
+    fn prop_batched_cavities(pts in prop::collection::vec(point(), 8..120), k in 2usize..12,
+                             seed in any::<u64>()) {
+        let reference = build_checked(&pts);
+        let mut t = Triangulation::new();
+        let mut i = 0;
+        while i < pts.len() && t.dimension() < 3 {
+            t.insert(pts[i]).unwrap();
+            i += 1;
+        }
+        if t.dimension() == 3 {
+            insert_in_batches(&mut t, &pts[i..], k, seed);
+        }
+        prop_assert!(t.is_valid().is_ok());
+        prop_assert_eq!(tets_by_points(&t), tets_by_points(&reference));
     }
 
     #[test]

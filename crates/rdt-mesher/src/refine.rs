@@ -13,7 +13,9 @@
 //! - `vertex_facets[v]` counts the restricted facets incident to `v`.
 
 use crate::criteria::Criteria;
-use delaunay3::{CellId, Changes, Facet, INFINITE_VERTEX, Insertion, Triangulation, VertexId};
+use delaunay3::{
+    Cavity, CellId, Changes, Facet, INFINITE_VERTEX, Insertion, Triangulation, VertexId,
+};
 use glam::DVec3;
 use meshio::TriMesh;
 use oracle::{BoundingSphere, OracleError, Surface, roots::SplitMix64};
@@ -153,6 +155,9 @@ pub struct Stats {
     /// Batches of oracle calls that ran on several threads (they are chosen from measured
     /// call costs, so this varies from run to run; the mesh does not).
     pub parallel_oracle_batches: u64,
+    /// Refinement points whose conflict zone overlapped an earlier one of the same batch and
+    /// went back to the queue (see `refine_batch`).
+    pub batch_deferrals: u64,
     pub time_total_s: f64,
     pub time_delaunay_s: f64,
     pub time_oracle_s: f64,
@@ -270,6 +275,16 @@ impl CostEstimate {
     }
 }
 
+/// Two refinement points closer than this many times the sum of their balls' radii are not
+/// put in the same batch (their conflict zones would likely overlap).
+const NEAR_FACTOR: f64 = 2.0;
+
+/// Largest batch of `Refiner::refine_batch`.
+const MAX_BATCH: usize = 32;
+
+/// Circumcenters of at least this many created cells are computed in parallel.
+const PARALLEL_CELLS: usize = 256;
+
 /// A batch of oracle calls runs in parallel when it is expected to take longer than this.
 const PARALLEL_BATCH_NS: f64 = 60_000.0;
 
@@ -370,6 +385,12 @@ pub(crate) struct Refiner<'a> {
     pending_buf: Vec<PendingFacet>,
     hits_buf: Vec<Option<(DVec3, bool)>>,
     pairs_buf: Vec<(Facet, Facet)>,
+    batch_buf: Vec<(QEntry, RFacet)>,
+    batch_created: Vec<CellId>,
+    cavities: Vec<Cavity>,
+    /// `touched[c] == touch_round`: cell c is in (or next to) a zone inserted in this batch.
+    touched: Vec<u32>,
+    touch_round: u32,
     /// Measured costs of the oracle's calls, to decide when a batch runs in parallel.
     value_cost: CostEstimate,
     crossing_cost: CostEstimate,
@@ -407,6 +428,11 @@ impl<'a> Refiner<'a> {
             pending_buf: Vec::new(),
             hits_buf: Vec::new(),
             pairs_buf: Vec::new(),
+            batch_buf: Vec::new(),
+            batch_created: Vec::new(),
+            cavities: Vec::new(),
+            touched: Vec::new(),
+            touch_round: 0,
             value_cost: CostEstimate::default(),
             crossing_cost: CostEstimate::default(),
             threads: rayon::current_num_threads(),
@@ -530,29 +556,38 @@ impl<'a> Refiner<'a> {
     }
 
     fn update_cell(&mut self, c: CellId) -> Result<(), MeshError> {
+        let info = self.cell_info(c);
+        self.set_cell(c, info);
+        Ok(())
+    }
+
+    fn set_cell(&mut self, c: CellId, info: CellInfo) {
         let idx = c as usize;
         if idx >= self.cells.len() {
             self.cells.resize(idx + 1 + idx / 2, CellInfo::default());
         }
+        self.cells[idx] = info;
+    }
+
+    /// Circumcenter of live cell `c`, with f = NaN ("value not evaluated yet", see
+    /// `eval_cells`) inside the bounding ball and +inf outside it or for an infinite cell.
+    fn cell_info(&self, c: CellId) -> CellInfo {
         if self.tri.is_infinite(c) {
-            self.cells[idx] = CellInfo {
+            return CellInfo {
                 cc: DVec3::ZERO,
                 f: f64::INFINITY,
             };
-            return Ok(());
         }
         let mut cc = self.tri.circumcenter(c);
         if !cc.is_finite() {
             cc = self.flat_cell_center(c);
         }
-        // NaN marks "value not evaluated yet" (see `eval_cells`).
         let f = if cc.is_finite() && self.ball.contains(cc) {
             f64::NAN
         } else {
             f64::INFINITY
         };
-        self.cells[idx] = CellInfo { cc, f };
-        Ok(())
+        CellInfo { cc, f }
     }
 
     /// A stand-in circumcenter for a cell whose four vertices are exactly coplanar (it exists
@@ -743,7 +778,17 @@ impl<'a> Refiner<'a> {
     fn test_facets(&mut self, pairs: &[(Facet, Facet)]) -> Result<(), MeshError> {
         let mut pending = std::mem::take(&mut self.pending_buf);
         pending.clear();
-        pending.extend(pairs.iter().filter_map(|&(f, m)| self.prepare_facet(f, m)));
+        if pairs.len() >= PARALLEL_CELLS && self.threads > 1 {
+            use rayon::prelude::*;
+            let this = &*self;
+            let prepared: Vec<Option<PendingFacet>> = pairs
+                .par_iter()
+                .map(|&(f, m)| this.prepare_facet(f, m))
+                .collect();
+            pending.extend(prepared.into_iter().flatten());
+        } else {
+            pending.extend(pairs.iter().filter_map(|&(f, m)| self.prepare_facet(f, m)));
+        }
         if pending.is_empty() {
             self.pending_buf = pending;
             return Ok(());
@@ -868,8 +913,6 @@ impl<'a> Refiner<'a> {
     fn insert(&mut self, p: DVec3, hint: Option<CellId>) -> Result<bool, MeshError> {
         let t = Instant::now();
         let mut changes = std::mem::take(&mut self.changes);
-        changes.removed.clear();
-        changes.created.clear();
         let res = self.tri.insert_with(p, hint, Some(&mut changes));
         self.t_delaunay += t.elapsed();
         let res = match res {
@@ -883,6 +926,17 @@ impl<'a> Refiner<'a> {
             self.changes = changes;
             return Ok(false);
         }
+        self.remove_destroyed(&changes);
+        let r = self.process_created(&changes.created);
+        self.changes = changes;
+        r?;
+        Ok(true)
+    }
+
+    /// Remove the restricted facets of the cells an insertion destroyed (registered facets
+    /// have their bits in `facet_mask`; this includes the cavity's boundary facets, whose duals
+    /// changed).
+    fn remove_destroyed(&mut self, changes: &Changes) {
         self.ensure_vertex_slots();
         for (cell, &id) in changes.removed.iter().zip(&changes.removed_cells) {
             let mask = self.facet_mask.get(id as usize).copied().unwrap_or(0);
@@ -906,25 +960,67 @@ impl<'a> Refiner<'a> {
                 }
             }
         }
+    }
+
+    /// Compute the circumcenters and values of `created` cells and test every facet of them
+    /// (new facets and the boundary facets of the cavities, whose duals changed).
+    fn process_created(&mut self, created: &[CellId]) -> Result<(), MeshError> {
         self.round = self.round.wrapping_add(1);
-        for &c in &changes.created {
-            self.update_cell(c)?;
+        if created.len() >= PARALLEL_CELLS && self.threads > 1 {
+            use rayon::prelude::*;
+            let this = &*self;
+            let infos: Vec<CellInfo> = created.par_iter().map(|&c| this.cell_info(c)).collect();
+            for (&c, info) in created.iter().zip(infos) {
+                self.set_cell(c, info);
+            }
+        } else {
+            for &c in created {
+                let info = self.cell_info(c);
+                self.set_cell(c, info);
+            }
+        }
+        for &c in created {
             if let Some(m) = self.facet_mask.get_mut(c as usize) {
                 *m = 0;
             }
         }
-        self.eval_cells(&changes.created)?;
-        for &c in &changes.created {
+        self.eval_cells(created)?;
+        for &c in created {
             let idx = c as usize;
             if idx >= self.created_stamp.len() {
                 self.created_stamp.resize(idx + 1 + idx / 2, 0);
             }
             self.created_stamp[idx] = self.round;
         }
-        let bipolar = self.opts.oracle == OracleKind::Bipolar;
         let mut pairs = std::mem::take(&mut self.pairs_buf);
         pairs.clear();
-        for &c in &changes.created {
+        if created.len() >= PARALLEL_CELLS && self.threads > 1 {
+            use rayon::prelude::*;
+            let this = &*self;
+            let parts: Vec<Vec<(Facet, Facet)>> = created
+                .par_chunks(64)
+                .map(|chunk| {
+                    let mut v = Vec::new();
+                    this.facets_to_test(chunk, &mut v);
+                    v
+                })
+                .collect();
+            for v in parts {
+                pairs.extend(v);
+            }
+        } else {
+            self.facets_to_test(created, &mut pairs);
+        }
+        let r = self.test_facets(&pairs);
+        self.pairs_buf = pairs;
+        r
+    }
+
+    /// The facets of `cells` (created in this round) to test, each with its mirror facet,
+    /// once each: a facet between two created cells is taken from the smaller id.
+    fn facets_to_test(&self, cells: &[CellId], out: &mut Vec<(Facet, Facet)>) {
+        let bipolar = self.opts.oracle == OracleKind::Bipolar;
+        for &c in cells {
             let fc = self.cells[c as usize].f;
             for i in 0..4u8 {
                 let n = self.tri.neighbor(c, i as usize);
@@ -933,21 +1029,175 @@ impl<'a> Refiner<'a> {
                 if n_created && n < c {
                     continue; // tested from n's side
                 }
-                // Invariant (kept by `full_scan` and `update_cell`): every live cell has its
-                // entry in `cells`, with f = +inf for infinite cells. So the bipolar sign
-                // rejection of `test_facet` can run here before the mirror facet is built.
+                // Invariant (kept by `full_scan` and `process_created`): every live cell has
+                // its entry in `cells`, with f = +inf for infinite cells. So the bipolar sign
+                // rejection of `prepare_facet` can run here before the mirror facet is built.
                 if bipolar && inside(fc) == inside(self.cells[n as usize].f) {
                     continue;
                 }
                 let f = Facet { cell: c, index: i };
-                pairs.push((f, self.tri.mirror_facet(f)));
+                out.push((f, self.tri.mirror_facet(f)));
             }
         }
-        let r = self.test_facets(&pairs);
-        self.pairs_buf = pairs;
+    }
+
+    /// Refinement steps in batches: take up to `batch_size()` fresh entries from the queue
+    /// (worst first), find their conflict zones at once (in parallel when there are several
+    /// threads: a read-only search), insert in queue order those whose zones touch no zone
+    /// inserted before them in the batch (the others go back to the queue), then update
+    /// Del_S(E) for all created cells at once. Disjoint zones (cells and their outside
+    /// neighbors) stay exact after the earlier insertions: a new cell's circumball lies in the
+    /// union of the circumballs of the destroyed cell and the outside neighbor it replaces, so a
+    /// later point in conflict with it would be in conflict with one of those. The batches
+    /// depend only on the queue, never on the thread count, so the mesh is the same on any
+    /// number of threads. Returns false when the queue is empty or a budget stopped the run.
+    fn refine_batch(&mut self, since_progress: &mut usize) -> Result<bool, MeshError> {
+        let k = self.batch_size();
+        let mut batch = std::mem::take(&mut self.batch_buf);
+        batch.clear();
+        let mut near = Vec::new();
+        let sep = NEAR_FACTOR;
+        while batch.len() < k {
+            let Some(e) = self.queue.pop() else { break };
+            let Some(rf) = self.restricted.get(&e.key).copied() else {
+                continue;
+            };
+            if rf.version != e.version {
+                continue;
+            }
+            if e.forced && rf.radius < self.manifold_floor(rf.center) {
+                continue;
+            }
+            // A point close to one already in the batch has overlapping conflict zones:
+            // leave it for the next batch without searching.
+            if batch.iter().any(|(_, b): &(QEntry, RFacet)| {
+                b.center.distance_squared(rf.center) < (sep * (b.radius + rf.radius)).powi(2)
+            }) {
+                near.push(e);
+                continue;
+            }
+            batch.push((e, rf));
+        }
+        self.stats.batch_deferrals += near.len() as u64;
+        for e in near {
+            self.queue.push(e);
+        }
+        if batch.is_empty() {
+            self.batch_buf = batch;
+            return Ok(false);
+        }
+        if batch.len() == 1 {
+            let (e, rf) = batch[0];
+            self.batch_buf = batch;
+            if self.budget_exceeded() {
+                return Ok(false);
+            }
+            if self.insert(rf.center, Some(rf.facet.cell))? {
+                self.count_insertion(e.forced, since_progress);
+            }
+            return Ok(true);
+        }
+        // Conflict zones, read-only.
+        let t = Instant::now();
+        let mut cavs = std::mem::take(&mut self.cavities);
+        if cavs.len() < batch.len() {
+            cavs.resize_with(batch.len(), Cavity::default);
+        }
+        let tri = &self.tri;
+        let search = |(e, rf): &(QEntry, RFacet), cav: &mut Cavity| {
+            let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version);
+            tri.find_cavity(rf.center, Some(rf.facet.cell), seed, cav)
+        };
+        let found: Vec<Result<(), delaunay3::Error>> = if self.threads > 1 {
+            use rayon::prelude::*;
+            batch
+                .par_iter()
+                .zip(cavs.par_iter_mut())
+                .map(|(b, cav)| search(b, cav))
+                .collect()
+        } else {
+            batch
+                .iter()
+                .zip(cavs.iter_mut())
+                .map(|(b, cav)| search(b, cav))
+                .collect()
+        };
+        self.t_delaunay += t.elapsed();
+        // Insert the disjoint ones in queue order.
+        self.touch_round = self.touch_round.wrapping_add(1);
+        if self.touch_round == 0 {
+            self.touched.iter_mut().for_each(|x| *x = 0);
+            self.touch_round = 1;
+        }
+        let mut created = std::mem::take(&mut self.batch_created);
+        created.clear();
+        let mut changes = std::mem::take(&mut self.changes);
+        let mut stop = false;
+        let mut result = Ok(());
+        for (i, (&(e, _), res)) in batch.iter().zip(&found).enumerate() {
+            if let Err(err) = res {
+                result = Err(MeshError::from(err.clone()));
+                break;
+            }
+            let cav = &cavs[i];
+            if cav.duplicate().is_some() {
+                continue;
+            }
+            let round = self.touch_round;
+            if cav
+                .touched_cells()
+                .any(|c| self.touched.get(c as usize).is_some_and(|&r| r == round))
+            {
+                self.queue.push(e); // its zone overlaps an earlier one: next batch
+                self.stats.batch_deferrals += 1;
+                continue;
+            }
+            if self.budget_exceeded() {
+                stop = true;
+                // The rest of the batch stays queued (for a caller that continues).
+                for &(e, _) in &batch[i..] {
+                    self.queue.push(e);
+                }
+                break;
+            }
+            for c in cav.touched_cells() {
+                let c = c as usize;
+                if c >= self.touched.len() {
+                    self.touched.resize(c + 1 + c / 2, 0);
+                }
+                self.touched[c] = round;
+            }
+            let t = Instant::now();
+            let ins = self.tri.insert_cavity(cav, Some(&mut changes));
+            self.t_delaunay += t.elapsed();
+            debug_assert!(matches!(ins, Insertion::New(_)));
+            self.remove_destroyed(&changes);
+            created.extend_from_slice(&changes.created);
+            self.count_insertion(e.forced, since_progress);
+        }
         self.changes = changes;
+        self.cavities = cavs;
+        self.batch_buf = batch;
+        let r = self.process_created(&created);
+        self.batch_created = created;
+        result?;
         r?;
-        Ok(true)
+        Ok(!stop)
+    }
+
+    /// Batch size of `refine_batch`: 1 while the triangulation is small (zones overlap), up
+    /// to `MAX_BATCH`. A function of the state only (never of the thread count).
+    fn batch_size(&self) -> usize {
+        (self.tri.num_vertices() / 128).clamp(1, MAX_BATCH)
+    }
+
+    fn count_insertion(&mut self, forced: bool, since_progress: &mut usize) {
+        if forced {
+            self.stats.manifold_insertions += 1;
+        } else {
+            self.stats.refinement_insertions += 1;
+        }
+        *since_progress += 1;
     }
 
     fn budget_exceeded(&mut self) -> bool {
@@ -971,28 +1221,14 @@ impl<'a> Refiner<'a> {
         self.ensure_vertex_slots();
         let mut since_progress = 0usize;
         loop {
-            // Main loop: refine bad balls, worst first.
-            while let Some(e) = self.queue.pop() {
-                let Some(rf) = self.restricted.get(&e.key).copied() else {
-                    continue;
-                };
-                if rf.version != e.version {
-                    continue;
-                }
-                if self.budget_exceeded() {
-                    return Ok(());
-                }
-                if e.forced && rf.radius < self.manifold_floor(rf.center) {
-                    continue;
-                }
-                if self.insert(rf.center, Some(rf.facet.cell))? {
-                    if e.forced {
-                        self.stats.manifold_insertions += 1;
-                    } else {
-                        self.stats.refinement_insertions += 1;
+            // Main loop: refine bad balls, worst first (in batches).
+            while !self.queue.is_empty() {
+                if !self.refine_batch(&mut since_progress)? {
+                    if self.stats.stopped_by.is_some() {
+                        return Ok(());
                     }
+                    continue;
                 }
-                since_progress += 1;
                 if since_progress >= 500 {
                     since_progress = 0;
                     progress(Progress {
@@ -1136,6 +1372,8 @@ impl<'a> Refiner<'a> {
     /// Recompute Del_S(E) from scratch and count the facets on which the incremental
     /// structure disagrees (0 when the invariants hold). For tests.
     fn audit(&mut self) -> Result<usize, MeshError> {
+        // The triangulation itself (combinatorics, orientation, local Delaunay property).
+        let invalid = usize::from(self.tri.is_valid().is_err());
         let before: Vec<([VertexId; 3], RFacet)> = self.sorted_facets();
         self.restricted.clear();
         self.facet_mask.clear();
@@ -1149,7 +1387,7 @@ impl<'a> Refiner<'a> {
         let b: Vec<_> = after.iter().map(|x| x.0).collect();
         let missing = b.iter().filter(|k| a.binary_search(k).is_err()).count();
         let extra = a.iter().filter(|k| b.binary_search(k).is_err()).count();
-        Ok(missing + extra)
+        Ok(missing + extra + invalid)
     }
 
     fn finish(mut self) -> MeshResult {

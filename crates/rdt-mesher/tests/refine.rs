@@ -204,6 +204,39 @@ fn parallel_oracle_batches_do_not_change_the_mesh() {
     }
 }
 
+/// Refinement runs in batches of up to 32 points whose conflict zones are searched in
+/// parallel: at ~9k vertices (full batches) the mesh is the same on 1 and on 4 threads, with
+/// both oracles, and the Delaunay triangulation and Del_S(E) stay exact (audit).
+#[test]
+fn batched_refinement_is_independent_of_the_thread_count() {
+    for oracle in [OracleKind::Bipolar, OracleKind::Intersection] {
+        let opts = MeshOptions {
+            criteria: Criteria::uniform(0.03),
+            oracle,
+            ..Default::default()
+        };
+        let in_pool = |n: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+                .install(|| mesh(&torus(), &opts).unwrap())
+        };
+        let one = in_pool(1);
+        let four = in_pool(4);
+        assert!(one.stats.vertices > 5000, "{}", one.stats.vertices);
+        assert!(one.stats.criteria_met, "{:?}", one.stats.unmet);
+        assert_eq!(one.mesh, four.mesh, "{oracle:?}");
+        check_closed_manifold(&four, 1);
+        let audit = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .unwrap()
+            .install(|| rdt_mesher::refine::audit(&torus(), &opts).unwrap());
+        assert_eq!(audit, 0);
+    }
+}
+
 #[test]
 fn sign_only_function_meshes_with_bipolar() {
     let s = Analytic {
