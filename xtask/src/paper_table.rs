@@ -238,7 +238,9 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
             let (dm, src, eps) = match s.dm_inf_hint() {
                 Some(d) => (d, "catalog".to_string(), EPS),
                 None => {
-                    eprintln!("{name}: estimating d_M^inf (lambda-medial axis, section 6.5)");
+                    eprintln!(
+                        "{name}: estimating d_M^inf (lambda-medial axis + Voronoi poles, section 6.5)"
+                    );
                     let e = sizing::estimate_dm_inf(&s, &base)?;
                     // First-pass size ~ n (sigma_e / sigma_0)^2: raise eps if 0.09 would not
                     // fit in half the budget.
@@ -248,7 +250,7 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
                     (
                         e.value,
                         format!(
-                            "estimated: min of d_(M_lambda) over a sample of {} points at sigma {:.4}{}",
+                            "estimated: min of the d_M estimate (lambda-medial axis + poles) over a sample of {} points at sigma {:.4}{}",
                             e.vertices,
                             e.sigma,
                             if e.converged {

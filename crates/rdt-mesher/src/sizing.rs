@@ -454,13 +454,13 @@ pub struct DmInfEstimate {
 pub const DM_INF_SIGMA_RATIO: f64 = 0.1;
 
 /// An estimate of d_M^inf for a surface without a known value (section 6.5 applied to itself):
-/// mesh S uniformly at sigma = bounding radius / 20, take m = min over the sample of
-/// d_{M_lambda} (lambda = 2.5 sigma); while sigma > 0.1 m, mesh again at sigma = 0.1 m, or at
-/// the smallest sigma expected to fit in 80% of `base.max_vertices` if larger (at most 6
-/// passes; a pass stopped by the budget is discarded).
+/// mesh S uniformly at sigma = bounding radius / 20, take m = min over the sample of the
+/// [`MedialAxisEstimate`] distance (lambda = 2.5 sigma); while sigma > 0.1 m, mesh again at
+/// sigma = 0.1 m, or at the smallest sigma expected to fit in 80% of `base.max_vertices` if
+/// larger (at most 6 passes; a pass stopped by the budget is discarded).
 ///
-/// Since every kept Voronoi vertex is at distance >= lambda from the sample, m >= 2.5 sigma: a
-/// coarse sample cannot see a smaller d_M, hence the refinement down to sigma = 0.1 m, where
+/// A coarse sample cannot see a d_M much below its spacing (its Voronoi vertices near the
+/// medial axis are blurred over that scale), hence the refinement down to sigma = 0.1 m, where
 /// the estimate is within 7% on the sphere, torus and ellipsoid (tests/sizing.rs). An estimate,
 /// not a bound; meaningless on singular surfaces (d_M^inf = 0 there: it decreases with sigma).
 pub fn estimate_dm_inf(
