@@ -77,15 +77,20 @@ impl Criteria {
     /// How bad the ball is: a value > 1 means bad (the larger the worse), <= 1 good.
     /// `tri` are the facet's vertices, `c` the ball center, `r` its radius.
     pub fn badness(&self, tri: [DVec3; 3], c: DVec3, r: f64) -> f64 {
+        self.badness_with_sigma(tri, c, r, self.size.as_ref().map(|s| s.at(c)))
+    }
+
+    /// [`Criteria::badness`] with sigma(c) already evaluated (`None` without a size
+    /// criterion): a sizing field is then evaluated once per ball.
+    pub fn badness_with_sigma(&self, tri: [DVec3; 3], c: DVec3, r: f64, sigma: Option<f64>) -> f64 {
         let mut bad: f64 = 0.0;
-        if let Some(s) = &self.size {
-            let sigma = s.at(c);
+        if let Some(sigma) = sigma {
             bad = bad.max(r / sigma);
         }
-        if self.min_angle_deg > 0.0 {
+        let circle = (self.min_angle_deg > 0.0 || self.max_distance.is_some())
+            .then(|| triangle_circumcircle(tri));
+        if let (true, Some((_, rc))) = (self.min_angle_deg > 0.0, circle) {
             // radius-edge ratio: R / l_min = 1 / (2 sin(theta_min)).
-            let (cc, rc) = triangle_circumcircle(tri);
-            let _ = cc;
             let lmin = (tri[1] - tri[0])
                 .length()
                 .min((tri[2] - tri[1]).length())
@@ -101,8 +106,7 @@ impl Criteria {
                 bad = bad.max(f64::MAX / 4.0);
             }
         }
-        if let Some(d) = self.max_distance {
-            let (cc, _) = triangle_circumcircle(tri);
+        if let (Some(d), Some((cc, _))) = (self.max_distance, circle) {
             let dist = (cc - c).length();
             if dist.is_finite() {
                 bad = bad.max(dist / d);

@@ -849,16 +849,19 @@ impl<'a> Refiner<'a> {
         let key = sorted3(verts);
         let pts = verts.map(|v| self.tri.point(v));
         let radius = pts.iter().map(|v| v.distance(center)).fold(0.0, f64::max);
-        if let Some(crate::Sizing::Field(_)) = &self.opts.criteria.size {
-            let s = self.opts.criteria.size.as_ref().unwrap().at(center);
-            if !(s > 0.0 && s.is_finite()) {
-                return Err(MeshError::InvalidSizeField {
-                    value: s,
-                    at: center,
-                });
-            }
+        let sigma = self.opts.criteria.size.as_ref().map(|s| s.at(center));
+        if let (Some(crate::Sizing::Field(_)), Some(s)) = (&self.opts.criteria.size, sigma)
+            && !(s > 0.0 && s.is_finite())
+        {
+            return Err(MeshError::InvalidSizeField {
+                value: s,
+                at: center,
+            });
         }
-        let bad = self.opts.criteria.badness(pts, center, radius);
+        let bad = self
+            .opts
+            .criteria
+            .badness_with_sigma(pts, center, radius, sigma);
         let oriented = if outward_from_cell {
             verts
         } else {

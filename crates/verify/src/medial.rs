@@ -2,7 +2,7 @@
 //! poles (Amenta & Bern): the poles of the samples approximate the medial axis, so the
 //! distance from a point to the nearest pole estimates d_M there.
 
-use delaunay3::{Insertion, Triangulation, VertexId};
+use delaunay3::{Triangulation, VertexId};
 use glam::DVec3;
 use thiserror::Error;
 
@@ -53,16 +53,15 @@ impl MedialAxisEstimate {
                 normals: n.len(),
             });
         }
-        let mut dt = Triangulation::new();
-        let mut vid: Vec<VertexId> = Vec::with_capacity(samples.len());
         for (i, &p) in samples.iter().enumerate() {
-            let r = dt
-                .insert(p)
+            delaunay3::validate_point(p)
                 .map_err(|source| MedialError::BadSample { index: i, source })?;
-            vid.push(match r {
-                Insertion::New(v) | Insertion::Duplicate(v) => v,
-            });
         }
+        // Spatially sorted insertion (several times faster than input order on large samples).
+        let mut dt = Triangulation::new();
+        let vid: Vec<VertexId> = dt
+            .insert_bulk(samples)
+            .map_err(|source| MedialError::BadSample { index: 0, source })?;
         if dt.dimension() < 3 {
             return Err(MedialError::Flat(samples.len()));
         }
