@@ -46,6 +46,7 @@
 // `!(x > y)` is used on purpose: it is true for NaN, which must take the safe branch.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod blocks;
 mod distance;
 mod error;
 mod nifti_io;

@@ -586,11 +586,12 @@ fn seed_tet(s: &ImageSurface, pts: &[DVec3], sign: f64) -> Option<[DVec3; 4]> {
 /// union-find works on runs, and sign changes between rows are found 64 nodes at a time.
 // Run indices are union-find ids and index several arrays: plain index loops are clearer.
 #[allow(clippy::needless_range_loop)]
-pub(crate) fn compute(s: &ImageSurface) -> Topology {
+///
+/// `bits` are the node signs from [`ImageSurface::inside_bits_rows`].
+pub(crate) fn compute(s: &ImageSurface, bits: &[u64]) -> Topology {
     let [nx, ny, nz] = s.dims_isize().map(|v| v as usize);
     let w = nx.div_ceil(64);
     let rows = ny * nz;
-    let bits = s.inside_bits_rows();
     let word = |r: usize, wi: usize| bits[r * w + wi];
     let get = |r: usize, x: usize| (bits[r * w + (x >> 6)] >> (x & 63)) & 1 == 1;
     // Valid node positions (x < nx) and transition positions (x < nx - 1) in word wi.
@@ -845,7 +846,7 @@ mod tests {
         ) else {
             return 0;
         };
-        let (a, b) = (compute(&s), compute_reference(&s));
+        let (a, b) = (compute(&s, &s.inside_bits_rows()), compute_reference(&s));
         assert_eq!(
             (a.inside_components, a.outside_components, a.crossing_edges),
             (b.inside_components, b.outside_components, b.crossing_edges),
