@@ -587,19 +587,19 @@ impl Surface for ImageSurface {
         self.value_voxel(self.inv.transform_point3(p))
     }
 
-    /// Block walk, then cell-wise root finding. The segment is walked through the sign
-    /// summary of `BLOCK³`-cell blocks (see the `blocks` module): uniform blocks are skipped
-    /// without touching the voxels, and the image is evaluated where the segment leaves each
-    /// mixed block, until the sign differs from the sign at `a`. That block's piece, with
-    /// exact values at both ends, is the bracket (if the walk is inconclusive, e.g. a root
-    /// within rounding of a block face, the bracket is the whole segment). Then each round
-    /// picks a candidate (false position, or the midpoint when the bracket did not halve in
-    /// two rounds), fetches the 8 corners of the voxel cell holding it, and evaluates the
-    /// cell's trilinear polynomial where the segment enters and leaves the cell: if the signs
-    /// differ there, the root is solved on that polynomial (Illinois, no more fetches) to the
-    /// tolerance; otherwise the whole cell piece is cut off the bracket. The bracket `[t0, t1]`
-    /// always keeps opposite signs (by `value < 0`). Returns the midpoint of a final bracket
-    /// shorter than the tolerance.
+    /// Block walk (segments longer than a block), then cell-wise root finding. The segment is
+    /// walked through the sign summary of `BLOCK³`-cell blocks (see the `blocks` module):
+    /// uniform blocks are skipped without touching the voxels, and the image is evaluated
+    /// where the segment leaves each mixed block, until the sign differs from the sign at `a`.
+    /// That block's piece is the bracket (if the walk is inconclusive, e.g. a root within
+    /// rounding of a block face, the bracket is the whole segment). Then each round picks a
+    /// candidate (false position, or the midpoint when the bracket did not halve in two rounds
+    /// or a value is unknown), fetches the 8 corners of the voxel cell holding it, and
+    /// evaluates the cell's trilinear polynomial where the segment enters and leaves the cell:
+    /// if the signs differ there, the root is solved on that polynomial (Illinois, no more
+    /// fetches) to the tolerance; otherwise the whole cell piece is cut off the bracket. The
+    /// bracket `[t0, t1]` keeps opposite signs (by `value < 0`). Returns the midpoint of a
+    /// final bracket shorter than the tolerance.
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
         let tol = self.tolerance();
         let d = b - a;
@@ -610,9 +610,14 @@ impl Surface for ImageSurface {
         let ttol = tol / len;
         let va = self.inv.transform_point3(a);
         let dv = self.inv.transform_vector3(d);
-        let br = self
-            .locate(va, dv, fa)
-            .unwrap_or_else(|| Bracket::new(fa, fb));
+        // A segment of a block or less is solved directly (the walk would cost more than it
+        // saves).
+        let br = if dv.length_squared() <= (blocks::BLOCK * blocks::BLOCK) as f64 {
+            None
+        } else {
+            self.locate(va, dv, fa)
+        };
+        let br = br.unwrap_or_else(|| Bracket::new(fa, fb));
         let br = self.solve_cells(va, dv, br, ttol);
         a + d * (0.5 * (br.t0 + br.t1))
     }
