@@ -54,6 +54,8 @@ pub struct ImageSurface {
     dm: OnceLock<Option<f64>>,
     /// Sign summary by blocks for [`Surface::crossing`] (built on the first crossing).
     blocks: OnceLock<Blocks>,
+    /// Budget of [`Surface::seed_points`] (see [`ImageSurface::with_seed_budget`]).
+    seed_budget: Option<usize>,
 }
 
 impl std::fmt::Debug for ImageSurface {
@@ -208,6 +210,7 @@ impl ImageSurface {
             topo: OnceLock::new(),
             dm: OnceLock::new(),
             blocks: OnceLock::new(),
+            seed_budget: Some(Topology::SEED_BUDGET),
         })
     }
 
@@ -237,6 +240,41 @@ impl ImageSurface {
         opts: &ImageOptions,
     ) -> Result<ImageSurface, ImageError> {
         ImageSurface::new(super::load_volume(path.as_ref(), load)?, opts)
+    }
+
+    /// Set the number of points [`Surface::seed_points`] aims at: `Some(b)`, or `None` for
+    /// [`Topology::full_seed_budget`] (a seed tetrahedron for every small component; the
+    /// default is [`Topology::SEED_BUDGET`], 64). The mesher must keep as many control points
+    /// (`MeshOptions::max_control_points`, see [`ImageSurface::seed_budget`]), else its
+    /// farthest-point thinning drops the close points of the tetrahedra first.
+    ///
+    /// ```
+    /// use oracle::image::{ImageOptions, ImageSurface, Volume, Voxels};
+    /// use oracle::Surface;
+    /// use glam::DAffine3;
+    /// // 40 isolated bright voxels: 40 components, too many for tetrahedra within 64 points.
+    /// let mut v = vec![0u8; 24 * 24 * 24];
+    /// for k in 0..40 {
+    ///     v[2 + 5 * (k % 4) + 24 * (2 + 5 * ((k / 4) % 4) + 24 * (2 + 8 * (k / 16)))] = 1;
+    /// }
+    /// let vol = Volume::new([24; 3], Voxels::U8(v), DAffine3::IDENTITY).unwrap();
+    /// let s = ImageSurface::new(vol, &ImageOptions::default()).unwrap();
+    /// assert_eq!(s.component_count(), 40);
+    /// assert_eq!(s.seed_points(0).len(), 64);
+    /// let s = s.with_seed_budget(None);
+    /// assert_eq!(s.seed_points(0).len(), s.seed_budget());
+    /// assert!(s.seed_budget() >= 40 * 4);
+    /// ```
+    pub fn with_seed_budget(mut self, budget: Option<usize>) -> ImageSurface {
+        self.seed_budget = budget;
+        self
+    }
+
+    /// The number of points [`Surface::seed_points`] aims at (runs the voxel scan when the
+    /// budget is [`Topology::full_seed_budget`]).
+    pub fn seed_budget(&self) -> usize {
+        self.seed_budget
+            .unwrap_or_else(|| self.topology().full_seed_budget())
     }
 
     /// The image.
@@ -647,11 +685,12 @@ impl Surface for ImageSurface {
         0.25 * s.x.min(s.y).min(s.z)
     }
 
-    /// One point on every surface component found by the voxel scan (see [`Topology`]), plus up
-    /// to 64 points in all with crossing points picked deterministically from `seed`
-    /// ([`Topology::seed_points`]).
+    /// One point on every surface component found by the voxel scan (see [`Topology`]), seed
+    /// tetrahedra around the small ones and crossing points picked deterministically from
+    /// `seed`: [`Topology::seed_points_within`] the [`ImageSurface::seed_budget`] (64 points
+    /// by default).
     fn seed_points(&self, seed: u64) -> Vec<DVec3> {
-        self.topology().seed_points(seed)
+        self.topology().seed_points_within(seed, self.seed_budget())
     }
 
     /// Central differences of the interpolant in voxel space (step 1e-4 voxel), mapped to world
