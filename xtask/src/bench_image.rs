@@ -17,8 +17,11 @@
 //! 128^3: 18 496 vertices in 0.46 s vs CGAL 19 493 in 1.39 s (3.0x); 256^3: 24 678 vertices
 //! in 0.66 s vs CGAL 25 869 in 1.83 s (2.8x); separately .nii read 0.001 / 0.06 s, scan (with
 //! the crossing's block summary) 0.004 / 0.03 s, d_M^inf 0.11 / 0.9 s (not needed with a
-//! size; `mesh` computes it on first use only). Before the block walk of the crossing: 2.3x
-//! and 1.8x. The 5x target at 128^3 is not met: a profile of the 128^3 mesh puts the
+//! size; `mesh` computes it on first use only). A second run gave 2.7x and 2.25x, the first
+//! run of the day (before the block walk) 2.5x and 2.3x: the ratio moves with the load. In user
+//! cycles per mesh (`perf stat`, same volume and criteria) the block walk of the crossing is
+//! neutral at 128^3 (1.11 G vs 1.14 G cycles; the volume fits the cache) and saves 7% at 256^3
+//! (2.38 G -> 2.21 G). The 5x target at 128^3 is not met: a profile of the 128^3 mesh puts the
 //! image oracle at ~19% of the samples (crossing 9%, value 6%, block walk 3%), Delaunay at
 //! ~33% and the mesher's bookkeeping (facet tests, queue, hash maps, per-call timers) at the
 //! rest.
