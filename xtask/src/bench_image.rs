@@ -12,13 +12,19 @@
 //! (`.nii`, uncompressed, from a temporary file), the scan alone and the d_M^inf estimate (not
 //! needed with a given size) are reported separately in `extra` and on stderr.
 //!
-//! Measured 2026-11-22 (`cargo xtask bench image --runs 5 --vs-cgal`, 2 shared vCPUs, load ~6,
-//! so only same-run ratios mean anything): 128^3: 18 479 vertices in 0.56 s vs CGAL 19 493 in
-//! 1.30 s (2.3x); 256^3: 24 647 vertices in 1.47 s vs CGAL 25 869 in 2.62 s (1.8x); separately
-//! .nii read 0.004 / 0.06 s, scan 0.002 / 0.03 s, d_M^inf 0.08 / 1.07 s. The targets
-//! (5x CGAL at 128^3, 256^3 in < 1 s) are not met; a profile of the 128^3 run puts the image
-//! oracle at ~13% of the samples, the mesher's bookkeeping, Delaunay and its per-call timers
-//! (clock_gettime, ~14%) at the rest.
+//! Measured 2026-11-22 (`cargo xtask bench image --runs 5 --vs-cgal`, 2 shared vCPUs, load 5-7,
+//! so only same-run ratios mean anything; CGAL itself took 1.4-2.7 s at 128^3 across runs):
+//! 128^3: 18 496 vertices in 0.46 s vs CGAL 19 493 in 1.39 s (3.0x); 256^3: 24 678 vertices
+//! in 0.66 s vs CGAL 25 869 in 1.83 s (2.8x); separately .nii read 0.001 / 0.06 s, scan (with
+//! the crossing's block summary) 0.004 / 0.03 s, d_M^inf 0.11 / 0.9 s (not needed with a
+//! size; `mesh` computes it on first use only). A second run gave 2.7x and 2.25x, the first
+//! run of the day (before the block walk) 2.5x and 2.3x: the ratio moves with the load. In user
+//! cycles per mesh (`perf stat`, same volume and criteria) the block walk of the crossing is
+//! neutral at 128^3 (1.11 G vs 1.14 G cycles; the volume fits the cache) and saves 7% at 256^3
+//! (2.38 G -> 2.21 G). The 5x target at 128^3 is not met: a profile of the 128^3 mesh puts the
+//! image oracle at ~19% of the samples (crossing 9%, value 6%, block walk 3%), Delaunay at
+//! ~33% and the mesher's bookkeeping (facet tests, queue, hash maps, per-call timers) at the
+//! rest.
 
 use crate::bench::{BenchArgs, Row, cgal_rows, median};
 use anyhow::{Context, Result};

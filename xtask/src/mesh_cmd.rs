@@ -263,7 +263,7 @@ pub fn run(a: &MeshArgs) -> Result<()> {
         initial_points,
         control_points: opened.control_points.clone(),
         initialization: a.initialization.into(),
-        ..Default::default()
+        ..opened.mesh_defaults()
     };
     for n in &notes {
         eprintln!("note: {n}");
@@ -468,7 +468,7 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
         },
         control_points: opened.control_points.clone(),
         initialization: a.initialization.into(),
-        ..Default::default()
+        ..opened.mesh_defaults()
     };
     let tp = rdt_mesher::sizing::two_pass(surface, e, dm, &base, &mut |_| {})
         .with_context(|| format!("meshing {spec} (two passes)"))?;

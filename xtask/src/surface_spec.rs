@@ -65,12 +65,24 @@ pub struct Opened {
     pub genus: Option<u32>,
     pub components: Option<u32>,
     pub control_points: Option<Vec<DVec3>>,
+    /// The mesher's `max_control_points` (64 by default; images: room for a seed tetrahedron
+    /// on every small component).
+    pub max_control_points: usize,
     pub notes: Vec<String>,
     /// Mesh input: its sharp edges (normals deviating by more than [`SHARP_DEG`]).
     pub sharp_edges: Vec<(DVec3, DVec3)>,
 }
 
 impl Opened {
+    /// The mesher's default options for this input (images: `max_control_points` with room
+    /// for a seed tetrahedron on every small component).
+    pub fn mesh_defaults(&self) -> rdt_mesher::MeshOptions {
+        rdt_mesher::MeshOptions {
+            max_control_points: self.max_control_points,
+            ..Default::default()
+        }
+    }
+
     /// Known or estimated d_M^inf (computed now if it is lazy).
     pub fn dm_inf(&self) -> Option<f64> {
         if self.lazy_dm_inf {
@@ -192,6 +204,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
             genus: entry.as_ref().and_then(|e| e.genus),
             components: entry.as_ref().and_then(|e| e.components),
             control_points: None,
+            max_control_points: rdt_mesher::MeshOptions::default().max_control_points,
             notes: vec![],
             sharp_edges: vec![],
         });
@@ -225,8 +238,11 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
         )
         .with_context(|| format!("opening image {spec}"))?;
         let comps = img.component_count();
+        // Room among the control points for a seed tetrahedron on every small component.
+        let img = img.with_seed_budget(None);
+        let budget = img.seed_budget();
         let notes = vec![format!(
-            "image: {} surface component(s) found by the voxel scan (iso {})",
+            "image: {} surface component(s) found by the voxel scan (iso {}); {budget} seed points",
             comps,
             img.iso()
         )];
@@ -239,6 +255,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
             genus: None,
             components: Some(comps as u32),
             control_points: None,
+            max_control_points: budget,
             notes,
             sharp_edges: vec![],
         });
@@ -270,6 +287,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
             genus: None,
             components: None,
             control_points: None,
+            max_control_points: rdt_mesher::MeshOptions::default().max_control_points,
             notes: vec![format!(
                 "point set: {} points, normals {}; suggested size {size:.5}",
                 cloud.points.len(),
@@ -316,6 +334,7 @@ pub fn open(spec: &str, bounding_sphere: Option<&str>, o: &SurfaceOptions) -> Re
         genus: None,
         components: None,
         control_points: None,
+        max_control_points: rdt_mesher::MeshOptions::default().max_control_points,
         notes,
         sharp_edges,
         surface,

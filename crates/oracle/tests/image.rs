@@ -997,6 +997,45 @@ mod props {
             prop_assert!((fu < 0.0) != (fw < 0.0) || fu.abs() < 1e-9 || fw.abs() < 1e-9,
                 "no sign change around the crossing: {fu} {fw}");
         }
+
+        /// Long segments through many blocks of the crossing's sign summary and several
+        /// sheets (a tanglecube on 40^3 voxels, oblique affine), starting and ending inside,
+        /// outside or beyond the grid: the crossing is within tolerance of a sign change.
+        #[test]
+        fn long_crossings_through_many_blocks(
+            aff in affine_strategy(),
+            a in prop::array::uniform3(-12.0f64..52.0),
+            b in prop::array::uniform3(-12.0f64..52.0),
+        ) {
+            let inv = aff.inverse();
+            let vol = synthetic::sample_implicit(
+                |p| synthetic::tanglecube((inv.transform_point3(p) - DVec3::splat(19.5)) * 0.2),
+                [40, 40, 40],
+                aff,
+            );
+            let s = ImageSurface::new(vol, &dark(0.0)).unwrap();
+            let (a, mut b) = (aff.transform_point3(DVec3::from(a)), aff.transform_point3(DVec3::from(b)));
+            let fa = s.value(a);
+            if (s.value(b) < 0.0) == (fa < 0.0) {
+                // Replace b by a point of the other side: the centre is outside, a point of a
+                // tube of the tanglecube inside.
+                let v = if fa < 0.0 { DVec3::splat(19.5) } else { DVec3::new(27.4, 27.4, 19.5) };
+                b = aff.transform_point3(v);
+            }
+            let fb = s.value(b);
+            prop_assert!((fa < 0.0) != (fb < 0.0));
+            for (a, fa, b, fb) in [(a, fa, b, fb), (b, fb, a, fa)] {
+                let p = s.crossing(a, fa, b, fb);
+                let d = (b - a).normalize();
+                let tol = s.tolerance();
+                let t = (p - a).dot(d);
+                prop_assert!(t >= -tol && t <= (b - a).length() + tol);
+                let (u, w) = (a + d * (t - tol).max(0.0), a + d * (t + tol).min((b - a).length()));
+                let (fu, fw) = (s.value(u), s.value(w));
+                prop_assert!((fu < 0.0) != (fw < 0.0) || fu.abs() < 1e-9 || fw.abs() < 1e-9,
+                    "no sign change around the crossing: {fu} {fw}");
+            }
+        }
     }
 }
 

@@ -1,5 +1,6 @@
 //! The voxel-image oracle: trilinear interpolation of (intensity - iso), in world space.
 
+use super::blocks::{self, Blocks};
 use super::topology::{self, Topology};
 use super::{ImageError, Stats, Volume, Voxel, distance, with_voxels};
 use crate::{BoundingSphere, Surface};
@@ -51,6 +52,10 @@ pub struct ImageSurface {
     sphere: BoundingSphere,
     topo: OnceLock<Topology>,
     dm: OnceLock<Option<f64>>,
+    /// Sign summary by blocks for [`Surface::crossing`] (built on the first crossing).
+    blocks: OnceLock<Blocks>,
+    /// Budget of [`Surface::seed_points`] (see [`ImageSurface::with_seed_budget`]).
+    seed_budget: Option<usize>,
 }
 
 impl std::fmt::Debug for ImageSurface {
@@ -204,6 +209,8 @@ impl ImageSurface {
             vol,
             topo: OnceLock::new(),
             dm: OnceLock::new(),
+            blocks: OnceLock::new(),
+            seed_budget: Some(Topology::SEED_BUDGET),
         })
     }
 
@@ -233,6 +240,41 @@ impl ImageSurface {
         opts: &ImageOptions,
     ) -> Result<ImageSurface, ImageError> {
         ImageSurface::new(super::load_volume(path.as_ref(), load)?, opts)
+    }
+
+    /// Set the number of points [`Surface::seed_points`] aims at: `Some(b)`, or `None` for
+    /// [`Topology::full_seed_budget`] (a seed tetrahedron for every small component; the
+    /// default is [`Topology::SEED_BUDGET`], 64). The mesher must keep as many control points
+    /// (`MeshOptions::max_control_points`, see [`ImageSurface::seed_budget`]), else its
+    /// farthest-point thinning drops the close points of the tetrahedra first.
+    ///
+    /// ```
+    /// use oracle::image::{ImageOptions, ImageSurface, Volume, Voxels};
+    /// use oracle::Surface;
+    /// use glam::DAffine3;
+    /// // 40 isolated bright voxels: 40 components, too many for tetrahedra within 64 points.
+    /// let mut v = vec![0u8; 24 * 24 * 24];
+    /// for k in 0..40 {
+    ///     v[2 + 5 * (k % 4) + 24 * (2 + 5 * ((k / 4) % 4) + 24 * (2 + 8 * (k / 16)))] = 1;
+    /// }
+    /// let vol = Volume::new([24; 3], Voxels::U8(v), DAffine3::IDENTITY).unwrap();
+    /// let s = ImageSurface::new(vol, &ImageOptions::default()).unwrap();
+    /// assert_eq!(s.component_count(), 40);
+    /// assert_eq!(s.seed_points(0).len(), 64);
+    /// let s = s.with_seed_budget(None);
+    /// assert_eq!(s.seed_points(0).len(), s.seed_budget());
+    /// assert!(s.seed_budget() >= 40 * 4);
+    /// ```
+    pub fn with_seed_budget(mut self, budget: Option<usize>) -> ImageSurface {
+        self.seed_budget = budget;
+        self
+    }
+
+    /// The number of points [`Surface::seed_points`] aims at (runs the voxel scan when the
+    /// budget is [`Topology::full_seed_budget`]).
+    pub fn seed_budget(&self) -> usize {
+        self.seed_budget
+            .unwrap_or_else(|| self.topology().full_seed_budget())
     }
 
     /// The image.
@@ -424,7 +466,13 @@ impl ImageSurface {
     /// Topology of the level set from the voxel grid (computed once, then cached): see
     /// [`Topology`].
     pub fn topology(&self) -> &Topology {
-        self.topo.get_or_init(|| topology::compute(self))
+        self.topo.get_or_init(|| {
+            // One pass over the voxels for the node signs, shared with the block summary of
+            // the crossings (the mesher asks for both).
+            let bits = self.inside_bits_rows();
+            self.blocks.get_or_init(|| Blocks::from_bits(self, &bits));
+            topology::compute(self, &bits)
+        })
     }
 
     /// Number of connected components of the surface found by the voxel scan
@@ -465,37 +513,51 @@ impl ImageSurface {
     }
 }
 
-impl Surface for ImageSurface {
-    fn bounding_sphere(&self) -> BoundingSphere {
-        self.sphere
+impl ImageSurface {
+    /// The piece of the segment `va + dv t` (voxel coordinates) where the block walk finds
+    /// the first sign change from `t = 0` (sign of `fa`), with exact values at both ends;
+    /// `None` if the walk is inconclusive.
+    fn locate(&self, va: DVec3, dv: DVec3, fa: f64) -> Option<Bracket> {
+        let blocks = self
+            .blocks
+            .get_or_init(|| Blocks::from_bits(self, &self.inside_bits_rows()));
+        let at = |t: f64| self.value_voxel(va + dv * t);
+        let run = fa < 0.0;
+        let mut found = None;
+        // The last exact value computed by the walk (at the end of a mixed piece).
+        let mut last = (0.0, fa);
+        blocks.walk(va, dv, |u0, u1, flag| {
+            if flag != blocks::MIXED {
+                // Uniform: the sign cannot change inside; a different sign than the walk's
+                // means a sign change at a face (rounding): inconclusive.
+                return (flag == blocks::IN) == run;
+            }
+            let g1 = at(u1);
+            if g1.is_nan() || (g1 < 0.0) == run {
+                last = (u1, g1);
+                return !g1.is_nan();
+            }
+            // The value at u0 only serves the first false-position step: unknown (NaN, so a
+            // bisection step) unless the previous piece computed it.
+            let f0 = if last.0 == u0 { last.1 } else { f64::NAN };
+            found = Some(Bracket {
+                t0: u0,
+                f0,
+                t1: u1,
+                f1: g1,
+                neg0: run,
+            });
+            false
+        });
+        found
     }
 
-    #[inline]
-    fn value(&self, p: DVec3) -> f64 {
-        self.value_voxel(self.inv.transform_point3(p))
-    }
-
-    /// Cell-wise root finding on the segment. The bracket `[t0, t1]` always keeps opposite
-    /// signs (by `value < 0`). Each round picks a candidate (false position, or the midpoint
-    /// when the bracket did not halve in two rounds), fetches the 8 corners of the voxel cell
-    /// holding it, and evaluates the cell's trilinear polynomial where the segment enters and
-    /// leaves the cell: if the signs differ there, the root is solved on that polynomial
-    /// (Illinois, no more fetches) to the tolerance; otherwise the whole cell piece is cut off
-    /// the bracket. Returns the midpoint of a final bracket shorter than the tolerance.
-    fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
-        let tol = self.tolerance();
-        let d = b - a;
-        let len = d.length();
-        if !(len > tol && fa.is_finite() && fb.is_finite()) {
-            return crate::roots::bisect(|p| self.value(p), a, fa, b, fb, tol);
-        }
-        let ttol = tol / len;
-        let va = self.inv.transform_point3(a);
-        let dv = self.inv.transform_vector3(d);
+    /// Cell-wise root finding in the bracket `br` of the segment `va + dv t` (see
+    /// [`Surface::crossing`]), down to the parameter tolerance `ttol`.
+    fn solve_cells(&self, va: DVec3, dv: DVec3, mut br: Bracket, ttol: f64) -> Bracket {
         let at = |t: f64| va + dv * t;
-        let mut br = Bracket::new(fa, fb);
         let mut width_two_ago = f64::INFINITY;
-        let mut width_one_ago = 1.0;
+        let mut width_one_ago = br.t1 - br.t0;
         for _ in 0..256 {
             let w = br.t1 - br.t0;
             if w <= ttol {
@@ -549,6 +611,52 @@ impl Surface for ImageSurface {
             width_two_ago = width_one_ago;
             width_one_ago = w;
         }
+        br
+    }
+}
+
+impl Surface for ImageSurface {
+    fn bounding_sphere(&self) -> BoundingSphere {
+        self.sphere
+    }
+
+    #[inline]
+    fn value(&self, p: DVec3) -> f64 {
+        self.value_voxel(self.inv.transform_point3(p))
+    }
+
+    /// Block walk (segments longer than a block), then cell-wise root finding. The segment is
+    /// walked through the sign summary of `BLOCK³`-cell blocks (see the `blocks` module):
+    /// uniform blocks are skipped without touching the voxels, and the image is evaluated
+    /// where the segment leaves each mixed block, until the sign differs from the sign at `a`.
+    /// That block's piece is the bracket (if the walk is inconclusive, e.g. a root within
+    /// rounding of a block face, the bracket is the whole segment). Then each round picks a
+    /// candidate (false position, or the midpoint when the bracket did not halve in two rounds
+    /// or a value is unknown), fetches the 8 corners of the voxel cell holding it, and
+    /// evaluates the cell's trilinear polynomial where the segment enters and leaves the cell:
+    /// if the signs differ there, the root is solved on that polynomial (Illinois, no more
+    /// fetches) to the tolerance; otherwise the whole cell piece is cut off the bracket. The
+    /// bracket `[t0, t1]` keeps opposite signs (by `value < 0`). Returns the midpoint of a
+    /// final bracket shorter than the tolerance.
+    fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
+        let tol = self.tolerance();
+        let d = b - a;
+        let len = d.length();
+        if !(len > tol && fa.is_finite() && fb.is_finite()) {
+            return crate::roots::bisect(|p| self.value(p), a, fa, b, fb, tol);
+        }
+        let ttol = tol / len;
+        let va = self.inv.transform_point3(a);
+        let dv = self.inv.transform_vector3(d);
+        // A segment of a block or less is solved directly (the walk would cost more than it
+        // saves).
+        let br = if dv.length_squared() <= (blocks::BLOCK * blocks::BLOCK) as f64 {
+            None
+        } else {
+            self.locate(va, dv, fa)
+        };
+        let br = br.unwrap_or_else(|| Bracket::new(fa, fb));
+        let br = self.solve_cells(va, dv, br, ttol);
         a + d * (0.5 * (br.t0 + br.t1))
     }
 
@@ -577,11 +685,12 @@ impl Surface for ImageSurface {
         0.25 * s.x.min(s.y).min(s.z)
     }
 
-    /// One point on every surface component found by the voxel scan (see [`Topology`]), plus up
-    /// to 64 points in all with crossing points picked deterministically from `seed`
-    /// ([`Topology::seed_points`]).
+    /// One point on every surface component found by the voxel scan (see [`Topology`]), seed
+    /// tetrahedra around the small ones and crossing points picked deterministically from
+    /// `seed`: [`Topology::seed_points_within`] the [`ImageSurface::seed_budget`] (64 points
+    /// by default).
     fn seed_points(&self, seed: u64) -> Vec<DVec3> {
-        self.topology().seed_points(seed)
+        self.topology().seed_points_within(seed, self.seed_budget())
     }
 
     /// Central differences of the interpolant in voxel space (step 1e-4 voxel), mapped to world

@@ -58,41 +58,53 @@ pub struct Topology {
     pub component_edges: Vec<usize>,
     /// For each of `component_seeds`: empty, or three more points of its component that form
     /// with the seed a tetrahedron whose circumcentre lies in the region the component
-    /// encloses, near the seed (see [`Topology::seed_points`]). Built for the components with
-    /// the fewest crossing edges, as many as two thirds of the free seed budget allow: around
-    /// the whole component if it spans at most 8 voxels, else around its seed.
+    /// encloses, near the seed (see [`Topology::seed_points_within`]). Built for the 256
+    /// components with the fewest crossing edges: around the whole component if it spans at
+    /// most 8 voxels, else around its seed.
     pub component_tets: Vec<Vec<DVec3>>,
     /// Further crossing points (world space), at a regular stride over the grid.
     pub extra_seeds: Vec<DVec3>,
 }
 
 impl Topology {
-    /// All component seeds, then the tetrahedra ([`Topology::component_tets`]) of the
-    /// components in increasing size (fewest crossing edges first) while they fit, then extra
-    /// seeds chosen from `seed` (deterministic), up to
-    /// [`Topology::SEED_BUDGET`] points in all (more only when there are more components).
-    ///
-    /// The budget matches the mesher's default number of control points
-    /// (`MeshOptions::max_control_points`), which thins longer lists by farthest-point
-    /// selection (that used to drop seeds of small components next to big ones): with at
-    /// most 64 components, every component seed is kept. The tetrahedra matter for
-    /// components smaller than the size bound: from one seed alone, the section 6.4.3 rays
-    /// must land several points on a blob of a voxel or two before one of its Voronoi
-    /// vertices falls inside it (no facet is restricted before), and often gave up; the
-    /// tetrahedron's circumcentre is such a Voronoi vertex from the start.
+    /// [`Topology::seed_points_within`] the default budget [`Topology::SEED_BUDGET`] (64, the
+    /// mesher's default number of control points).
     pub fn seed_points(&self, seed: u64) -> Vec<DVec3> {
+        self.seed_points_within(seed, Self::SEED_BUDGET)
+    }
+
+    /// All component seeds, then the tetrahedra ([`Topology::component_tets`]) of the
+    /// components in increasing size (fewest crossing edges first), as many as two thirds of
+    /// the budget left by the seeds allow (three points each), then extra seeds chosen from
+    /// `seed` (deterministic), up to `budget` points in all (more only when there are more
+    /// components).
+    ///
+    /// The mesher thins longer lists than its `MeshOptions::max_control_points` (64 by
+    /// default) by farthest-point selection, which would drop the close points of a
+    /// tetrahedron first: keep `budget` at most that. With at most 64 components every
+    /// component seed is kept. The tetrahedra matter for components smaller than the size
+    /// bound: from one seed alone, the section 6.4.3 rays must land several points on a blob
+    /// of a voxel or two before one of its Voronoi vertices falls inside it (no facet is
+    /// restricted before), and often gave up; the tetrahedron's circumcentre is such a Voronoi
+    /// vertex from the start. The extra seeds (the last third) seed the far side of necks
+    /// thinner than the size bound on big components: with all of the budget in tetrahedra,
+    /// more of the nilearn fixture's surface stayed unmeshed at iso 2.
+    /// [`Topology::full_seed_budget`] fits every tetrahedron.
+    pub fn seed_points_within(&self, seed: u64, budget: usize) -> Vec<DVec3> {
         let mut out = self.component_seeds.clone();
         let mut order: Vec<usize> = (0..self.component_seeds.len()).collect();
         order.sort_by_key(|&i| (self.component_edges.get(i).copied().unwrap_or(0), i));
+        let mut room = budget.saturating_sub(out.len()) * 2 / 9;
         for i in order {
-            // Tetrahedra were only built for components that fit the budget.
-            let ext = self.component_tets.get(i).map_or(&[][..], |e| &e[..]);
-            if out.len() + ext.len() > Self::SEED_BUDGET {
+            if room == 0 {
                 break;
             }
-            out.extend_from_slice(ext);
+            if let Some(tet) = self.component_tets.get(i).filter(|t| !t.is_empty()) {
+                out.extend_from_slice(tet);
+                room -= 1;
+            }
         }
-        let k = Self::SEED_BUDGET.saturating_sub(out.len());
+        let k = budget.saturating_sub(out.len());
         let n = self.extra_seeds.len();
         if n <= k {
             out.extend_from_slice(&self.extra_seeds);
@@ -102,6 +114,15 @@ impl Topology {
             out.extend((0..k).map(|i| self.extra_seeds[(start + i * step) % n]));
         }
         out
+    }
+
+    /// The smallest budget for [`Topology::seed_points_within`] that takes every seed
+    /// tetrahedron (at least [`Topology::SEED_BUDGET`]); pass the mesher as many control
+    /// points.
+    pub fn full_seed_budget(&self) -> usize {
+        let n = self.component_seeds.len();
+        let tets = self.component_tets.iter().filter(|t| !t.is_empty()).count();
+        Self::SEED_BUDGET.max(n + (9 * tets).div_ceil(2) + 1)
     }
 
     /// Total number of seed points [`Topology::seed_points`] aims at.
@@ -289,6 +310,9 @@ const DIRS: [[i64; 3]; 7] = [
     [-1, 1, 1],
 ];
 
+/// Seed tetrahedra are built for at most this many components (the smallest).
+const MAX_TETS: usize = 256;
+
 /// Components whose crossing edges span at most this many voxels along every axis are
 /// *small*: their seed tetrahedron ([`Topology::component_tets`]) is chosen around the whole
 /// component, else around its first crossing edge.
@@ -390,11 +414,9 @@ impl Pairs {
         // Tetrahedra for the smallest components, as many as the seed budget can take.
         let mut order: Vec<usize> = (0..pairs.len()).collect();
         order.sort_by_key(|&i| (pairs[i].1.edges, i));
-        // Two thirds of the free budget: the rest goes to extra seeds spread over the grid, which
-        // seed the far side of necks thinner than the size bound on big components (with all
-        // of the budget in tetrahedra, more of the nilearn fixture's surface stayed unmeshed at
-        // iso 2).
-        let room = Topology::SEED_BUDGET.saturating_sub(pairs.len()) * 2 / 9;
+        // Tetrahedra for the smallest components (bounded cost: up to a few thousand
+        // circumcentres each).
+        let room = MAX_TETS;
         let mut tets: Vec<Option<[DVec3; 4]>> = vec![None; pairs.len()];
         for &i in order.iter().take(room) {
             let (key, info) = pairs[i];
@@ -586,11 +608,12 @@ fn seed_tet(s: &ImageSurface, pts: &[DVec3], sign: f64) -> Option<[DVec3; 4]> {
 /// union-find works on runs, and sign changes between rows are found 64 nodes at a time.
 // Run indices are union-find ids and index several arrays: plain index loops are clearer.
 #[allow(clippy::needless_range_loop)]
-pub(crate) fn compute(s: &ImageSurface) -> Topology {
+///
+/// `bits` are the node signs from [`ImageSurface::inside_bits_rows`].
+pub(crate) fn compute(s: &ImageSurface, bits: &[u64]) -> Topology {
     let [nx, ny, nz] = s.dims_isize().map(|v| v as usize);
     let w = nx.div_ceil(64);
     let rows = ny * nz;
-    let bits = s.inside_bits_rows();
     let word = |r: usize, wi: usize| bits[r * w + wi];
     let get = |r: usize, x: usize| (bits[r * w + (x >> 6)] >> (x & 63)) & 1 == 1;
     // Valid node positions (x < nx) and transition positions (x < nx - 1) in word wi.
@@ -845,7 +868,7 @@ mod tests {
         ) else {
             return 0;
         };
-        let (a, b) = (compute(&s), compute_reference(&s));
+        let (a, b) = (compute(&s, &s.inside_bits_rows()), compute_reference(&s));
         assert_eq!(
             (a.inside_components, a.outside_components, a.crossing_edges),
             (b.inside_components, b.outside_components, b.crossing_edges),
