@@ -207,7 +207,8 @@ const GWN_COARSE: usize = 4096;
 const MIN_WEIGHT: f64 = 1.0;
 
 /// Below [`MIN_WEIGHT`], the IMLS value signs the far field where the kernel weight is at
-/// least this (more than one point's tail)...
+/// least this (more than one point's tail; below it, the flood-filled far-field sign is
+/// used as where the weight is 0)...
 const FRINGE_WEIGHT: f64 = 0.003;
 
 /// ...the contributing normals agree to this ratio (`|Σ φ n| / Σ φ`)...
@@ -300,7 +301,14 @@ impl PointSetSurface {
         let coords: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
         let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
             .expect("kd-tree construction from finite points");
-        let k = params.k_normals.max(params.k_spacing).min(n - 1);
+        // Neighbours needed: the spacing's, and the normals' (PCA) or, with given normals,
+        // only the orientation graph's (components).
+        let k_nrm = if normals.is_some() {
+            params.k_normals.min(K_GRAPH)
+        } else {
+            params.k_normals
+        };
+        let k = k_nrm.max(params.k_spacing).min(n - 1);
         let kq = NonZeroUsize::new(k + 1).expect("k + 1 > 0");
         // kNN lists (without the point itself, robust to duplicates: drop index i).
         let knn: Vec<Vec<u32>> = points
@@ -557,21 +565,23 @@ impl PointSetSurface {
 
     /// Far-field value: `∓ max_radius`, negative inside. `(num, den, nsum)` are the kernel
     /// sums at `x`. Decided, in order, by:
-    /// - zero weight: the flood-filled sign of the region no kernel reaches ([`FarCache`]);
-    /// - low weight (at least [`FRINGE_WEIGHT`]), where the contributing normals agree
-    ///   (`|Σ φ n| ≥ 0.9 Σ φ`) and the IMLS value is clearly off the surface (`|f| ≥` [`FRINGE_OFFSET`] × the median kernel
-    ///   radius): the sign of the IMLS value, which there agrees with the winding number
-    ///   and keeps the blend free of spurious zeros;
+    /// - zero or negligible weight (below [`FRINGE_WEIGHT`]: farther than 0.87 `R_i` from
+    ///   every point): the flood-filled sign of the region no kernel reaches, at `x`'s
+    ///   cell or its clear neighbours ([`FarCache`]);
+    /// - low weight, where the contributing normals agree (`|Σ φ n| ≥ 0.9 Σ φ`) and the
+    ///   IMLS value is clearly off the surface (`|f| ≥` [`FRINGE_OFFSET`] × the median
+    ///   kernel radius): the sign of the IMLS value, which there agrees with the winding
+    ///   number and keeps the blend free of spurious zeros;
     /// - otherwise the point-cloud winding number at `x` (above 1/2: inside).
     fn far_value(&self, x: DVec3, num: f64, den: f64, nsum: DVec3) -> f64 {
         let r = self.max_radius;
-        if den == 0.0 {
+        if den < FRINGE_WEIGHT {
             match self.far_cache.get(x) {
                 1 => return r,
                 -1 => return -r,
                 _ => {}
             }
-        } else if den >= FRINGE_WEIGHT && nsum.length_squared() >= (COHERENCE * den).powi(2) {
+        } else if nsum.length_squared() >= (COHERENCE * den).powi(2) {
             let f = num / den;
             if f.abs() >= FRINGE_OFFSET * self.stats.median_radius {
                 return if f < 0.0 { -r } else { r };
