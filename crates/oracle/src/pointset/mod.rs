@@ -905,7 +905,10 @@ impl Surface for PointSetSurface {
         }
     }
 
-    /// Newton-like projection along the averaged normal: `x ← x − f(x) n̄(x)`, checked.
+    /// Newton projection: where the kernel weight is at least the blending threshold,
+    /// `x ← x − f ∇f / |∇f|²` with the exact gradient of the IMLS quotient (quadratic
+    /// convergence); at lower weight, `x ← x − f n̄` along the averaged normal. Steps are
+    /// capped at the largest kernel radius; stops when a step is below the tolerance.
     fn project(&self, p: DVec3) -> Option<DVec3> {
         if !p.is_finite() {
             return None;
@@ -913,22 +916,36 @@ impl Surface for PointSetSurface {
         let tol = self.tolerance();
         let mut x = p;
         for _ in 0..50 {
-            let (num, den, nsum) = self.sums(x);
-            if den.is_nan() || den <= 1e-12 {
+            let s = self.sums_impl::<true>(x);
+            if s.den.is_nan() || s.den <= 1e-12 {
                 // Out of the support: jump to the nearest point first.
                 let (j, _) = self.nearest(x);
                 x = self.points[j];
                 continue;
             }
-            let g = nsum.normalize_or_zero();
-            if g == DVec3::ZERO {
+            let f = s.num / s.den;
+            let grad = (s.dnum - f * s.dden) / s.den;
+            let g2 = grad.length_squared();
+            let step = if s.den >= MIN_WEIGHT && g2 > 0.0 && g2.is_finite() {
+                grad * (f / g2)
+            } else {
+                let g = s.nsum.normalize_or_zero();
+                if g == DVec3::ZERO {
+                    return None;
+                }
+                g * f
+            };
+            // Cap steps at the kernel radius to stay in the region where f is meaningful.
+            let len = step.length();
+            if !len.is_finite() {
                 return None;
             }
-            let f = num / den;
-            // Cap steps at the kernel radius to stay in the region where f is meaningful.
-            let step = f.clamp(-self.max_radius, self.max_radius);
-            x -= g * step;
-            if step.abs() < tol {
+            x -= if len > self.max_radius {
+                step * (self.max_radius / len)
+            } else {
+                step
+            };
+            if len < tol {
                 return Some(x);
             }
         }
