@@ -50,6 +50,22 @@ fn bench(c: &mut Criterion) {
             s.value(black_box(boxed[i]))
         })
     });
+    // Crossings of short segments through the surface (as the mesher's dual Voronoi edges).
+    let segs: Vec<(DVec3, f64, DVec3, f64)> = near
+        .iter()
+        .map(|&p| {
+            let (a, b) = (p * 0.985, p * 1.015);
+            (a, s.value(a), b, s.value(b))
+        })
+        .filter(|&(_, fa, _, fb)| (fa < 0.0) != (fb < 0.0))
+        .collect();
+    g.bench_function("crossing_short_segment", |b| {
+        b.iter(|| {
+            i = (i + 1) % segs.len();
+            let (a, fa, q, fq) = segs[i];
+            s.crossing(black_box(a), fa, q, fq)
+        })
+    });
     g.bench_function("project_near", |b| {
         b.iter(|| {
             i = (i + 1) % near.len();

@@ -30,6 +30,41 @@ fn noisy_sphere(n: usize, center: DVec3, radius: f64, sigma: f64, seed: u64) -> 
         .collect()
 }
 
+/// Construction (kNN, normals, far-field flood fill) and queries give the same bits with 1
+/// and 3 threads; the far field has the inside and the outside as separate regions.
+#[test]
+fn results_do_not_depend_on_thread_count() {
+    let mut pts = noisy_sphere(6000, DVec3::ZERO, 1.0, 0.004, 9);
+    pts.extend(noisy_sphere(
+        1500,
+        DVec3::new(2.6, 0.0, 0.0),
+        0.5,
+        0.004,
+        10,
+    ));
+    let run = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let s = PointSetSurface::new(&pts, None, &PointSetParams::default()).unwrap();
+            let mut rng = SplitMix64(4);
+            let vals: Vec<u64> = (0..3000)
+                .map(|_| {
+                    let x = rng.unit_vector() * 3.5 * rng.next_f64();
+                    let c = s.crossing(DVec3::ZERO, s.value(DVec3::ZERO), x * 1.5, 1.0);
+                    s.value(x).to_bits() ^ c.x.to_bits().rotate_left(7)
+                })
+                .collect();
+            (s.stats().clone(), vals, s.seed_points(2), s.dm_inf_hint())
+        })
+    };
+    let one = run(1);
+    assert!(one.0.far_components >= 3, "{:?}", one.0);
+    assert_eq!(one, run(3));
+}
+
 #[test]
 fn noisy_sphere_without_normals() {
     let sigma = 0.005;

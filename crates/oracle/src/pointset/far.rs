@@ -11,10 +11,11 @@
 //! keeps sign 0, "unknown", and its queries are evaluated one by one as before.
 //!
 //! Invariants: deterministic (a sequential flood fill; signs evaluated independently);
-//! [`FarCache::get`] returns ±1 only for a point with zero kernel weight in a clear cell of
-//! a unanimously signed component, or in a blocked cell whose clear neighbours (the 26
-//! around it, within 1.8 kernel radii, closer than the shell of supports around a
-//! well-sampled surface is thick) are all signed alike.
+//! [`FarCache::get`] returns ±1 only in a clear cell of a unanimously signed component, or
+//! in a blocked cell whose clear neighbours (the 26 around it, all within 1.8 kernel radii,
+//! closer than the shell of supports around a well-sampled surface is thick) are all
+//! signed alike. Callers ask only for points with (almost) zero kernel weight, i.e. outside
+//! that shell, where the neighbours' side is the point's side.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -199,7 +200,7 @@ impl FarCache {
         }
     }
 
-    /// The far-field sign at `x`, a point with zero kernel weight (0 if unknown).
+    /// The far-field sign at `x`, a point with (almost) zero kernel weight (0 if unknown).
     pub fn get(&self, x: DVec3) -> i8 {
         let n = self.n;
         if self.sign.is_empty() {

@@ -186,6 +186,20 @@ impl std::fmt::Debug for PointSetSurface {
     }
 }
 
+/// Kernel sums at a point (see [`PointSetSurface::sums_impl`]).
+#[derive(Clone, Copy, Default)]
+struct Sums {
+    /// Σ φ n·(x − p).
+    num: f64,
+    /// Σ φ.
+    den: f64,
+    /// Σ φ n.
+    nsum: DVec3,
+    /// ∇ of `num` and `den` (when asked for).
+    dnum: DVec3,
+    dden: DVec3,
+}
+
 /// Points in the coarse winding-number tree.
 const GWN_COARSE: usize = 4096;
 
@@ -193,7 +207,8 @@ const GWN_COARSE: usize = 4096;
 const MIN_WEIGHT: f64 = 1.0;
 
 /// Below [`MIN_WEIGHT`], the IMLS value signs the far field where the kernel weight is at
-/// least this (more than one point's tail)...
+/// least this (more than one point's tail; below it, the flood-filled far-field sign is
+/// used as where the weight is 0)...
 const FRINGE_WEIGHT: f64 = 0.003;
 
 /// ...the contributing normals agree to this ratio (`|Σ φ n| / Σ φ`)...
@@ -286,7 +301,14 @@ impl PointSetSurface {
         let coords: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
         let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
             .expect("kd-tree construction from finite points");
-        let k = params.k_normals.max(params.k_spacing).min(n - 1);
+        // Neighbours needed: the spacing's, and the normals' (PCA) or, with given normals,
+        // only the orientation graph's (components).
+        let k_nrm = if normals.is_some() {
+            params.k_normals.min(K_GRAPH)
+        } else {
+            params.k_normals
+        };
+        let k = k_nrm.max(params.k_spacing).min(n - 1);
         let kq = NonZeroUsize::new(k + 1).expect("k + 1 > 0");
         // kNN lists (without the point itself, robust to duplicates: drop index i).
         let knn: Vec<Vec<u32>> = points
@@ -491,7 +513,15 @@ impl PointSetSurface {
 
     /// IMLS sums at `x`: (Σ φ n·(x−p), Σ φ, Σ φ n).
     fn sums(&self, x: DVec3) -> (f64, f64, DVec3) {
-        let (mut num, mut den, mut nsum) = (0.0, 0.0, DVec3::ZERO);
+        let s = self.sums_impl::<false>(x);
+        (s.num, s.den, s.nsum)
+    }
+
+    /// The kernel sums at `x`, with their gradients if `GRAD` (otherwise left at zero). The
+    /// sums are computed by the same operations either way (bit-identical).
+    #[inline]
+    fn sums_impl<const GRAD: bool>(&self, x: DVec3) -> Sums {
+        let mut s = Sums::default();
         self.grid.for_each_near(x, self.max_radius, |it| {
             let d = x - it.p;
             let d2 = d.length_squared();
@@ -499,31 +529,59 @@ impl PointSetSurface {
                 let u = 1.0 - d2 / it.r2;
                 let u2 = u * u;
                 let w = u2 * u2;
-                num += w * it.n.dot(d);
-                den += w;
-                nsum += w * it.n;
+                let nd = it.n.dot(d);
+                s.num += w * nd;
+                s.den += w;
+                s.nsum += w * it.n;
+                if GRAD {
+                    // ∇φ = 4u³ ∇u, ∇u = −2 (x − p) / R².
+                    let gw = d * (-8.0 * u2 * u / it.r2);
+                    s.dnum += gw * nd + w * it.n;
+                    s.dden += gw;
+                }
             }
         });
-        (num, den, nsum)
+        s
+    }
+
+    /// The value and its gradient at `x`; the gradient is NaN where the value is not the
+    /// plain IMLS quotient (low kernel weight, far field). The value equals
+    /// [`Surface::value`] exactly.
+    fn value_grad(&self, x: DVec3) -> (f64, DVec3) {
+        let dc = (x - self.sphere.center).length();
+        if !x.is_finite() || dc >= self.sphere.radius {
+            return (self.value(x), DVec3::NAN);
+        }
+        let s = self.sums_impl::<true>(x);
+        if s.den >= MIN_WEIGHT {
+            let f = s.num / s.den;
+            return (f, (s.dnum - f * s.dden) / s.den);
+        }
+        (
+            blend(s.num, s.den, self.far_value(x, s.num, s.den, s.nsum)),
+            DVec3::NAN,
+        )
     }
 
     /// Far-field value: `∓ max_radius`, negative inside. `(num, den, nsum)` are the kernel
     /// sums at `x`. Decided, in order, by:
-    /// - zero weight: the flood-filled sign of the region no kernel reaches ([`FarCache`]);
-    /// - low weight (at least [`FRINGE_WEIGHT`]), where the contributing normals agree
-    ///   (`|Σ φ n| ≥ 0.9 Σ φ`) and the IMLS value is clearly off the surface (`|f| ≥` [`FRINGE_OFFSET`] × the median kernel
-    ///   radius): the sign of the IMLS value, which there agrees with the winding number
-    ///   and keeps the blend free of spurious zeros;
+    /// - zero or negligible weight (below [`FRINGE_WEIGHT`]: farther than 0.87 `R_i` from
+    ///   every point): the flood-filled sign of the region no kernel reaches, at `x`'s
+    ///   cell or its clear neighbours ([`FarCache`]);
+    /// - low weight, where the contributing normals agree (`|Σ φ n| ≥ 0.9 Σ φ`) and the
+    ///   IMLS value is clearly off the surface (`|f| ≥` [`FRINGE_OFFSET`] × the median
+    ///   kernel radius): the sign of the IMLS value, which there agrees with the winding
+    ///   number and keeps the blend free of spurious zeros;
     /// - otherwise the point-cloud winding number at `x` (above 1/2: inside).
     fn far_value(&self, x: DVec3, num: f64, den: f64, nsum: DVec3) -> f64 {
         let r = self.max_radius;
-        if den == 0.0 {
+        if den < FRINGE_WEIGHT {
             match self.far_cache.get(x) {
                 1 => return r,
                 -1 => return -r,
                 _ => {}
             }
-        } else if den >= FRINGE_WEIGHT && nsum.length_squared() >= (COHERENCE * den).powi(2) {
+        } else if nsum.length_squared() >= (COHERENCE * den).powi(2) {
             let f = num / den;
             if f.abs() >= FRINGE_OFFSET * self.stats.median_radius {
                 return if f < 0.0 { -r } else { r };
@@ -847,7 +905,10 @@ impl Surface for PointSetSurface {
         }
     }
 
-    /// Newton-like projection along the averaged normal: `x ← x − f(x) n̄(x)`, checked.
+    /// Newton projection: where the kernel weight is at least the blending threshold,
+    /// `x ← x − f ∇f / |∇f|²` with the exact gradient of the IMLS quotient (quadratic
+    /// convergence); at lower weight, `x ← x − f n̄` along the averaged normal. Steps are
+    /// capped at the largest kernel radius; stops when a step is below the tolerance.
     fn project(&self, p: DVec3) -> Option<DVec3> {
         if !p.is_finite() {
             return None;
@@ -855,33 +916,49 @@ impl Surface for PointSetSurface {
         let tol = self.tolerance();
         let mut x = p;
         for _ in 0..50 {
-            let (num, den, nsum) = self.sums(x);
-            if den.is_nan() || den <= 1e-12 {
+            let s = self.sums_impl::<true>(x);
+            if s.den.is_nan() || s.den <= 1e-12 {
                 // Out of the support: jump to the nearest point first.
                 let (j, _) = self.nearest(x);
                 x = self.points[j];
                 continue;
             }
-            let g = nsum.normalize_or_zero();
-            if g == DVec3::ZERO {
+            let f = s.num / s.den;
+            let grad = (s.dnum - f * s.dden) / s.den;
+            let g2 = grad.length_squared();
+            let step = if s.den >= MIN_WEIGHT && g2 > 0.0 && g2.is_finite() {
+                grad * (f / g2)
+            } else {
+                let g = s.nsum.normalize_or_zero();
+                if g == DVec3::ZERO {
+                    return None;
+                }
+                g * f
+            };
+            // Cap steps at the kernel radius to stay in the region where f is meaningful.
+            let len = step.length();
+            if !len.is_finite() {
                 return None;
             }
-            let f = num / den;
-            // Cap steps at the kernel radius to stay in the region where f is meaningful.
-            let step = f.clamp(-self.max_radius, self.max_radius);
-            x -= g * step;
-            if step.abs() < tol {
+            x -= if len > self.max_radius {
+                step * (self.max_radius / len)
+            } else {
+                step
+            };
+            if len < tol {
                 return Some(x);
             }
         }
         None
     }
 
-    /// Bipolar oracle: Illinois (modified regula falsi) on the IMLS value, which is close to a
-    /// signed distance near the surface, so a few evaluations suffice; stops when the bracket
-    /// or |f| is below the tolerance.
+    /// Bipolar oracle: Newton steps on the IMLS value (close to a signed distance near the
+    /// surface, with an exact gradient) kept inside the sign-change bracket, Illinois
+    /// (modified regula falsi) steps where the gradient is unavailable or the step leaves the
+    /// bracket, and bisection when the bracket shrinks slowly; stops when the bracket, |f|
+    /// or the Newton step is below the tolerance.
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
-        illinois(|x| self.value(x), a, fa, b, fb, self.tolerance())
+        newton_bracketed(|x| self.value_grad(x), a, fa, b, fb, self.tolerance())
     }
 
     /// Intersection oracle: sign changes of the value sampled at [`Surface::crossing_step`],
@@ -921,6 +998,86 @@ impl Surface for PointSetSurface {
         let _ = &s.points;
         (x > 0.0).then_some(x)
     }
+}
+
+/// Root finding on `[a, b]` (`fa`, `fb` of opposite signs) for `f` returning the value and
+/// its gradient (NaN where unknown): a Newton step along the segment whenever the gradient
+/// is known and the step stays strictly inside the bracket, an Illinois step otherwise, and
+/// bisection every third step if the bracket did not halve. Returns a point within `tol` of
+/// a sign change: where `|f| < tol`, the Newton update of a point whose step is below `tol`
+/// / 2 (functions close to a distance), or the middle of a bracket shorter than `tol`.
+pub(crate) fn newton_bracketed(
+    f: impl Fn(DVec3) -> (f64, DVec3),
+    a: DVec3,
+    fa: f64,
+    b: DVec3,
+    fb: f64,
+    tol: f64,
+) -> DVec3 {
+    let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
+    let len0 = (b - a).length();
+    if !(len0 > 0.0 && len0.is_finite()) {
+        return a.lerp(b, 0.5);
+    }
+    // Unit direction and origin of the parameter `s` along the segment.
+    let (o, u) = (a, (b - a) / len0);
+    let mut side = 0i8;
+    let mut prev_len = len0;
+    let mut newton: Option<DVec3> = None;
+    for it in 0..200 {
+        let len = (b - a).length();
+        if len <= tol {
+            break;
+        }
+        let bisect = it % 3 == 2 && len > 0.5 * prev_len;
+        if it % 3 == 2 {
+            prev_len = len;
+        }
+        let m = match newton.take() {
+            Some(p) if !bisect => p,
+            _ => {
+                let t = if bisect { 0.5 } else { fa / (fa - fb) };
+                a.lerp(
+                    b,
+                    if t.is_finite() {
+                        t.clamp(0.0, 1.0)
+                    } else {
+                        0.5
+                    },
+                )
+            }
+        };
+        let (fm, g) = f(m);
+        if fm.is_nan() || fm.abs() < tol {
+            return m;
+        }
+        if (fm < 0.0) == (fa < 0.0) {
+            (a, fa) = (m, fm);
+            if side == -1 {
+                fb *= 0.5;
+            }
+            side = -1;
+        } else {
+            (b, fb) = (m, fm);
+            if side == 1 {
+                fa *= 0.5;
+            }
+            side = 1;
+        }
+        let slope = g.dot(u);
+        if slope.is_finite() && slope != 0.0 {
+            let step = -fm / slope;
+            let p = m + u * step;
+            let (sa, sb, sp) = ((a - o).dot(u), (b - o).dot(u), (p - o).dot(u));
+            if sp > sa.min(sb) && sp < sa.max(sb) {
+                if step.abs() <= 0.5 * tol {
+                    return p;
+                }
+                newton = Some(p);
+            }
+        }
+    }
+    a.lerp(b, 0.5)
 }
 
 /// Illinois root finding on `[a, b]` (`fa`, `fb` of opposite signs), safeguarded by bisection
@@ -982,6 +1139,73 @@ pub(crate) fn illinois(
 mod tests {
     use super::*;
     use std::cell::Cell;
+
+    /// `value_grad` returns exactly `value`, and a gradient matching central differences
+    /// near the surface (NaN in the blend zone and beyond).
+    #[test]
+    fn value_grad_matches_value_and_finite_differences() {
+        let n = 3000;
+        let pts: Vec<DVec3> = (0..n)
+            .map(|i| {
+                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let t = i as f64 * 2.399963229728653;
+                let r = (1.0 - z * z).sqrt();
+                DVec3::new(r * t.cos(), r * t.sin(), z) * (1.0 + 0.1 * (3.0 * z).sin())
+            })
+            .collect();
+        let s = PointSetSurface::new(&pts, None, &PointSetParams::default()).unwrap();
+        let mut rng = SplitMix64(11);
+        let (mut near, mut far) = (0, 0);
+        for _ in 0..400 {
+            let x = rng.unit_vector() * (0.7 + 0.6 * rng.next_f64());
+            let (f, g) = s.value_grad(x);
+            assert_eq!(f.to_bits(), s.value(x).to_bits(), "{x}");
+            if g.is_nan() {
+                far += 1;
+                continue;
+            }
+            near += 1;
+            let h = 1e-6;
+            let fd = DVec3::new(
+                s.value(x + DVec3::X * h) - s.value(x - DVec3::X * h),
+                s.value(x + DVec3::Y * h) - s.value(x - DVec3::Y * h),
+                s.value(x + DVec3::Z * h) - s.value(x - DVec3::Z * h),
+            ) / (2.0 * h);
+            assert!(
+                (fd - g).length() < 1e-4 * g.length().max(1.0),
+                "{x}: {g} vs {fd}"
+            );
+        }
+        assert!(near > 50 && far > 50, "{near} near, {far} far");
+        // The crossing oracle lands on the surface.
+        let (a, b) = (DVec3::ZERO, DVec3::new(2.0, 0.1, 0.3));
+        let c = s.crossing(a, s.value(a), b, s.value(b));
+        assert!(s.value(c).abs() < 1e-6, "{c}");
+    }
+
+    #[test]
+    fn newton_bracketed_converges_with_exact_wrong_and_missing_gradients() {
+        let (a, b) = (DVec3::new(-1.0, 0.2, 0.0), DVec3::new(2.0, 0.2, 0.0));
+        let calls = Cell::new(0);
+        // Distance to the unit sphere with its exact gradient: quadratic convergence.
+        let exact = |x: DVec3| {
+            calls.set(calls.get() + 1);
+            (x.length() - 1.0, x.normalize())
+        };
+        let x = newton_bracketed(exact, a, a.length() - 1.0, b, b.length() - 1.0, 1e-12);
+        assert!((x.length() - 1.0).abs() < 1e-12, "{x}");
+        assert!(calls.get() <= 8, "{} evaluations", calls.get());
+        // A wrong gradient (pointing the other way): the bracket and bisection still win.
+        let wrong = |x: DVec3| (x.length() - 1.0, -x.normalize());
+        let x = newton_bracketed(wrong, a, a.length() - 1.0, b, b.length() - 1.0, 1e-10);
+        assert!((x.length() - 1.0).abs() < 1e-9, "{x}");
+        // Sign only, no gradient.
+        let step = |x: DVec3| (if x.x < 0.3 { -1.0 } else { 1.0 }, DVec3::NAN);
+        let x = newton_bracketed(step, a, -1.0, b, 1.0, 1e-9);
+        assert!((x.x - 0.3).abs() < 1e-8, "{x}");
+        // A degenerate segment returns its point.
+        assert_eq!(newton_bracketed(exact, a, -1.0, a, 1.0, 1e-9), a);
+    }
 
     #[test]
     fn illinois_converges_on_smooth_and_sign_only_functions() {
