@@ -286,7 +286,7 @@ const MAX_BATCH: usize = 32;
 const PARALLEL_CELLS: usize = 256;
 
 /// A batch of oracle calls runs in parallel when it is expected to take longer than this.
-const PARALLEL_BATCH_NS: f64 = 60_000.0;
+const PARALLEL_BATCH_NS: f64 = 20_000.0;
 
 /// Rounds of random rays (section 6.4.3) per control point before it is reported missing.
 const MAX_RAY_ROUNDS: u32 = 16;
@@ -322,12 +322,17 @@ pub fn mesh(surface: &dyn Surface, opts: &MeshOptions) -> Result<MeshResult, Mes
 pub fn mesh_with_progress(
     surface: &dyn Surface,
     opts: &MeshOptions,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<MeshResult, MeshError> {
     validate(opts)?;
-    let mut r = Refiner::new(surface, opts);
-    r.run(progress)?;
-    Ok(r.finish())
+    // The refinement loop runs on a thread of rayon's pool, so that its parallel sections
+    // (`refine_batch`, `process_created`, `test_facets`) are split by work stealing with the
+    // other workers instead of each waking the pool from outside.
+    rayon::scope(|_| {
+        let mut r = Refiner::new(surface, opts);
+        r.run(progress)?;
+        Ok(r.finish())
+    })
 }
 
 /// Run, then recompute Del_S(E) from scratch and return how many facets the incremental
@@ -1219,7 +1224,7 @@ impl<'a> Refiner<'a> {
         false
     }
 
-    fn run(&mut self, progress: &mut dyn FnMut(Progress)) -> Result<(), MeshError> {
+    fn run(&mut self, progress: &mut (dyn FnMut(Progress) + Send)) -> Result<(), MeshError> {
         self.initialize()?;
         self.ensure_vertex_slots();
         let mut since_progress = 0usize;

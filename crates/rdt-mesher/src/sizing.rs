@@ -359,7 +359,7 @@ pub fn two_pass(
     eps: f64,
     dm_inf: f64,
     base: &MeshOptions,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<TwoPass, MeshError> {
     check_eps(eps)?;
     if !(dm_inf > 0.0 && dm_inf.is_finite()) {
@@ -398,7 +398,7 @@ pub fn second_pass(
     eps: f64,
     sigma0: f64,
     base: &MeshOptions,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<SecondPass, MeshError> {
     check_eps(eps)?;
     let medial = Arc::new(MedialAxisEstimate::new(
