@@ -277,7 +277,7 @@ impl CostEstimate {
 
 /// Two refinement points closer than this many times the sum of their balls' radii are not
 /// put in the same batch (their conflict zones would likely overlap).
-const NEAR_FACTOR: f64 = 2.0;
+const NEAR_FACTOR: f64 = 3.0;
 
 /// Largest batch of `Refiner::refine_batch`.
 const MAX_BATCH: usize = 32;
