@@ -12,19 +12,14 @@
 //! (`.nii`, uncompressed, from a temporary file), the scan alone and the d_M^inf estimate (not
 //! needed with a given size) are reported separately in `extra` and on stderr.
 //!
-//! Measured 2026-11-22 (`cargo xtask bench image --runs 5 --vs-cgal`, 2 shared vCPUs, load 5-7,
-//! so only same-run ratios mean anything; CGAL itself took 1.4-2.7 s at 128^3 across runs):
-//! 128^3: 18 496 vertices in 0.46 s vs CGAL 19 493 in 1.39 s (3.0x); 256^3: 24 678 vertices
-//! in 0.66 s vs CGAL 25 869 in 1.83 s (2.8x); separately .nii read 0.001 / 0.06 s, scan (with
-//! the crossing's block summary) 0.004 / 0.03 s, d_M^inf 0.11 / 0.9 s (not needed with a
-//! size; `mesh` computes it on first use only). A second run gave 2.7x and 2.25x, the first
-//! run of the day (before the block walk) 2.5x and 2.3x: the ratio moves with the load. In user
-//! cycles per mesh (`perf stat`, same volume and criteria) the block walk of the crossing is
-//! neutral at 128^3 (1.11 G vs 1.14 G cycles; the volume fits the cache) and saves 7% at 256^3
-//! (2.38 G -> 2.21 G). The 5x target at 128^3 is not met: a profile of the 128^3 mesh puts the
-//! image oracle at ~19% of the samples (crossing 9%, value 6%, block walk 3%), Delaunay at
-//! ~33% and the mesher's bookkeeping (facet tests, queue, hash maps, per-call timers) at the
-//! rest.
+//! Measured 2026-11-22 03:31 UTC on the quiet 2-core machine (`cargo xtask bench image
+//! --vs-cgal --runs 9`, twice): 128^3, 18 486 vertices in 0.161 / 0.164 s vs CGAL 19 493 in
+//! 0.807 / 0.808 s (5.01x / 4.93x; earlier runs 5.46x, 5.08x, 4.99x); 256^3, 24 655 vertices
+//! in 0.262 / 0.271 s vs CGAL 25 869 in 1.173 / 1.179 s (4.5x / 4.35x). Separately: .nii read
+//! 0.004 / 0.04 s, scan 0.003 / 0.016 s, d_M^inf 0.06 / 0.38 s (not needed with a size; `mesh`
+//! computes it on first use only). The mesher core (Delaunay, restricted-facet bookkeeping)
+//! dominates; the image oracle's crossing walks a per-block sign summary (7% fewer cycles at
+//! 256^3, neutral at 128^3).
 
 use crate::bench::{BenchArgs, Row, cgal_rows, median};
 use anyhow::{Context, Result};
