@@ -22,6 +22,7 @@ use oracle::{BoundingSphere, OracleError, Surface, roots::SplitMix64};
 use rustc_hash::FxHashMap;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Which oracle answers "does this Voronoi edge meet S" (section 6.4.2).
@@ -370,7 +371,12 @@ pub(crate) struct Refiner<'a> {
     s: &'a dyn Surface,
     opts: &'a MeshOptions,
     ball: BoundingSphere,
-    tri: Triangulation,
+    /// Shared with the conflict-zone searches of the next batch while the cells created by
+    /// the previous one are processed (`refine_batch`); mutated only through `tri_mut`.
+    tri: Arc<Triangulation>,
+    /// Cells created by the last batch whose circumcenters, values and facets are not
+    /// processed yet (see `refine_batch`); empty outside the main loop.
+    pending_created: Vec<CellId>,
     cells: Vec<CellInfo>,
     restricted: FxHashMap<[VertexId; 3], RFacet>,
     vertex_facets: Vec<u32>,
@@ -391,7 +397,6 @@ pub(crate) struct Refiner<'a> {
     hits_buf: Vec<Option<(DVec3, bool)>>,
     pairs_buf: Vec<(Facet, Facet)>,
     batch_buf: Vec<(QEntry, RFacet)>,
-    batch_created: Vec<CellId>,
     cavities: Vec<Cavity>,
     /// `touched[c] == touch_round`: cell c is in (or next to) a zone inserted in this batch.
     touched: Vec<u32>,
@@ -416,7 +421,8 @@ impl<'a> Refiner<'a> {
             s,
             opts,
             ball: s.bounding_sphere(),
-            tri: Triangulation::new(),
+            tri: Arc::new(Triangulation::new()),
+            pending_created: Vec::new(),
             cells: Vec::new(),
             restricted: FxHashMap::default(),
             vertex_facets: Vec::new(),
@@ -434,7 +440,6 @@ impl<'a> Refiner<'a> {
             hits_buf: Vec::new(),
             pairs_buf: Vec::new(),
             batch_buf: Vec::new(),
-            batch_created: Vec::new(),
             cavities: Vec::new(),
             touched: Vec::new(),
             touch_round: 0,
@@ -450,6 +455,12 @@ impl<'a> Refiner<'a> {
             values: 0,
             crossing_calls: 0,
         }
+    }
+
+    /// The triangulation, for an insertion. Invariant: no other reference to it is alive
+    /// outside the `rayon::join` of `refine_batch`, so this never clones it.
+    fn tri_mut(&mut self) -> &mut Triangulation {
+        Arc::get_mut(&mut self.tri).expect("the triangulation is not shared between steps")
     }
 
     fn eval(&mut self, p: DVec3) -> Result<f64, MeshError> {
@@ -515,7 +526,7 @@ impl<'a> Refiner<'a> {
         let t = Instant::now();
         let mut ids = Vec::with_capacity(pts.len());
         for p in &pts {
-            ids.push(match self.tri.insert(*p)? {
+            ids.push(match self.tri_mut().insert(*p)? {
                 Insertion::New(v) | Insertion::Duplicate(v) => v,
             });
         }
@@ -921,7 +932,8 @@ impl<'a> Refiner<'a> {
     fn insert(&mut self, p: DVec3, hint: Option<CellId>) -> Result<bool, MeshError> {
         let t = Instant::now();
         let mut changes = std::mem::take(&mut self.changes);
-        let res = self.tri.insert_with(p, hint, Some(&mut changes));
+        debug_assert!(self.pending_created.is_empty());
+        let res = self.tri_mut().insert_with(p, hint, Some(&mut changes));
         self.t_delaunay += t.elapsed();
         let res = match res {
             Ok(r) => r,
@@ -1092,53 +1104,70 @@ impl<'a> Refiner<'a> {
         }
         if batch.is_empty() {
             self.batch_buf = batch;
-            return Ok(false);
-        }
-        if batch.len() == 1 {
-            let (e, rf) = batch[0];
-            self.batch_buf = batch;
-            if self.budget_exceeded() {
+            if self.pending_created.is_empty() {
                 return Ok(false);
             }
-            if self.insert(rf.center, Some(rf.facet.cell))? {
-                self.count_insertion(e.forced, since_progress);
-            }
+            // The last batch's cells may queue new bad balls.
+            let pending = std::mem::take(&mut self.pending_created);
+            let r = self.process_created(&pending);
+            self.pending_created = pending;
+            self.pending_created.clear();
+            r?;
             return Ok(true);
         }
-        // Conflict zones, read-only.
-        let t = Instant::now();
+        // Conflict zones of this batch (read-only on the triangulation), while the cells
+        // created by the previous batch are processed (which reads the triangulation and
+        // writes only the refiner's own state). This batch was taken from the queue before
+        // those cells' facets were registered: a fixed one-step delay, the same on any number
+        // of threads. Its entries stay valid: processing creates no cell and removes no facet.
         let mut cavs = std::mem::take(&mut self.cavities);
         if cavs.len() < batch.len() {
             cavs.resize_with(batch.len(), Cavity::default);
         }
-        let tri = &self.tri;
-        let search = |(e, rf): &(QEntry, RFacet), cav: &mut Cavity| {
-            let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version);
-            tri.find_cavity(rf.center, Some(rf.facet.cell), seed, cav)
+        let pending = std::mem::take(&mut self.pending_created);
+        let tri = Arc::clone(&self.tri);
+        let threads = self.threads;
+        let search_all = {
+            let (batch, cavs) = (&batch, &mut cavs);
+            move || {
+                let t = Instant::now();
+                let search = |(e, rf): &(QEntry, RFacet), cav: &mut Cavity| {
+                    let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version);
+                    tri.find_cavity(rf.center, Some(rf.facet.cell), seed, cav)
+                };
+                let found: Vec<Result<(), delaunay3::Error>> = if threads > 1 {
+                    use rayon::prelude::*;
+                    batch
+                        .par_iter()
+                        .zip(cavs.par_iter_mut())
+                        .map(|(b, cav)| search(b, cav))
+                        .collect()
+                } else {
+                    batch
+                        .iter()
+                        .zip(cavs.iter_mut())
+                        .map(|(b, cav)| search(b, cav))
+                        .collect()
+                };
+                (found, t.elapsed())
+            }
         };
-        let found: Vec<Result<(), delaunay3::Error>> = if self.threads > 1 {
-            use rayon::prelude::*;
-            batch
-                .par_iter()
-                .zip(cavs.par_iter_mut())
-                .map(|(b, cav)| search(b, cav))
-                .collect()
-        } else {
-            batch
-                .iter()
-                .zip(cavs.iter_mut())
-                .map(|(b, cav)| search(b, cav))
-                .collect()
-        };
-        self.t_delaunay += t.elapsed();
+        let ((found, dt), processed) = rayon::join(search_all, || self.process_created(&pending));
+        self.t_delaunay += dt;
+        self.pending_created = pending;
+        self.pending_created.clear();
+        if let Err(e) = processed {
+            self.cavities = cavs;
+            self.batch_buf = batch;
+            return Err(e);
+        }
         // Insert the disjoint ones in queue order.
         self.touch_round = self.touch_round.wrapping_add(1);
         if self.touch_round == 0 {
             self.touched.iter_mut().for_each(|x| *x = 0);
             self.touch_round = 1;
         }
-        let mut created = std::mem::take(&mut self.batch_created);
-        created.clear();
+        let mut created = std::mem::take(&mut self.pending_created);
         let mut changes = std::mem::take(&mut self.changes);
         let mut stop = false;
         let mut result = Ok(());
@@ -1176,7 +1205,7 @@ impl<'a> Refiner<'a> {
                 self.touched[c] = round;
             }
             let t = Instant::now();
-            let ins = self.tri.insert_cavity(cav, Some(&mut changes));
+            let ins = self.tri_mut().insert_cavity(cav, Some(&mut changes));
             self.t_delaunay += t.elapsed();
             debug_assert!(matches!(ins, Insertion::New(_)));
             self.remove_destroyed(&changes);
@@ -1186,10 +1215,16 @@ impl<'a> Refiner<'a> {
         self.changes = changes;
         self.cavities = cavs;
         self.batch_buf = batch;
-        let r = self.process_created(&created);
-        self.batch_created = created;
+        self.pending_created = created;
         result?;
-        r?;
+        if stop {
+            // The run ends here: bring Del_S(E) up to date with the triangulation.
+            let pending = std::mem::take(&mut self.pending_created);
+            let r = self.process_created(&pending);
+            self.pending_created = pending;
+            self.pending_created.clear();
+            r?;
+        }
         Ok(!stop)
     }
 
@@ -1230,7 +1265,7 @@ impl<'a> Refiner<'a> {
         let mut since_progress = 0usize;
         loop {
             // Main loop: refine bad balls, worst first (in batches).
-            while !self.queue.is_empty() {
+            while !self.queue.is_empty() || !self.pending_created.is_empty() {
                 if !self.refine_batch(&mut since_progress)? {
                     if self.stats.stopped_by.is_some() {
                         return Ok(());
