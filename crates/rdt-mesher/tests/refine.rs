@@ -161,6 +161,15 @@ fn deterministic_bit_for_bit() {
     assert_eq!(a.mesh, b.mesh);
 }
 
+/// Runs `f` on a rayon pool of `n` threads.
+fn in_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 /// An oracle slow enough (~5 us a value) that the mesher runs its batches of oracle calls on
 /// several threads: the mesh must be the same, bit for bit, as on one thread, with both oracles.
 #[test]
@@ -184,15 +193,8 @@ fn parallel_oracle_batches_do_not_change_the_mesh() {
             seed: 3,
             ..Default::default()
         };
-        let in_pool = |n: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .unwrap()
-                .install(|| mesh(&slow_torus, &opts).unwrap())
-        };
-        let one = in_pool(1);
-        let four = in_pool(4);
+        let one = in_pool(1, || mesh(&slow_torus, &opts).unwrap());
+        let four = in_pool(4, || mesh(&slow_torus, &opts).unwrap());
         assert_eq!(one.stats.parallel_oracle_batches, 0);
         assert!(
             four.stats.parallel_oracle_batches > 0,
@@ -215,24 +217,13 @@ fn batched_refinement_is_independent_of_the_thread_count() {
             oracle,
             ..Default::default()
         };
-        let in_pool = |n: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .unwrap()
-                .install(|| mesh(&torus(), &opts).unwrap())
-        };
-        let one = in_pool(1);
-        let four = in_pool(4);
+        let one = in_pool(1, || mesh(&torus(), &opts).unwrap());
+        let four = in_pool(4, || mesh(&torus(), &opts).unwrap());
         assert!(one.stats.vertices > 5000, "{}", one.stats.vertices);
         assert!(one.stats.criteria_met, "{:?}", one.stats.unmet);
         assert_eq!(one.mesh, four.mesh, "{oracle:?}");
         check_closed_manifold(&four, 1);
-        let audit = rayon::ThreadPoolBuilder::new()
-            .num_threads(4)
-            .build()
-            .unwrap()
-            .install(|| rdt_mesher::refine::audit(&torus(), &opts).unwrap());
+        let audit = in_pool(4, || rdt_mesher::refine::audit(&torus(), &opts).unwrap());
         assert_eq!(audit, 0);
     }
 }

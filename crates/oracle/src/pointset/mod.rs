@@ -1051,19 +1051,7 @@ pub(crate) fn newton_bracketed(
         if fm.is_nan() || fm.abs() < tol {
             return m;
         }
-        if (fm < 0.0) == (fa < 0.0) {
-            (a, fa) = (m, fm);
-            if side == -1 {
-                fb *= 0.5;
-            }
-            side = -1;
-        } else {
-            (b, fb) = (m, fm);
-            if side == 1 {
-                fa *= 0.5;
-            }
-            side = 1;
-        }
+        shrink_bracket(m, fm, (&mut a, &mut fa), (&mut b, &mut fb), &mut side);
         let slope = g.dot(u);
         if slope.is_finite() && slope != 0.0 {
             let step = -fm / slope;
@@ -1078,6 +1066,31 @@ pub(crate) fn newton_bracketed(
         }
     }
     a.lerp(b, 0.5)
+}
+
+/// One Illinois step of a sign-change bracket [a, b]: `m` (value `fm`) replaces the end
+/// with the same sign, and the value kept at the other end is halved when the same end moved
+/// twice in a row (`side` remembers which end moved last: -1 for a, 1 for b).
+fn shrink_bracket(
+    m: DVec3,
+    fm: f64,
+    (a, fa): (&mut DVec3, &mut f64),
+    (b, fb): (&mut DVec3, &mut f64),
+    side: &mut i8,
+) {
+    if (fm < 0.0) == (*fa < 0.0) {
+        (*a, *fa) = (m, fm);
+        if *side == -1 {
+            *fb *= 0.5;
+        }
+        *side = -1;
+    } else {
+        (*b, *fb) = (m, fm);
+        if *side == 1 {
+            *fa *= 0.5;
+        }
+        *side = 1;
+    }
 }
 
 /// Illinois root finding on `[a, b]` (`fa`, `fb` of opposite signs), safeguarded by bisection
@@ -1118,19 +1131,7 @@ pub(crate) fn illinois(
         if fm.is_nan() || fm.abs() < tol {
             return m;
         }
-        if (fm < 0.0) == (fa < 0.0) {
-            (a, fa) = (m, fm);
-            if side == -1 {
-                fb *= 0.5;
-            }
-            side = -1;
-        } else {
-            (b, fb) = (m, fm);
-            if side == 1 {
-                fa *= 0.5;
-            }
-            side = 1;
-        }
+        shrink_bracket(m, fm, (&mut a, &mut fa), (&mut b, &mut fb), &mut side);
     }
     a.lerp(b, 0.5)
 }
