@@ -144,15 +144,7 @@ pub static VERDICT_FAILED: AtomicBool = AtomicBool::new(false);
 
 /// The mesher's surface Delaunay balls in `verify`'s form (one per output triangle).
 pub fn verify_balls(balls: &[rdt_mesher::SurfaceBall]) -> Vec<verify::SurfaceBall> {
-    balls
-        .iter()
-        .enumerate()
-        .map(|(i, b)| verify::SurfaceBall {
-            facet: i,
-            center: b.center,
-            radius: b.radius,
-        })
-        .collect()
+    verify::SurfaceBall::per_facet(balls.iter().map(|b| (b.center, b.radius)))
 }
 
 pub fn read_xyz(path: &PathBuf) -> Result<Vec<DVec3>> {

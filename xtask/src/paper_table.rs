@@ -321,16 +321,7 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
 }
 
 fn certify(s: &dyn Surface, first: &MeshResult, second: &MeshResult, eps: f64) -> String {
-    let balls = second
-        .balls
-        .iter()
-        .enumerate()
-        .map(|(i, b)| verify::SurfaceBall {
-            facet: i,
-            center: b.center,
-            radius: b.radius,
-        })
-        .collect();
+    let balls = crate::mesh_cmd::verify_balls(&second.balls);
     let vo = verify::Options {
         self_intersections: false,
         samples_per_edge: 1,

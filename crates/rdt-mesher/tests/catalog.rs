@@ -146,15 +146,7 @@ fn two_disjoint_spheres_yield_both_components() {
 }
 
 fn balls_for_verify(r: &MeshResult) -> Vec<verify::SurfaceBall> {
-    r.balls
-        .iter()
-        .enumerate()
-        .map(|(i, b)| verify::SurfaceBall {
-            facet: i,
-            center: b.center,
-            radius: b.radius,
-        })
-        .collect()
+    verify::SurfaceBall::per_facet(r.balls.iter().map(|b| (b.center, b.radius)))
 }
 
 /// max over the vertices and a dense barycentric grid (n subdivisions per edge, plus each

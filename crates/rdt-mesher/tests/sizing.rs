@@ -160,20 +160,12 @@ fn two_pass_ellipsoid_is_sparser_and_certified() {
         tp.second.stats.nonmanifold_edges + tp.second.stats.nonmanifold_vertices,
         0
     );
-    let balls = tp
-        .second
-        .balls
-        .iter()
-        .enumerate()
-        .map(|(i, b)| verify::SurfaceBall {
-            facet: i,
-            center: b.center,
-            radius: b.radius,
-        });
+    let balls =
+        verify::SurfaceBall::per_facet(tp.second.balls.iter().map(|b| (b.center, b.radius)));
     let vo = verify::Options {
         self_intersections: false,
         samples_per_edge: 1,
-        surface_balls: Some(balls.collect()),
+        surface_balls: Some(balls),
         epsilon: Some(eps),
         dm: verify::DmSource::Poles,
         surface_samples: Some(tp.first.mesh.vertices.clone()),
@@ -353,17 +345,8 @@ fn two_pass_chair_with_too_large_dm_inf_is_certified() {
         tp.dm_inf_estimate
     );
     assert!(tp.floor < tp.sigma0);
-    let balls: Vec<verify::SurfaceBall> = tp
-        .second
-        .balls
-        .iter()
-        .enumerate()
-        .map(|(i, b)| verify::SurfaceBall {
-            facet: i,
-            center: b.center,
-            radius: b.radius,
-        })
-        .collect();
+    let balls =
+        verify::SurfaceBall::per_facet(tp.second.balls.iter().map(|b| (b.center, b.radius)));
     let vo = verify::Options {
         self_intersections: false,
         samples_per_edge: 1,
