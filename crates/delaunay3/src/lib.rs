@@ -243,13 +243,49 @@ impl Cavity {
         &self.cells
     }
 
-    /// The cells in conflict and their neighbors across the zone's boundary: two zones whose
-    /// touched cells are disjoint can be inserted one after the other without searching again.
+    /// The cells in conflict and their neighbors across the zone's boundary. A zone stays
+    /// valid after other zones were inserted as long as none of its touched cells was
+    /// destroyed by them, i.e. its touched cells avoid their [`Cavity::cells`] (sharing an
+    /// outside neighbor is fine: see [`Triangulation::insert_cavity`]).
     pub fn touched_cells(&self) -> impl Iterator<Item = CellId> + '_ {
         self.cells
             .iter()
             .copied()
             .chain(self.boundary.iter().map(|b| b.out))
+    }
+
+    /// The vertices of the cells that [`Triangulation::insert_cavity`] will create, in the
+    /// order of [`Changes::created`] and with the same vertex order as
+    /// [`Triangulation::cell_vertices`]; `new` stands for the inserted point's vertex id,
+    /// unknown before the insertion. Lets a caller compute per-cell data (circumcenters)
+    /// during the parallel search, while the boundary's points are in cache.
+    ///
+    /// ```
+    /// use delaunay3::{Cavity, Changes, Triangulation};
+    /// use glam::DVec3;
+    /// let mut t = Triangulation::new();
+    /// for p in [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::ONE] {
+    ///     t.insert(p).unwrap();
+    /// }
+    /// let mut cav = Cavity::default();
+    /// t.find_cavity(DVec3::splat(0.3), None, 1, &mut cav).unwrap();
+    /// let planned: Vec<[u32; 4]> = cav.new_cells(u32::MAX).collect();
+    /// let mut ch = Changes::default();
+    /// let delaunay3::Insertion::New(v) = t.insert_cavity(&cav, Some(&mut ch)) else {
+    ///     unreachable!()
+    /// };
+    /// let made: Vec<[u32; 4]> = ch.created.iter().map(|&c| t.cell_vertices(c)).collect();
+    /// let planned: Vec<[u32; 4]> = planned
+    ///     .iter()
+    ///     .map(|q| q.map(|x| if x == u32::MAX { v } else { x }))
+    ///     .collect();
+    /// assert_eq!(made, planned);
+    /// ```
+    pub fn new_cells(&self, new: VertexId) -> impl ExactSizeIterator<Item = [VertexId; 4]> + '_ {
+        // `build_star` makes one cell per boundary facet, in boundary order.
+        self.boundary
+            .iter()
+            .map(move |b| [b.v[0], b.v[1], b.v[2], new])
     }
 }
 
@@ -1120,10 +1156,19 @@ impl Triangulation {
     }
 
     /// Inserts the point of a conflict zone found by [`Triangulation::find_cavity`] on this
-    /// triangulation. Correct only if no cell of the zone, and no cell just outside it, has
-    /// changed since the search: the caller keeps zones applied together disjoint (cells
-    /// and outside neighbors; see [`Cavity::touched_cells`]). `changes` as for
-    /// [`Triangulation::insert_with`].
+    /// triangulation. Correct only if no cell of the zone, and no cell just outside it, was
+    /// destroyed since the search: the caller applies zones of one batch in order and skips
+    /// a zone whose [`Cavity::touched_cells`] meet the [`Cavity::cells`] of a zone applied
+    /// before it.
+    ///
+    /// Why that suffices: a cell created by an earlier zone A joins A's point to a facet
+    /// between a destroyed cell D and an outside cell O, and its circumball lies in the union
+    /// of the balls of D and O. Neither D (a cell of A, not touched by this zone B, so not in
+    /// conflict with B's point: conflict zones are connected) nor O (O is not in B's zone,
+    /// else D, its neighbor, would be in B's zone or on its boundary) is in conflict with B's
+    /// point, so no new cell is; and B's own cells and outside neighbors are still alive,
+    /// with the facets between them unchanged (A only rewires O's facet toward D).
+    /// `changes` as for [`Triangulation::insert_with`].
     pub fn insert_cavity(&mut self, cav: &Cavity, changes: Option<&mut Changes>) -> Insertion {
         let mut changes = changes;
         if let Some(ch) = changes.as_deref_mut() {

@@ -440,7 +440,7 @@ fn insert_in_batches(t: &mut Triangulation, rest: &[DVec3], k: usize, seed: u64)
                 deferred.push(*p);
                 continue;
             }
-            touched.extend(cav.touched_cells());
+            touched.extend(cav.cells().iter().copied());
             let mut ch = Changes::default();
             assert!(matches!(
                 t.insert_cavity(cav, Some(&mut ch)),

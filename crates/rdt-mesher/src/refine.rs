@@ -377,6 +377,15 @@ pub(crate) struct Refiner<'a> {
     /// Cells created by the last batch whose circumcenters, values and facets are not
     /// processed yet (see `refine_batch`); empty outside the main loop.
     pending_created: Vec<CellId>,
+    /// `cell_info` of each `pending_created` cell, computed during the batch's search (see
+    /// `zone_infos`); empty when the cells came from elsewhere.
+    pending_infos: Vec<CellInfo>,
+    /// Per batch zone: the `cell_info` of the cells its insertion will create
+    /// (`Cavity::new_cells` order, which is `Changes::created` order).
+    zone_infos: Vec<Vec<CellInfo>>,
+    /// The last (clean) result of `nonmanifold_elements`, with the vertex count it was
+    /// computed at.
+    last_nonmanifold: Option<NonManifold>,
     cells: Vec<CellInfo>,
     restricted: FxHashMap<[VertexId; 3], RFacet>,
     vertex_facets: Vec<u32>,
@@ -398,7 +407,7 @@ pub(crate) struct Refiner<'a> {
     pairs_buf: Vec<(Facet, Facet)>,
     batch_buf: Vec<(QEntry, RFacet)>,
     cavities: Vec<Cavity>,
-    /// `touched[c] == touch_round`: cell c is in (or next to) a zone inserted in this batch.
+    /// `touched[c] == touch_round`: cell c was destroyed by a zone inserted in this batch.
     touched: Vec<u32>,
     touch_round: u32,
     /// Measured costs of the oracle's calls, to decide when a batch runs in parallel.
@@ -423,6 +432,9 @@ impl<'a> Refiner<'a> {
             ball: s.bounding_sphere(),
             tri: Arc::new(Triangulation::new()),
             pending_created: Vec::new(),
+            pending_infos: Vec::new(),
+            zone_infos: Vec::new(),
+            last_nonmanifold: None,
             cells: Vec::new(),
             restricted: FxHashMap::default(),
             vertex_facets: Vec::new(),
@@ -588,47 +600,7 @@ impl<'a> Refiner<'a> {
     /// Circumcenter of live cell `c`, with f = NaN ("value not evaluated yet", see
     /// `eval_cells`) inside the bounding ball and +inf outside it or for an infinite cell.
     fn cell_info(&self, c: CellId) -> CellInfo {
-        if self.tri.is_infinite(c) {
-            return CellInfo {
-                cc: DVec3::ZERO,
-                f: f64::INFINITY,
-            };
-        }
-        let mut cc = self.tri.circumcenter(c);
-        if !cc.is_finite() {
-            cc = self.flat_cell_center(c);
-        }
-        let f = if cc.is_finite() && self.ball.contains(cc) {
-            f64::NAN
-        } else {
-            f64::INFINITY
-        };
-        CellInfo { cc, f }
-    }
-
-    /// A stand-in circumcenter for a cell whose four vertices are exactly coplanar (it exists
-    /// under the symbolic perturbation; common on planar parts of polyhedra). Its circumsphere
-    /// degenerates to the plane, and its center goes to infinity along the plane's normal, on
-    /// the side fixed by the cell's (perturbed, positive) orientation: return a point on that
-    /// side far outside the bounding ball, so that the duals of its facets behave as rays.
-    fn flat_cell_center(&self, c: CellId) -> DVec3 {
-        let p = self.tri.cell_vertices(c).map(|v| self.tri.point(v));
-        let (a, b, d) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
-        let (bd, da, ab) = (b.cross(d), d.cross(a), a.cross(b));
-        let mut n = bd;
-        for x in [da, ab] {
-            if x.length_squared() > n.length_squared() {
-                n = x;
-            }
-        }
-        let n = n.normalize_or_zero();
-        let num = bd * a.length_squared() + da * b.length_squared() + ab * d.length_squared();
-        let s = num.dot(n);
-        // cc - p0 = num / (2 det) with det -> 0 from below (positive cells have det < 0).
-        let dir = if s > 0.0 { -n } else { n };
-        let centroid = (p[0] + p[1] + p[2] + p[3]) * 0.25;
-        let far = 4.0 * self.ball.radius + (centroid - self.ball.center).length();
-        centroid + dir * far
+        cell_info_of(&self.tri, &self.ball, self.tri.cell_vertices(c), DVec3::NAN)
     }
 
     /// Evaluate the surface at the circumcenters of `cells` left pending by `update_cell`
@@ -947,7 +919,7 @@ impl<'a> Refiner<'a> {
             return Ok(false);
         }
         self.remove_destroyed(&changes);
-        let r = self.process_created(&changes.created);
+        let r = self.process_created(&changes.created, &[]);
         self.changes = changes;
         r?;
         Ok(true)
@@ -984,9 +956,22 @@ impl<'a> Refiner<'a> {
 
     /// Compute the circumcenters and values of `created` cells and test every facet of them
     /// (new facets and the boundary facets of the cavities, whose duals changed).
-    fn process_created(&mut self, created: &[CellId]) -> Result<(), MeshError> {
+    fn process_created(&mut self, created: &[CellId], infos: &[CellInfo]) -> Result<(), MeshError> {
         self.round = self.round.wrapping_add(1);
-        if created.len() >= PARALLEL_CELLS && self.threads > 1 {
+        if infos.len() == created.len() {
+            // Computed during the search (`zone_infos`).
+            for (&c, &info) in created.iter().zip(infos) {
+                debug_assert_eq!(
+                    (info.cc.to_array(), info.f.is_nan()),
+                    {
+                        let i = self.cell_info(c);
+                        (i.cc.to_array(), i.f.is_nan())
+                    },
+                    "planned cell info differs"
+                );
+                self.set_cell(c, info);
+            }
+        } else if created.len() >= PARALLEL_CELLS && self.threads > 1 {
             use rayon::prelude::*;
             let this = &*self;
             let infos: Vec<CellInfo> = created.par_iter().map(|&c| this.cell_info(c)).collect();
@@ -1033,6 +1018,18 @@ impl<'a> Refiner<'a> {
         }
         let r = self.test_facets(&pairs);
         self.pairs_buf = pairs;
+        r
+    }
+
+    /// `process_created` on the cells left pending by the last batch, then clear them.
+    fn process_pending(&mut self) -> Result<(), MeshError> {
+        let pending = std::mem::take(&mut self.pending_created);
+        let infos = std::mem::take(&mut self.pending_infos);
+        let r = self.process_created(&pending, &infos);
+        self.pending_created = pending;
+        self.pending_created.clear();
+        self.pending_infos = infos;
+        self.pending_infos.clear();
         r
     }
 
@@ -1108,10 +1105,7 @@ impl<'a> Refiner<'a> {
                 return Ok(false);
             }
             // The last batch's cells may queue new bad balls.
-            let pending = std::mem::take(&mut self.pending_created);
-            let r = self.process_created(&pending);
-            self.pending_created = pending;
-            self.pending_created.clear();
+            let r = self.process_pending();
             r?;
             return Ok(true);
         }
@@ -1124,40 +1118,59 @@ impl<'a> Refiner<'a> {
         if cavs.len() < batch.len() {
             cavs.resize_with(batch.len(), Cavity::default);
         }
+        let mut zone_infos = std::mem::take(&mut self.zone_infos);
+        if zone_infos.len() < batch.len() {
+            zone_infos.resize_with(batch.len(), Vec::new);
+        }
         let pending = std::mem::take(&mut self.pending_created);
+        let pending_infos = std::mem::take(&mut self.pending_infos);
         let tri = Arc::clone(&self.tri);
+        let ball = self.ball;
         let threads = self.threads;
         let search_all = {
-            let (batch, cavs) = (&batch, &mut cavs);
+            let (batch, cavs, zone_infos) = (&batch, &mut cavs, &mut zone_infos);
             move || {
                 let t = Instant::now();
-                let search = |(e, rf): &(QEntry, RFacet), cav: &mut Cavity| {
-                    let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version);
-                    tri.find_cavity(rf.center, Some(rf.facet.cell), seed, cav)
-                };
+                // The zone, then the circumcenters of the cells it will create: their points
+                // were just read by the search.
+                let search =
+                    |(e, rf): &(QEntry, RFacet),
+                     (cav, infos): (&mut Cavity, &mut Vec<CellInfo>)| {
+                        let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version);
+                        tri.find_cavity(rf.center, Some(rf.facet.cell), seed, cav)?;
+                        infos.clear();
+                        let p = cav.point();
+                        infos.extend(cav.new_cells(NEW).map(|v| cell_info_of(&tri, &ball, v, p)));
+                        Ok(())
+                    };
                 let found: Vec<Result<(), delaunay3::Error>> = if threads > 1 {
                     use rayon::prelude::*;
                     batch
                         .par_iter()
-                        .zip(cavs.par_iter_mut())
-                        .map(|(b, cav)| search(b, cav))
+                        .zip(cavs.par_iter_mut().zip(zone_infos.par_iter_mut()))
+                        .map(|(b, z)| search(b, z))
                         .collect()
                 } else {
                     batch
                         .iter()
-                        .zip(cavs.iter_mut())
-                        .map(|(b, cav)| search(b, cav))
+                        .zip(cavs.iter_mut().zip(zone_infos.iter_mut()))
+                        .map(|(b, z)| search(b, z))
                         .collect()
                 };
                 (found, t.elapsed())
             }
         };
-        let ((found, dt), processed) = rayon::join(search_all, || self.process_created(&pending));
+        let ((found, dt), processed) = rayon::join(search_all, || {
+            self.process_created(&pending, &pending_infos)
+        });
         self.t_delaunay += dt;
         self.pending_created = pending;
         self.pending_created.clear();
+        self.pending_infos = pending_infos;
+        self.pending_infos.clear();
         if let Err(e) = processed {
             self.cavities = cavs;
+            self.zone_infos = zone_infos;
             self.batch_buf = batch;
             return Err(e);
         }
@@ -1168,6 +1181,7 @@ impl<'a> Refiner<'a> {
             self.touch_round = 1;
         }
         let mut created = std::mem::take(&mut self.pending_created);
+        let mut created_infos = std::mem::take(&mut self.pending_infos);
         let mut changes = std::mem::take(&mut self.changes);
         let mut stop = false;
         let mut result = Ok(());
@@ -1197,7 +1211,8 @@ impl<'a> Refiner<'a> {
                 }
                 break;
             }
-            for c in cav.touched_cells() {
+            // Only destroyed cells invalidate later zones (see `insert_cavity`).
+            for &c in cav.cells() {
                 let c = c as usize;
                 if c >= self.touched.len() {
                     self.touched.resize(c + 1 + c / 2, 0);
@@ -1209,21 +1224,21 @@ impl<'a> Refiner<'a> {
             self.t_delaunay += t.elapsed();
             debug_assert!(matches!(ins, Insertion::New(_)));
             self.remove_destroyed(&changes);
+            debug_assert_eq!(changes.created.len(), zone_infos[i].len());
             created.extend_from_slice(&changes.created);
+            created_infos.extend_from_slice(&zone_infos[i]);
             self.count_insertion(e.forced, since_progress);
         }
         self.changes = changes;
         self.cavities = cavs;
+        self.zone_infos = zone_infos;
+        self.pending_infos = created_infos;
         self.batch_buf = batch;
         self.pending_created = created;
         result?;
         if stop {
             // The run ends here: bring Del_S(E) up to date with the triangulation.
-            let pending = std::mem::take(&mut self.pending_created);
-            let r = self.process_created(&pending);
-            self.pending_created = pending;
-            self.pending_created.clear();
-            r?;
+            self.process_pending()?;
         }
         Ok(!stop)
     }
@@ -1344,6 +1359,8 @@ impl<'a> Refiner<'a> {
         self.stats.manifold_passes += 1;
         let (bad_edges, bad_vertices) = self.nonmanifold_elements();
         if bad_edges.is_empty() && bad_vertices.is_empty() {
+            // Del_S(E) changes only with the vertices: `finish` reuses this.
+            self.last_nonmanifold = Some((self.tri.num_vertices(), (bad_edges, bad_vertices)));
             return 0;
         }
         let mut keys: Vec<[VertexId; 3]> = Vec::new();
@@ -1408,7 +1425,8 @@ impl<'a> Refiner<'a> {
     /// Edges (sorted pairs) with other than two restricted facets, and vertices whose link is
     /// not a single cycle. Both lists sorted.
     fn nonmanifold_elements(&self) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
-        let tris: Vec<[VertexId; 3]> = self.sorted_facets().into_iter().map(|(k, _)| k).collect();
+        // The order of the triangles does not matter to the result.
+        let tris: Vec<[VertexId; 3]> = self.restricted.keys().copied().collect();
         crate::topology::nonmanifold_elements(&tris)
     }
 
@@ -1438,39 +1456,57 @@ impl<'a> Refiner<'a> {
         let mut used: Vec<VertexId> = facets.iter().flat_map(|(k, _)| *k).collect();
         used.sort_unstable();
         used.dedup();
-        let mut remap = FxHashMap::default();
-        for (i, v) in used.iter().enumerate() {
-            remap.insert(*v, i as u32);
+        let mut remap = vec![u32::MAX; used.last().map_or(0, |&v| v as usize + 1)];
+        for (i, &v) in used.iter().enumerate() {
+            remap[v as usize] = i as u32;
         }
         let vertices: Vec<DVec3> = used.iter().map(|&v| self.tri.point(v)).collect();
-        let mut triangles = Vec::with_capacity(facets.len());
-        let mut balls = Vec::with_capacity(facets.len());
+        let triangles: Vec<[u32; 3]> = facets
+            .iter()
+            .map(|(_, rf)| rf.oriented.map(|v| remap[v as usize]))
+            .collect();
+        let balls: Vec<SurfaceBall> = facets
+            .iter()
+            .map(|(_, rf)| SurfaceBall {
+                center: rf.center,
+                radius: rf.radius,
+            })
+            .collect();
+        // Per-facet measures in parallel, then min / max (order-independent).
+        let measures: Vec<(f64, Option<f64>, Option<f64>, bool)> = {
+            use rayon::prelude::*;
+            let (tri, criteria) = (&self.tri, &self.opts.criteria);
+            facets
+                .par_iter()
+                .map(|(_, rf)| {
+                    let pts = rf.oriented.map(|v| tri.point(v));
+                    let rs = criteria.size.as_ref().map(|s| rf.radius / s.at(rf.center));
+                    let dist = criteria.max_distance.map(|d| {
+                        let (cc, _) = crate::criteria::triangle_circumcircle(pts);
+                        (cc - rf.center).length() / d
+                    });
+                    (crate::criteria::min_angle_deg(pts), rs, dist, rf.bad > 1.0)
+                })
+                .collect()
+        };
+        let max_opt = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(x), Some(y)) => Some(x.max(y)),
+            (x, None) | (None, x) => x,
+        };
         let mut max_rs: Option<f64> = None;
         let mut max_dist: Option<f64> = None;
         let mut min_angle = f64::INFINITY;
         let mut all_good = true;
-        for (_, rf) in &facets {
-            triangles.push(rf.oriented.map(|v| remap[&v]));
-            balls.push(SurfaceBall {
-                center: rf.center,
-                radius: rf.radius,
-            });
-            let pts = rf.oriented.map(|v| self.tri.point(v));
-            min_angle = min_angle.min(crate::criteria::min_angle_deg(pts));
-            if let Some(s) = &self.opts.criteria.size {
-                let r = rf.radius / s.at(rf.center);
-                max_rs = Some(max_rs.map_or(r, |m: f64| m.max(r)));
-            }
-            if let Some(d) = self.opts.criteria.max_distance {
-                let (cc, _) = crate::criteria::triangle_circumcircle(pts);
-                let r = (cc - rf.center).length() / d;
-                max_dist = Some(max_dist.map_or(r, |m: f64| m.max(r)));
-            }
-            if rf.bad > 1.0 {
-                all_good = false;
-            }
+        for &(angle, rs, dist, bad) in &measures {
+            min_angle = min_angle.min(angle);
+            max_rs = max_opt(max_rs, rs);
+            max_dist = max_opt(max_dist, dist);
+            all_good &= !bad;
         }
-        let (bad_edges, bad_vertices) = self.nonmanifold_elements();
+        let (bad_edges, bad_vertices) = match self.last_nonmanifold.take() {
+            Some((n, r)) if n == self.tri.num_vertices() => r,
+            _ => self.nonmanifold_elements(),
+        };
         let missing = self
             .control
             .iter()
@@ -1532,4 +1568,63 @@ impl<'a> Refiner<'a> {
             stats: self.stats,
         }
     }
+}
+
+/// Circumcenter and pending value of the cell with vertices `v` (`NEW` stands for the point
+/// `new`, not yet a vertex): f = NaN ("not evaluated yet", see `eval_cells`) inside the
+/// bounding ball, +inf outside it or for an infinite cell. The same arithmetic on the same
+/// points in the same order, whether called on a live cell or on a planned one.
+fn cell_info_of(
+    tri: &Triangulation,
+    ball: &BoundingSphere,
+    v: [VertexId; 4],
+    new: DVec3,
+) -> CellInfo {
+    if v.contains(&INFINITE_VERTEX) {
+        return CellInfo {
+            cc: DVec3::ZERO,
+            f: f64::INFINITY,
+        };
+    }
+    let p = v.map(|x| if x == NEW { new } else { tri.point(x) });
+    let mut cc = delaunay3::circumcenter(p[0], p[1], p[2], p[3]);
+    if !cc.is_finite() {
+        cc = flat_cell_center(ball, p);
+    }
+    let f = if cc.is_finite() && ball.contains(cc) {
+        f64::NAN
+    } else {
+        f64::INFINITY
+    };
+    CellInfo { cc, f }
+}
+
+/// Vertex count, then bad edges and bad vertices (see `Refiner::nonmanifold_elements`).
+type NonManifold = (usize, (Vec<[VertexId; 2]>, Vec<VertexId>));
+
+/// Placeholder id of a point being inserted in `Cavity::new_cells`.
+const NEW: VertexId = INFINITE_VERTEX - 1;
+
+/// A stand-in circumcenter for a cell whose four vertices are exactly coplanar (it exists
+/// under the symbolic perturbation; common on planar parts of polyhedra). Its circumsphere
+/// degenerates to the plane, and its center goes to infinity along the plane's normal, on
+/// the side fixed by the cell's (perturbed, positive) orientation: return a point on that
+/// side far outside the bounding ball, so that the duals of its facets behave as rays.
+fn flat_cell_center(ball: &BoundingSphere, p: [DVec3; 4]) -> DVec3 {
+    let (a, b, d) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
+    let (bd, da, ab) = (b.cross(d), d.cross(a), a.cross(b));
+    let mut n = bd;
+    for x in [da, ab] {
+        if x.length_squared() > n.length_squared() {
+            n = x;
+        }
+    }
+    let n = n.normalize_or_zero();
+    let num = bd * a.length_squared() + da * b.length_squared() + ab * d.length_squared();
+    let s = num.dot(n);
+    // cc - p0 = num / (2 det) with det -> 0 from below (positive cells have det < 0).
+    let dir = if s > 0.0 { -n } else { n };
+    let centroid = (p[0] + p[1] + p[2] + p[3]) * 0.25;
+    let far = 4.0 * ball.radius + (centroid - ball.center).length();
+    centroid + dir * far
 }

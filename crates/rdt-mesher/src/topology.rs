@@ -15,93 +15,131 @@ use delaunay3::VertexId;
 /// assert_eq!((e.len(), v.len()), (3, 3));
 /// ```
 pub fn nonmanifold_elements(tris: &[[VertexId; 3]]) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
-    let mut edges: Vec<[VertexId; 2]> = Vec::with_capacity(tris.len() * 3);
-    let mut link: Vec<(VertexId, VertexId, VertexId)> = Vec::with_capacity(tris.len() * 3);
+    // The link of every vertex, bucketed by vertex (counting sort): the triangle (a, b, c)
+    // puts the link edge (b, c) in a's bucket, and so on. The edge (a, x) has as many
+    // triangles as x has link edges in a's bucket, so one pass over the links finds both the
+    // bad edges and the bad vertices. The result does not depend on the triangles' order.
+    let n = tris
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut start = vec![0u32; n + 1];
+    for t in tris {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut link = vec![[0 as VertexId; 2]; tris.len() * 3];
     for t in tris {
         for i in 0..3 {
             let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
-            edges.push(if a < b { [a, b] } else { [b, a] });
-            link.push((a, b.min(c), b.max(c)));
+            let k = &mut fill[a as usize];
+            link[*k as usize] = [b, c];
+            *k += 1;
         }
     }
-    edges.sort_unstable();
+    let check = |range: std::ops::Range<usize>| {
+        let mut bad_edges = Vec::new();
+        let mut bad_vertices = Vec::new();
+        let mut ends: Vec<(VertexId, u32)> = Vec::new();
+        for v in range {
+            let l = &link[start[v] as usize..start[v + 1] as usize];
+            if l.is_empty() {
+                continue;
+            }
+            let (single, edges_ok) = link_of(l, &mut ends);
+            if !edges_ok {
+                // Edges (v, x) with x > v whose count (x's degree in the link) is not 2.
+                let mut k = 0;
+                while k < ends.len() {
+                    let x = ends[k].0;
+                    let mut m = k;
+                    while m < ends.len() && ends[m].0 == x {
+                        m += 1;
+                    }
+                    if m - k != 2 && x as usize > v {
+                        bad_edges.push([v as VertexId, x]);
+                    }
+                    k = m;
+                }
+            }
+            if !single {
+                bad_vertices.push(v as VertexId);
+            }
+        }
+        (bad_edges, bad_vertices)
+    };
+    use rayon::prelude::*;
+    const CHUNK: usize = 4096;
+    let parts: Vec<_> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|k| check(k * CHUNK..((k + 1) * CHUNK).min(n)))
+        .collect();
     let mut bad_edges = Vec::new();
-    let mut i = 0;
-    while i < edges.len() {
-        let mut j = i + 1;
-        while j < edges.len() && edges[j] == edges[i] {
-            j += 1;
-        }
-        if j - i != 2 {
-            bad_edges.push(edges[i]);
-        }
-        i = j;
-    }
-    link.sort_unstable();
     let mut bad_vertices = Vec::new();
-    let mut i = 0;
-    let mut ends: Vec<(VertexId, usize)> = Vec::new();
-    while i < link.len() {
-        let v = link[i].0;
-        let mut j = i;
-        while j < link.len() && link[j].0 == v {
-            j += 1;
-        }
-        if !is_single_cycle(&link[i..j], &mut ends) {
-            bad_vertices.push(v);
-        }
-        i = j;
+    for (e, v) in parts {
+        bad_edges.extend(e);
+        bad_vertices.extend(v);
     }
+    // Bad edges with both endpoints seen from the smaller one come out sorted.
     (bad_edges, bad_vertices)
 }
 
-/// Whether the link edges (v, a, b) of one vertex form exactly one cycle.
-fn is_single_cycle(
-    link: &[(VertexId, VertexId, VertexId)],
-    ends: &mut Vec<(VertexId, usize)>,
-) -> bool {
+/// The link edges `link` of one vertex: whether they form exactly one cycle, and whether
+/// every link vertex has degree exactly 2 (every edge at the vertex has two triangles).
+/// Leaves `ends` = the (link vertex, link edge) pairs sorted.
+fn link_of(link: &[[VertexId; 2]], ends: &mut Vec<(VertexId, u32)>) -> (bool, bool) {
     let n = link.len();
-    if n < 3 {
-        return false;
-    }
     ends.clear();
-    for (k, &(_, a, b)) in link.iter().enumerate() {
-        ends.push((a, k));
-        ends.push((b, k));
+    for (k, &[a, b]) in link.iter().enumerate() {
+        ends.push((a, k as u32));
+        ends.push((b, k as u32));
     }
     ends.sort_unstable();
     // Every link vertex must have degree exactly 2.
-    for pair in ends.chunks(2) {
-        if pair.len() != 2 || pair[0].0 != pair[1].0 {
-            return false;
+    let mut degrees_ok = ends.len().is_multiple_of(2);
+    if degrees_ok {
+        for pair in ends.chunks(2) {
+            if pair[0].0 != pair[1].0 {
+                degrees_ok = false;
+                break;
+            }
         }
     }
-    if ends.windows(3).any(|w| w[0].0 == w[2].0) {
-        return false;
+    if degrees_ok && ends.windows(3).any(|w| w[0].0 == w[2].0) {
+        degrees_ok = false;
+    }
+    if !degrees_ok || n < 3 {
+        return (false, degrees_ok);
     }
     // Walk the cycle from edge 0 and count its edges.
     let other = |x: VertexId, k: usize| -> usize {
         let i = ends.partition_point(|e| e.0 < x);
-        if ends[i].1 == k {
-            ends[i + 1].1
+        if ends[i].1 as usize == k {
+            ends[i + 1].1 as usize
         } else {
-            ends[i].1
+            ends[i].1 as usize
         }
     };
-    let (_, start_a, _) = link[0];
+    let [start_a, mut at] = link[0];
     let mut k = 0usize;
-    let mut at = link[0].2;
     let mut len = 1;
     while at != start_a {
         k = other(at, k);
-        let (_, a, b) = link[k];
+        let [a, b] = link[k];
         at = if a == at { b } else { a };
         len += 1;
         if len > n {
-            return false;
+            return (false, true);
         }
     }
-    len == n
+    (len == n, true)
 }
 
 /// Up to `per_component` well-spread vertices (farthest-point order) of every connected
@@ -161,6 +199,7 @@ pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     #[test]
     fn two_tets_sharing_a_vertex_is_nonmanifold_vertex() {
@@ -184,6 +223,89 @@ mod tests {
             [0, 3, 5],
         ];
         assert_eq!(nonmanifold_elements(&t), (vec![], vec![]));
+    }
+
+    /// The definition, written plainly: sort all edges, and each vertex's link edges.
+    fn reference(tris: &[[VertexId; 3]]) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
+        let mut edges: Vec<[VertexId; 2]> = Vec::new();
+        let mut link: std::collections::BTreeMap<VertexId, Vec<[VertexId; 2]>> = Default::default();
+        for t in tris {
+            for i in 0..3 {
+                let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+                edges.push([a.min(b), a.max(b)]);
+                link.entry(a).or_default().push([b, c]);
+            }
+        }
+        edges.sort_unstable();
+        let mut bad_edges: Vec<[VertexId; 2]> = Vec::new();
+        for e in &edges {
+            let n = edges.iter().filter(|x| *x == e).count();
+            if n != 2 && bad_edges.last() != Some(e) {
+                bad_edges.push(*e);
+            }
+        }
+        let mut bad_vertices = Vec::new();
+        for (v, l) in link {
+            // One cycle: every link vertex of degree 2, and the edges connected.
+            let mut deg: std::collections::BTreeMap<VertexId, usize> = Default::default();
+            for [a, b] in &l {
+                *deg.entry(*a).or_default() += 1;
+                *deg.entry(*b).or_default() += 1;
+            }
+            let mut ok = l.len() >= 3 && deg.values().all(|&d| d == 2);
+            if ok {
+                let mut seen = vec![false; l.len()];
+                let mut stack = vec![0];
+                seen[0] = true;
+                while let Some(k) = stack.pop() {
+                    for (m, e) in l.iter().enumerate() {
+                        if !seen[m] && e.iter().any(|x| l[k].contains(x)) {
+                            seen[m] = true;
+                            stack.push(m);
+                        }
+                    }
+                }
+                ok = seen.iter().all(|&s| s);
+            }
+            if !ok {
+                bad_vertices.push(v);
+            }
+        }
+        (bad_edges, bad_vertices)
+    }
+
+    proptest::proptest! {
+        /// Random triangle soups on few vertices (many non-manifold edges and vertices) and
+        /// closed surfaces with a few triangles dropped or doubled, in any order.
+        #[test]
+        fn matches_the_definition(
+            soup in proptest::collection::vec(
+                (0u32..9, 0u32..9, 0u32..9).prop_filter("distinct", |(a, b, c)| a != b && b != c && a != c),
+                0..30,
+            ),
+            drop in proptest::collection::vec(0usize..8, 0..3),
+            twice in proptest::collection::vec(0usize..8, 0..2),
+            shift in 0u32..5,
+        ) {
+            let t: Vec<[VertexId; 3]> = soup.iter().map(|&(a, b, c)| [a, b, c]).collect();
+            proptest::prop_assert_eq!(nonmanifold_elements(&t), reference(&t));
+            // An octahedron with vertex ids shifted, some triangles dropped or doubled.
+            let oct = [
+                [0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
+                [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5],
+            ];
+            let mut t: Vec<[VertexId; 3]> = oct
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| !drop.contains(i))
+                .map(|(_, x)| x.map(|v: u32| v * 3 + shift))
+                .collect();
+            for &k in &twice {
+                t.push(oct[k].map(|v: u32| v * 3 + shift));
+            }
+            t.reverse();
+            proptest::prop_assert_eq!(nonmanifold_elements(&t), reference(&t));
+        }
     }
 
     #[test]
