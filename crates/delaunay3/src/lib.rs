@@ -224,7 +224,7 @@ pub struct Cavity {
     cells: Vec<CellId>,
     boundary: Vec<Boundary>,
     duplicate: Option<VertexId>,
-    seen: rustc_hash::FxHashMap<CellId, bool>,
+    seen: SeenCells,
 }
 
 impl Cavity {
@@ -286,6 +286,85 @@ impl Cavity {
         self.boundary
             .iter()
             .map(move |b| [b.v[0], b.v[1], b.v[2], new])
+    }
+}
+
+/// The cells a conflict-zone search has decided (in conflict or not): a small
+/// open-addressing table of `generation << 33 | cell << 1 | in_conflict` words, cleared in
+/// O(1) by bumping the generation and grown (rehashed) past half full. Invariant: a slot
+/// belongs to the current search iff its top 31 bits equal `generation`.
+#[derive(Clone, Debug, Default)]
+struct SeenCells {
+    slots: Vec<u64>,
+    len: usize,
+    generation: u64,
+}
+
+impl SeenCells {
+    const MIN_SLOTS: usize = 512;
+
+    fn clear(&mut self) {
+        if self.slots.is_empty() {
+            self.slots = vec![0; Self::MIN_SLOTS];
+        }
+        self.len = 0;
+        self.generation += 1;
+        if self.generation >= 1 << 31 {
+            self.slots.iter_mut().for_each(|s| *s = 0);
+            self.generation = 1;
+        }
+    }
+
+    #[inline]
+    fn home(&self, c: CellId) -> usize {
+        ((c as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (self.slots.len() - 1)
+    }
+
+    #[inline]
+    fn get(&self, c: CellId) -> Option<bool> {
+        let mut h = self.home(c);
+        loop {
+            let s = self.slots[h];
+            if s >> 33 != self.generation {
+                return None;
+            }
+            if (s >> 1) as u32 == c {
+                return Some(s & 1 == 1);
+            }
+            h = (h + 1) & (self.slots.len() - 1);
+        }
+    }
+
+    /// Records `c` (not present yet).
+    #[inline]
+    fn insert(&mut self, c: CellId, inside: bool) {
+        if 2 * (self.len + 1) > self.slots.len() {
+            self.grow();
+        }
+        let mut h = self.home(c);
+        while self.slots[h] >> 33 == self.generation {
+            h = (h + 1) & (self.slots.len() - 1);
+        }
+        self.slots[h] = self.generation << 33 | (c as u64) << 1 | inside as u64;
+        self.len += 1;
+    }
+
+    #[cold]
+    fn grow(&mut self) {
+        let live: Vec<u64> = self
+            .slots
+            .iter()
+            .copied()
+            .filter(|s| s >> 33 == self.generation)
+            .collect();
+        self.slots = vec![0; self.slots.len() * 2];
+        for s in live {
+            let mut h = self.home((s >> 1) as u32);
+            while self.slots[h] >> 33 == self.generation {
+                h = (h + 1) & (self.slots.len() - 1);
+            }
+            self.slots[h] = s;
+        }
     }
 }
 
@@ -1136,8 +1215,8 @@ impl Triangulation {
             k += 1;
             for i in 0..4 {
                 let n = self.cells[c as usize].n[i];
-                let inside = match out.seen.get(&n) {
-                    Some(&b) => b,
+                let inside = match out.seen.get(n) {
+                    Some(b) => b,
                     None => {
                         let b = self.in_conflict(n, p);
                         out.seen.insert(n, b);

@@ -31,6 +31,7 @@
 pub mod criteria;
 pub mod init;
 pub mod refine;
+mod restricted;
 pub mod sizing;
 pub mod topology;
 

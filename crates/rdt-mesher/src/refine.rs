@@ -5,21 +5,22 @@
 //! - `cells[c]` holds the circumcenter of every live finite cell `c` and the surface value
 //!   there (or "outside the bounding ball"); it is recomputed for every created cell.
 //! - `restricted` holds exactly the facets of Del(E) whose (clipped) dual Voronoi edge meets S
-//!   according to the oracle, keyed by their sorted vertex triple. After an insertion, every
-//!   facet of a destroyed cell is removed, and every facet of a created cell (new facets and the
-//!   boundary facets of the cavity, whose duals changed) is re-tested: nothing else changed.
-//! - A queue entry is fresh iff its `version` equals the version of the map entry for its key;
-//!   stale entries are skipped when popped.
+//!   according to the oracle, keyed by their sorted vertex triple (see `crate::restricted`).
+//!   After an insertion, every facet of a destroyed cell is removed, and every facet of a
+//!   created cell (new facets and the boundary facets of the cavity, whose duals changed) is
+//!   re-tested: nothing else changed.
+//! - A queue entry (slot, version) is fresh iff that slot is live with that version; stale
+//!   entries are skipped when popped.
 //! - `vertex_facets[v]` counts the restricted facets incident to `v`.
 
 use crate::criteria::Criteria;
+use crate::restricted::{RFacet, Restricted};
 use delaunay3::{
     Cavity, CellId, Changes, Facet, INFINITE_VERTEX, Insertion, Triangulation, VertexId,
 };
 use glam::DVec3;
 use meshio::TriMesh;
 use oracle::{BoundingSphere, OracleError, Surface, roots::SplitMix64};
-use rustc_hash::FxHashMap;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::sync::Arc;
@@ -209,21 +210,11 @@ struct CellInfo {
     f: f64,
 }
 
-#[derive(Clone, Copy, Debug)]
-struct RFacet {
-    facet: Facet,
-    /// Vertex ids oriented counter-clockwise seen from outside (normal toward value > 0).
-    oriented: [VertexId; 3],
-    center: DVec3,
-    radius: f64,
-    bad: f64,
-    version: u32,
-}
-
 #[derive(Clone, Copy, PartialEq)]
 struct QEntry {
     bad: f64,
-    key: [VertexId; 3],
+    /// Slot in `Refiner::restricted`.
+    idx: u32,
     version: u32,
     forced: bool,
 }
@@ -387,7 +378,7 @@ pub(crate) struct Refiner<'a> {
     /// computed at.
     last_nonmanifold: Option<NonManifold>,
     cells: Vec<CellInfo>,
-    restricted: FxHashMap<[VertexId; 3], RFacet>,
+    restricted: Restricted,
     vertex_facets: Vec<u32>,
     queue: BinaryHeap<QEntry>,
     version: u32,
@@ -436,7 +427,7 @@ impl<'a> Refiner<'a> {
             zone_infos: Vec::new(),
             last_nonmanifold: None,
             cells: Vec::new(),
-            restricted: FxHashMap::default(),
+            restricted: Restricted::default(),
             vertex_facets: Vec::new(),
             queue: BinaryHeap::new(),
             version: 0,
@@ -864,7 +855,7 @@ impl<'a> Refiner<'a> {
             bad,
             version: self.version,
         };
-        self.restricted.insert(key, rf);
+        let idx = self.restricted.insert(key, rf, m);
         let need = f.cell.max(m.cell) as usize + 1;
         if self.facet_mask.len() < need {
             self.facet_mask.resize(need + need / 2, 0);
@@ -877,7 +868,7 @@ impl<'a> Refiner<'a> {
         if bad > 1.0 {
             self.queue.push(QEntry {
                 bad,
-                key,
+                idx,
                 version: rf.version,
                 forced: false,
             });
@@ -885,8 +876,9 @@ impl<'a> Refiner<'a> {
         Ok(())
     }
 
-    fn remove_key(&mut self, key: [VertexId; 3]) {
-        if self.restricted.remove(&key).is_some() {
+    /// Remove the facet `key`, facet `i` of cell `c`, if registered.
+    fn remove_facet(&mut self, c: CellId, i: u8, key: [VertexId; 3]) {
+        if self.restricted.remove(c, i, key) {
             for v in key {
                 self.vertex_facets[v as usize] -= 1;
             }
@@ -948,7 +940,7 @@ impl<'a> Refiner<'a> {
                     }
                 }
                 if !f.contains(&INFINITE_VERTEX) {
-                    self.remove_key(sorted3(f));
+                    self.remove_facet(id, i as u8, sorted3(f));
                 }
             }
         }
@@ -1076,12 +1068,9 @@ impl<'a> Refiner<'a> {
         let sep = NEAR_FACTOR;
         while batch.len() < k {
             let Some(e) = self.queue.pop() else { break };
-            let Some(rf) = self.restricted.get(&e.key).copied() else {
+            let Some(rf) = self.restricted.get(e.idx, e.version).copied() else {
                 continue;
             };
-            if rf.version != e.version {
-                continue;
-            }
             if e.forced && rf.radius < self.manifold_floor(rf.center) {
                 continue;
             }
@@ -1363,13 +1352,13 @@ impl<'a> Refiner<'a> {
             self.last_nonmanifold = Some((self.tri.num_vertices(), (bad_edges, bad_vertices)));
             return 0;
         }
-        let mut keys: Vec<[VertexId; 3]> = Vec::new();
-        for (k, _) in self.sorted_facets() {
+        let mut keys: Vec<(u32, RFacet)> = Vec::new();
+        for (idx, k, rf) in self.restricted.iter() {
             let e = [[k[0], k[1]], [k[1], k[2]], [k[0], k[2]]];
             if e.iter().any(|e| bad_edges.binary_search(e).is_ok())
                 || k.iter().any(|v| bad_vertices.binary_search(v).is_ok())
             {
-                keys.push(k);
+                keys.push((idx, *rf));
             }
         }
         // Termination (section 6.6.1's patch can refine forever at sharp edges and singular
@@ -1388,16 +1377,13 @@ impl<'a> Refiner<'a> {
                 return 0;
             }
         }
-        keys.retain(|k| {
-            let rf = &self.restricted[k];
-            rf.radius >= self.manifold_floor(rf.center)
-        });
+        keys.retain(|(_, rf)| rf.radius >= self.manifold_floor(rf.center));
         let n = keys.len();
-        for key in keys {
-            let rf = self.restricted[&key];
+        // The queue's order is total (badness, then version): push order does not matter.
+        for (idx, rf) in keys {
             self.queue.push(QEntry {
                 bad: 1.0 + rf.radius,
-                key,
+                idx,
                 version: rf.version,
                 forced: true,
             });
@@ -1417,7 +1403,7 @@ impl<'a> Refiner<'a> {
     }
 
     fn sorted_facets(&self) -> Vec<([VertexId; 3], RFacet)> {
-        let mut v: Vec<_> = self.restricted.iter().map(|(k, f)| (*k, *f)).collect();
+        let mut v: Vec<_> = self.restricted.iter().map(|(_, k, f)| (k, *f)).collect();
         v.sort_unstable_by_key(|(k, _)| *k);
         v
     }
@@ -1426,7 +1412,7 @@ impl<'a> Refiner<'a> {
     /// not a single cycle. Both lists sorted.
     fn nonmanifold_elements(&self) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
         // The order of the triangles does not matter to the result.
-        let tris: Vec<[VertexId; 3]> = self.restricted.keys().copied().collect();
+        let tris: Vec<[VertexId; 3]> = self.restricted.iter().map(|(_, k, _)| k).collect();
         crate::topology::nonmanifold_elements(&tris)
     }
 

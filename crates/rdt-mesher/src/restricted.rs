@@ -1,0 +1,161 @@
+//! Del_S(E) as a set of facets of Del(E), stored without hashing: a slab of restricted
+//! facets, reached from the two cells of each facet (`of_facet`) and from queue entries
+//! (slab index + version).
+//!
+//! # Invariants
+//! - A slab slot is live iff `slots[i].key[0] != FREE`; a live key (sorted vertex triple) is
+//!   in at most one live slot.
+//! - When a facet is registered, `of_facet` of both its cells points at its slot. A pointer
+//!   may go stale (the slot freed, or reused by another facet): every lookup through
+//!   `of_facet` compares the key, so a stale pointer is a miss, never a wrong hit.
+//! - Versions are unique per registration (a wrapping `u32`): a queue entry (index, version)
+//!   is fresh iff the slot is live with that version.
+
+use delaunay3::{CellId, Facet, VertexId};
+use glam::DVec3;
+
+/// A restricted facet and its surface Delaunay ball.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RFacet {
+    pub facet: Facet,
+    /// Vertex ids oriented counter-clockwise seen from outside (normal toward value > 0).
+    pub oriented: [VertexId; 3],
+    pub center: DVec3,
+    pub radius: f64,
+    pub bad: f64,
+    pub version: u32,
+}
+
+#[derive(Clone, Copy)]
+struct Slot {
+    key: [VertexId; 3],
+    rf: RFacet,
+}
+
+const FREE: VertexId = VertexId::MAX;
+const NONE: u32 = u32::MAX;
+
+#[derive(Default)]
+pub(crate) struct Restricted {
+    slots: Vec<Slot>,
+    free: Vec<u32>,
+    len: usize,
+    /// `of_facet[4 c + i]`: the slot last registered for facet i of cell c, or `NONE`.
+    of_facet: Vec<u32>,
+}
+
+impl Restricted {
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn clear(&mut self) {
+        self.slots.clear();
+        self.free.clear();
+        self.len = 0;
+        self.of_facet.clear();
+    }
+
+    /// The facet in slot `idx` if it is live with `version`.
+    #[inline]
+    pub fn get(&self, idx: u32, version: u32) -> Option<&RFacet> {
+        let s = self.slots.get(idx as usize)?;
+        (s.key[0] != FREE && s.rf.version == version).then_some(&s.rf)
+    }
+
+    /// Register `rf` under `key` (which must not be registered), pointed at from the facet
+    /// `f` and its mirror `m`. Returns the slot index.
+    pub fn insert(&mut self, key: [VertexId; 3], rf: RFacet, m: Facet) -> u32 {
+        debug_assert!(self.find(rf.facet.cell, rf.facet.index, key).is_none());
+        let slot = Slot { key, rf };
+        let idx = match self.free.pop() {
+            Some(i) => {
+                self.slots[i as usize] = slot;
+                i
+            }
+            None => {
+                self.slots.push(slot);
+                (self.slots.len() - 1) as u32
+            }
+        };
+        self.len += 1;
+        let need = 4 * (rf.facet.cell.max(m.cell) as usize + 1);
+        if self.of_facet.len() < need {
+            self.of_facet.resize(need + need / 2, NONE);
+        }
+        self.of_facet[4 * rf.facet.cell as usize + rf.facet.index as usize] = idx;
+        self.of_facet[4 * m.cell as usize + m.index as usize] = idx;
+        idx
+    }
+
+    /// The live slot of facet `i` of cell `c` if its key is `key`.
+    #[inline]
+    fn find(&self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<u32> {
+        let idx = *self.of_facet.get(4 * c as usize + i as usize)?;
+        let s = self.slots.get(idx as usize)?;
+        (s.key == key).then_some(idx)
+    }
+
+    /// Remove the facet `key`, seen as facet `i` of cell `c`, if registered. Returns whether
+    /// it was.
+    pub fn remove(&mut self, c: CellId, i: u8, key: [VertexId; 3]) -> bool {
+        match self.find(c, i, key) {
+            Some(idx) => {
+                self.slots[idx as usize].key[0] = FREE;
+                self.free.push(idx);
+                self.len -= 1;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Live facets with their keys, in slot order (deterministic, not sorted).
+    pub fn iter(&self) -> impl Iterator<Item = (u32, [VertexId; 3], &RFacet)> + '_ {
+        self.slots
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.key[0] != FREE)
+            .map(|(i, s)| (i as u32, s.key, &s.rf))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rf(cell: CellId, index: u8, version: u32) -> RFacet {
+        RFacet {
+            facet: Facet { cell, index },
+            oriented: [0, 1, 2],
+            center: DVec3::ZERO,
+            radius: 1.0,
+            bad: 0.5,
+            version,
+        }
+    }
+
+    #[test]
+    fn stale_pointers_miss_and_versions_tell_fresh_entries() {
+        let mut r = Restricted::default();
+        let m = Facet { cell: 7, index: 2 };
+        let a = r.insert([1, 2, 3], rf(3, 0, 10), m);
+        assert_eq!(r.len(), 1);
+        assert!(r.get(a, 10).is_some());
+        assert!(r.get(a, 9).is_none());
+        // Removing through the mirror works; removing twice does not.
+        assert!(r.remove(7, 2, [1, 2, 3]));
+        assert!(!r.remove(3, 0, [1, 2, 3]));
+        assert!(r.get(a, 10).is_none());
+        // The slot is reused by another facet: the old pointers of cells 3 and 7 (asked with
+        // their own facet's key) miss.
+        let b = r.insert([4, 5, 6], rf(9, 1, 11), Facet { cell: 8, index: 0 });
+        assert_eq!(a, b);
+        assert!(!r.remove(3, 0, [1, 2, 3]));
+        assert!(!r.remove(7, 2, [1, 2, 3]));
+        assert_eq!(r.len(), 1);
+        assert!(r.remove(8, 0, [4, 5, 6]));
+        assert_eq!(r.len(), 0);
+        assert_eq!(r.iter().count(), 0);
+    }
+}
