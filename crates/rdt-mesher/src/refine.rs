@@ -277,6 +277,9 @@ const MAX_BATCH: usize = 32;
 /// Circumcenters of at least this many created cells are computed in parallel.
 const PARALLEL_CELLS: usize = 256;
 
+/// Queue length below which `Refiner::purge_stale` leaves stale entries alone.
+const PURGE_MIN: usize = 4096;
+
 /// A batch of oracle calls runs in parallel when it is expected to take longer than this.
 const PARALLEL_BATCH_NS: f64 = 20_000.0;
 
@@ -381,6 +384,8 @@ pub(crate) struct Refiner<'a> {
     restricted: Restricted,
     vertex_facets: Vec<u32>,
     queue: BinaryHeap<QEntry>,
+    /// About how many entries of `queue` are stale (see `purge_stale`).
+    stale_in_queue: usize,
     version: u32,
     changes: Changes,
     created_stamp: Vec<u32>,
@@ -430,6 +435,7 @@ impl<'a> Refiner<'a> {
             restricted: Restricted::default(),
             vertex_facets: Vec::new(),
             queue: BinaryHeap::new(),
+            stale_in_queue: 0,
             version: 0,
             changes: Changes::default(),
             created_stamp: Vec::new(),
@@ -878,7 +884,9 @@ impl<'a> Refiner<'a> {
 
     /// Remove the facet `key`, facet `i` of cell `c`, if registered.
     fn remove_facet(&mut self, c: CellId, i: u8, key: [VertexId; 3]) {
-        if self.restricted.remove(c, i, key) {
+        if let Some(rf) = self.restricted.remove(c, i, key) {
+            // Its queue entry, if any, is stale now (forced entries are not counted: rare).
+            self.stale_in_queue += usize::from(rf.bad > 1.0);
             for v in key {
                 self.vertex_facets[v as usize] -= 1;
             }
@@ -1062,6 +1070,7 @@ impl<'a> Refiner<'a> {
     /// number of threads. Returns false when the queue is empty or a budget stopped the run.
     fn refine_batch(&mut self, since_progress: &mut usize) -> Result<bool, MeshError> {
         let k = self.batch_size();
+        self.purge_stale();
         let mut batch = std::mem::take(&mut self.batch_buf);
         batch.clear();
         let mut near = Vec::new();
@@ -1069,6 +1078,7 @@ impl<'a> Refiner<'a> {
         while batch.len() < k {
             let Some(e) = self.queue.pop() else { break };
             let Some(rf) = self.restricted.get(e.idx, e.version).copied() else {
+                self.stale_in_queue = self.stale_in_queue.saturating_sub(1);
                 continue;
             };
             if e.forced && rf.radius < self.manifold_floor(rf.center) {
@@ -1230,6 +1240,16 @@ impl<'a> Refiner<'a> {
             self.process_pending()?;
         }
         Ok(!stop)
+    }
+
+    /// Drop the stale entries of the queue (facets removed since) once they are about half of
+    /// it: most popped entries are stale, and each pop costs a walk down the heap. The pop order is unchanged (a total order on fresh entries).
+    fn purge_stale(&mut self) {
+        if self.stale_in_queue > PURGE_MIN && 2 * self.stale_in_queue > self.queue.len() {
+            let r = &self.restricted;
+            self.queue.retain(|e| r.get(e.idx, e.version).is_some());
+            self.stale_in_queue = 0;
+        }
     }
 
     /// Batch size of `refine_batch`: 1 while the triangulation is small (zones overlap), up

@@ -96,18 +96,14 @@ impl Restricted {
         (s.key == key).then_some(idx)
     }
 
-    /// Remove the facet `key`, seen as facet `i` of cell `c`, if registered. Returns whether
-    /// it was.
-    pub fn remove(&mut self, c: CellId, i: u8, key: [VertexId; 3]) -> bool {
-        match self.find(c, i, key) {
-            Some(idx) => {
-                self.slots[idx as usize].key[0] = FREE;
-                self.free.push(idx);
-                self.len -= 1;
-                true
-            }
-            None => false,
-        }
+    /// Remove the facet `key`, seen as facet `i` of cell `c`, if registered, and return it.
+    pub fn remove(&mut self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<RFacet> {
+        let idx = self.find(c, i, key)?;
+        let s = &mut self.slots[idx as usize];
+        s.key[0] = FREE;
+        self.free.push(idx);
+        self.len -= 1;
+        Some(s.rf)
     }
 
     /// Live facets with their keys, in slot order (deterministic, not sorted).
@@ -144,17 +140,17 @@ mod tests {
         assert!(r.get(a, 10).is_some());
         assert!(r.get(a, 9).is_none());
         // Removing through the mirror works; removing twice does not.
-        assert!(r.remove(7, 2, [1, 2, 3]));
-        assert!(!r.remove(3, 0, [1, 2, 3]));
+        assert_eq!(r.remove(7, 2, [1, 2, 3]).map(|f| f.version), Some(10));
+        assert!(r.remove(3, 0, [1, 2, 3]).is_none());
         assert!(r.get(a, 10).is_none());
         // The slot is reused by another facet: the old pointers of cells 3 and 7 (asked with
         // their own facet's key) miss.
         let b = r.insert([4, 5, 6], rf(9, 1, 11), Facet { cell: 8, index: 0 });
         assert_eq!(a, b);
-        assert!(!r.remove(3, 0, [1, 2, 3]));
-        assert!(!r.remove(7, 2, [1, 2, 3]));
+        assert!(r.remove(3, 0, [1, 2, 3]).is_none());
+        assert!(r.remove(7, 2, [1, 2, 3]).is_none());
         assert_eq!(r.len(), 1);
-        assert!(r.remove(8, 0, [4, 5, 6]));
+        assert!(r.remove(8, 0, [4, 5, 6]).is_some());
         assert_eq!(r.len(), 0);
         assert_eq!(r.iter().count(), 0);
     }
