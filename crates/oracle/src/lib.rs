@@ -162,6 +162,14 @@ pub trait Surface: Send + Sync {
         roots::project_newton(self, p)
     }
 
+    /// How far (degrees) the direction of [`Surface::gradient`] at `p` may be from the normal
+    /// of the surface the data stands for, because of the data's own rounding. 0 (the
+    /// default) for exact backends; images with integer voxels bound it from the rounding of
+    /// the corner values (see `ImageSurface`). `verify` allows it on top of lemma 3.1.
+    fn normal_uncertainty_deg(&self, _p: DVec3) -> f64 {
+        0.0
+    }
+
     /// P2: a positive lower bound (or estimate) of the smallest distance from S to its medial
     /// axis, d_M^inf, if the backend knows one.
     fn dm_inf_hint(&self) -> Option<f64> {
@@ -196,6 +204,9 @@ impl<S: Surface + ?Sized> Surface for &S {
     }
     fn project(&self, p: DVec3) -> Option<DVec3> {
         (**self).project(p)
+    }
+    fn normal_uncertainty_deg(&self, p: DVec3) -> f64 {
+        (**self).normal_uncertainty_deg(p)
     }
     fn dm_inf_hint(&self) -> Option<f64> {
         (**self).dm_inf_hint()

@@ -1280,3 +1280,35 @@ fn nilearn_components_get_seed_tetrahedra() {
     assert_eq!((t.inside_components, t.outside_components), (9, 2));
     assert_eq!(check_tets(&s), (10, 9));
 }
+
+/// Integer voxels round the true values: the gradient's direction is known only to
+/// asin(sqrt(3) q / (h |grad|)); float voxels are taken as exact.
+#[test]
+fn normal_uncertainty_from_integer_rounding() {
+    let n = 16;
+    // A ramp of 10 units per voxel along x, voxel size 0.5: |grad| = 20 per world unit.
+    let ramp = |i: usize| 10.0 * i as f64;
+    let idx = |p: usize| p % n;
+    let affine = DAffine3::from_scale(DVec3::splat(0.5));
+    let opts = ImageOptions {
+        iso: Some(75.0),
+        ..Default::default()
+    };
+    let u16v: Vec<u16> = (0..n * n * n).map(|p| ramp(idx(p)) as u16).collect();
+    let f32v: Vec<f32> = (0..n * n * n).map(|p| ramp(idx(p)) as f32).collect();
+    let s16 = ImageSurface::new(
+        Volume::new([n; 3], Voxels::U16(u16v), affine).unwrap(),
+        &opts,
+    )
+    .unwrap();
+    let s32 = ImageSurface::new(
+        Volume::new([n; 3], Voxels::F32(f32v), affine).unwrap(),
+        &opts,
+    )
+    .unwrap();
+    let p = DVec3::new(3.75, 4.1, 3.9); // on the level set x = 7.5 voxels
+    let expect = (3f64.sqrt() * 1.0 / (0.5 * 20.0)).asin().to_degrees();
+    let got = s16.normal_uncertainty_deg(p);
+    assert!((got - expect).abs() < 1e-6, "{got} vs {expect}");
+    assert_eq!(s32.normal_uncertainty_deg(p), 0.0);
+}

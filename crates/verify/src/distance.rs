@@ -178,6 +178,12 @@ pub struct NormalDeviation {
     pub max_deg: f64,
     /// Largest angle between the *lines* of the two (min(a, 180 - a)): lemma 3.1's quantity.
     pub max_line_deg: f64,
+    /// Largest excess of that line angle over the surface's own normal uncertainty at the
+    /// vertex ([`oracle::Surface::normal_uncertainty_deg`]); equals `max_line_deg` for exact
+    /// backends. What the normals check compares with lemma 3.1's bound.
+    pub max_excess_line_deg: f64,
+    /// Largest normal uncertainty of the surface at a vertex (0 for exact backends).
+    pub max_uncertainty_deg: f64,
     pub mean_deg: f64,
     /// Facets with an angle above 90 degrees at some vertex (facing inward).
     pub inverted_facets: usize,
@@ -271,7 +277,7 @@ pub fn mesh_to_surface(
 
 /// Normal deviation of the facets against the surface gradient.
 pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviation {
-    let per: Vec<([Option<f64>; 3], bool)> = mesh
+    let per: Vec<([Option<(f64, f64)>; 3], bool)> = mesh
         .triangles
         .par_iter()
         .map(|t| {
@@ -286,7 +292,7 @@ pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviatio
                 }
                 let ang = n.cross(g).length().atan2(n.dot(g)).to_degrees();
                 inverted |= ang > 90.0;
-                out[k] = Some(ang);
+                out[k] = Some((ang, surface.normal_uncertainty_deg(v)));
             }
             (out, inverted)
         })
@@ -294,6 +300,8 @@ pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviatio
     let mut nd = NormalDeviation {
         max_deg: 0.0,
         max_line_deg: 0.0,
+        max_excess_line_deg: 0.0,
+        max_uncertainty_deg: 0.0,
         mean_deg: 0.0,
         inverted_facets: 0,
         undefined: 0,
@@ -303,9 +311,12 @@ pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviatio
         nd.inverted_facets += *inv as usize;
         for a in angles {
             match a {
-                Some(a) => {
+                Some((a, u)) => {
+                    let line = a.min(180.0 - a);
                     nd.max_deg = nd.max_deg.max(*a);
-                    nd.max_line_deg = nd.max_line_deg.max(a.min(180.0 - a));
+                    nd.max_line_deg = nd.max_line_deg.max(line);
+                    nd.max_excess_line_deg = nd.max_excess_line_deg.max(line - u);
+                    nd.max_uncertainty_deg = nd.max_uncertainty_deg.max(*u);
                     nd.mean_deg += a;
                     n += 1;
                 }

@@ -706,6 +706,24 @@ impl Surface for ImageSurface {
         self.inv_t * g
     }
 
+    /// Integer voxels are the true values rounded to a quantum `q` (`|scl_slope|`): each corner
+    /// of the interpolating cell is off by up to `q / 2`, each component of the interpolant's
+    /// gradient by up to `q / h` (h the smallest voxel size), so its direction by up to
+    /// `asin(min(1, sqrt(3) q / (h |grad|)))`. 0 for float voxels.
+    fn normal_uncertainty_deg(&self, p: DVec3) -> f64 {
+        if !self.vol.dtype().is_integer() {
+            return 0.0;
+        }
+        let q = self.vol.scaling().0.abs();
+        let s = self.vol.spacing();
+        let h = s.x.min(s.y).min(s.z);
+        let g = self.gradient(p).length();
+        if !(g > 0.0 && g.is_finite()) {
+            return 90.0;
+        }
+        (3f64.sqrt() * q / (h * g)).min(1.0).asin().to_degrees()
+    }
+
     /// Estimate of d_M^inf from distance transforms of the inside and outside: see
     /// [`ImageSurface::dm_inf_estimate`].
     fn dm_inf_hint(&self) -> Option<f64> {
