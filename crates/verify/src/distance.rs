@@ -277,7 +277,9 @@ pub fn mesh_to_surface(
 
 /// Normal deviation of the facets against the surface gradient.
 pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviation {
-    let per: Vec<([Option<(f64, f64)>; 3], bool)> = mesh
+    // Per facet: (angle, the surface's normal uncertainty) at each vertex, and "faces inward".
+    type PerFacet = ([Option<(f64, f64)>; 3], bool);
+    let per: Vec<PerFacet> = mesh
         .triangles
         .par_iter()
         .map(|t| {
