@@ -48,6 +48,10 @@ pub struct MeshArgs {
     /// Do not enforce a manifold output (section 6.6.1's patch is on by default).
     #[arg(long)]
     pub no_manifold: bool,
+    /// Do not insert scaffold points inside the solid (an acceleration that leaves the
+    /// output's guarantees unchanged; see docs/GUIDE.md).
+    #[arg(long)]
+    pub no_scaffold: bool,
     /// Seed for every random choice.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -249,6 +253,7 @@ pub fn run(a: &MeshArgs) -> Result<()> {
             OracleArg::Intersection => OracleKind::Intersection,
         },
         manifold: !a.no_manifold,
+        scaffold: !a.no_scaffold,
         seed: a.seed,
         max_vertices: a.max_vertices,
         time_limit: a.time_limit.map(Duration::from_secs_f64),
@@ -396,6 +401,7 @@ pub fn run(a: &MeshArgs) -> Result<()> {
             "distance": a.distance,
             "oracle": format!("{:?}", a.oracle).to_lowercase(),
             "manifold": !a.no_manifold,
+            "scaffold": !a.no_scaffold,
             "seed": a.seed,
             "notes": notes,
             "stats": st,
@@ -451,6 +457,7 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
             OracleArg::Intersection => OracleKind::Intersection,
         },
         manifold: !a.no_manifold,
+        scaffold: !a.no_scaffold,
         seed: a.seed,
         max_vertices: a.max_vertices,
         time_limit: a.time_limit.map(Duration::from_secs_f64),

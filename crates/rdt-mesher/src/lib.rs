@@ -32,6 +32,7 @@ pub mod criteria;
 pub mod init;
 pub mod refine;
 mod restricted;
+mod scaffold;
 pub mod sizing;
 pub mod topology;
 

@@ -1,0 +1,166 @@
+//! Scaffold points: an acceleration of the refinement that leaves its output unchanged.
+//!
+//! The 3D Delaunay triangulation of a sample of a surface with tunnels or thin parts (a
+//! torus, the tanglecube) is full of long cells joining opposite sides of the solid, whose
+//! large circumballs put ~35 cells in the conflict zone of every refinement point. A few
+//! points far from S, inside and outside (the *scaffold*), cut those cells up: on the catalog
+//! torus at sigma = 0.0194 the refinement runs 2.4x faster on one thread.
+//!
+//! Scaffold points are vertices of Del(E) but not samples, and never appear in the output:
+//! - a restricted facet with a scaffold vertex is always bad (`Refiner::register_facet`), so
+//!   the refinement keeps inserting surface points until no Voronoi edge of a scaffold point
+//!   meets S (it terminates: such a facet's ball has radius at least the scaffold point's
+//!   distance to S, which is positive);
+//! - at the end, `Refiner::scaffold_clear` checks that every Voronoi vertex of every scaffold
+//!   point (the circumcenters of its cells, whose values are known) is on the scaffold point's
+//!   side of S. If that holds, S does not enter a scaffold point's Voronoi cell through its
+//!   vertices or edges, and Del_S(E) is the restricted Delaunay triangulation of the samples
+//!   alone. If it fails, the triangulation is rebuilt from the samples alone and the
+//!   refinement resumes (`Refiner::drop_scaffold`): the paper's algorithm, unaccelerated.
+//!
+//! The points: nodes of a grid over the bounding ball, inside S (value < 0), on the ridges of
+//! the half-width of the largest all-inside block of nodes around them (a discrete medial axis
+//! of the solid), where that block is at least twice sigma wide (so that the scaffold stays
+//! clear of the final sample's balls and adds no refinement of its own). Outside points were
+//! measured to slow the torus down, not up: the long cells are inside.
+
+use crate::Sizing;
+use glam::DVec3;
+use oracle::Surface;
+use rayon::prelude::*;
+
+/// Grid nodes per axis over the bounding ball's cube.
+pub(crate) const GRID: usize = 32;
+/// Largest block half-width (in grid steps) measured around a node.
+const MAX_BLOCK: usize = 8;
+
+/// Scaffold points of `s` for the size `size` (see the module docs), in a deterministic order.
+pub(crate) fn scaffold_points(s: &dyn Surface, size: Option<&Sizing>) -> Vec<DVec3> {
+    let ball = s.bounding_sphere();
+    let n = GRID;
+    let g = 2.0 * ball.radius / (n - 1) as f64;
+    let lo = ball.center - DVec3::splat(ball.radius);
+    let node = |i: usize, j: usize, k: usize| lo + DVec3::new(i as f64, j as f64, k as f64) * g;
+    // Inside nodes (value < 0); NaN and 0 count as not inside.
+    let inside: Vec<bool> = (0..n * n * n)
+        .into_par_iter()
+        .map(|p| s.value(node(p % n, (p / n) % n, p / (n * n))) < 0.0)
+        .collect();
+    // Prefix sums of the inside nodes, for block counts in O(1).
+    let m = n + 1;
+    let at = |i: usize, j: usize, k: usize| i + m * (j + m * k);
+    let mut sum = vec![0u32; m * m * m];
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let v = u32::from(inside[i + n * (j + n * k)]);
+                sum[at(i + 1, j + 1, k + 1)] = v
+                    + sum[at(i, j + 1, k + 1)]
+                    + sum[at(i + 1, j, k + 1)]
+                    + sum[at(i + 1, j + 1, k)]
+                    - sum[at(i, j, k + 1)]
+                    - sum[at(i, j + 1, k)]
+                    - sum[at(i + 1, j, k)]
+                    + sum[at(i, j, k)];
+            }
+        }
+    }
+    // Inside nodes with a <= index < b on every axis.
+    let block = |a: [usize; 3], b: [usize; 3]| -> u32 {
+        let (x0, y0, z0, x1, y1, z1) = (a[0], a[1], a[2], b[0], b[1], b[2]);
+        sum[at(x1, y1, z1)] + sum[at(x0, y0, z1)] + sum[at(x0, y1, z0)] + sum[at(x1, y0, z0)]
+            - sum[at(x0, y1, z1)]
+            - sum[at(x1, y0, z1)]
+            - sum[at(x1, y1, z0)]
+            - sum[at(x0, y0, z0)]
+    };
+    // Half-width of the largest all-inside block around each inside node (0: none).
+    let width: Vec<u8> = (0..n * n * n)
+        .into_par_iter()
+        .map(|p| {
+            let (i, j, k) = (p % n, (p / n) % n, p / (n * n));
+            if !inside[p] {
+                return 0;
+            }
+            let mut w = 0;
+            for r in 1..=MAX_BLOCK {
+                if i < r || j < r || k < r || i + r >= n || j + r >= n || k + r >= n {
+                    break;
+                }
+                let full = (2 * r + 1).pow(3) as u32;
+                if block([i - r, j - r, k - r], [i + r + 1, j + r + 1, k + r + 1]) != full {
+                    break;
+                }
+                w = r;
+            }
+            w as u8
+        })
+        .collect();
+    // Keep the ridges of the width (a discrete medial axis of the inside), where the block is
+    // at least twice sigma wide.
+    let mut out = Vec::new();
+    for k in 1..n - 1 {
+        for j in 1..n - 1 {
+            for i in 1..n - 1 {
+                let p = i + n * (j + n * k);
+                let w = width[p] as usize;
+                if w == 0 {
+                    continue;
+                }
+                let q = node(i, j, k);
+                let sigma = size.map_or(0.0, |s| s.at(q));
+                if !(sigma.is_finite() && sigma >= 0.0) || (w as f64) * g < 2.0 * sigma {
+                    continue;
+                }
+                let ridge = [1, n, n * n]
+                    .iter()
+                    .all(|&o| width[p - o] as usize <= w && width[p + o] as usize <= w);
+                if ridge {
+                    out.push(q);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use oracle::BoundingSphere;
+
+    struct Shell;
+    impl Surface for Shell {
+        fn bounding_sphere(&self) -> BoundingSphere {
+            BoundingSphere {
+                center: DVec3::ZERO,
+                radius: 2.0,
+            }
+        }
+        fn value(&self, p: DVec3) -> f64 {
+            // A thick spherical shell 0.5 < |p| < 1.5 (negative inside the shell).
+            (p.length() - 1.0).abs() - 0.5
+        }
+    }
+
+    #[test]
+    fn scaffold_points_are_inside_and_clear_of_the_surface() {
+        let s = Shell;
+        let g = 4.0 / (GRID - 1) as f64;
+        for sigma in [0.01, 0.05, 0.1] {
+            let pts = scaffold_points(&s, Some(&Sizing::Constant(sigma)));
+            assert!(!pts.is_empty(), "sigma {sigma}");
+            for p in &pts {
+                // Inside the wall 0.5 < |p| < 1.5, at least a grid step and 2 sigma from S.
+                assert!(s.value(*p) < 0.0);
+                let d = (p.length() - 0.5).abs().min((p.length() - 1.5).abs());
+                assert!(
+                    d >= g && d >= 2.0 * sigma - 1e-12,
+                    "{p} at {d} from S, sigma {sigma}"
+                );
+            }
+        }
+        // A wall too thin for the size: no scaffold.
+        assert!(scaffold_points(&s, Some(&Sizing::Constant(0.6))).is_empty());
+    }
+}
