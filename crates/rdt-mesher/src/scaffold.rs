@@ -34,10 +34,23 @@ pub(crate) const GRID: usize = 32;
 /// Largest block half-width (in grid steps) measured around a node.
 const MAX_BLOCK: usize = 8;
 
-/// Scaffold points of `s` for the size `size` (see the module docs), in a deterministic order.
+/// Scaffold points of `s` for the size `size` (see the module docs), in a deterministic order:
+/// on a `GRID` grid, or a finer one when that finds fewer than `FEW` points (thin solids).
 pub(crate) fn scaffold_points(s: &dyn Surface, size: Option<&Sizing>) -> Vec<DVec3> {
+    let pts = scaffold_on_grid(s, size, GRID);
+    if pts.len() >= FEW {
+        return pts;
+    }
+    scaffold_on_grid(s, size, FINE_GRID)
+}
+
+/// Finer grid of `scaffold_points`.
+const FINE_GRID: usize = 48;
+/// Fewer scaffold points than this on the `GRID` grid: try the `FINE_GRID` one.
+const FEW: usize = 16;
+
+fn scaffold_on_grid(s: &dyn Surface, size: Option<&Sizing>, n: usize) -> Vec<DVec3> {
     let ball = s.bounding_sphere();
-    let n = GRID;
     let g = 2.0 * ball.radius / (n - 1) as f64;
     let lo = ball.center - DVec3::splat(ball.radius);
     let node = |i: usize, j: usize, k: usize| lo + DVec3::new(i as f64, j as f64, k as f64) * g;
@@ -98,7 +111,7 @@ pub(crate) fn scaffold_points(s: &dyn Surface, size: Option<&Sizing>) -> Vec<DVe
         .collect();
     // Keep the ridges of the width (a discrete medial axis of the inside), where the block is
     // at least twice sigma wide.
-    let mut out = Vec::new();
+    let mut out: Vec<(usize, DVec3)> = Vec::new();
     for k in 1..n - 1 {
         for j in 1..n - 1 {
             for i in 1..n - 1 {
@@ -116,13 +129,27 @@ pub(crate) fn scaffold_points(s: &dyn Surface, size: Option<&Sizing>) -> Vec<DVe
                     .iter()
                     .all(|&o| width[p - o] as usize <= w && width[p + o] as usize <= w);
                 if ridge {
-                    out.push(q);
+                    out.push((w, q));
                 }
             }
         }
     }
-    out
+    // Thin the ridge to points about `SPACING` x their block half-width apart, widest first
+    // (a plateau of the width would otherwise give a solid of points).
+    let spacing = SPACING;
+    out.sort_by_key(|&(w, _)| std::cmp::Reverse(w)); // stable: grid order among equals
+    let mut kept: Vec<(usize, DVec3)> = Vec::new();
+    for (w, q) in out {
+        let r = spacing * w as f64 * g;
+        if kept.iter().all(|&(_, p)| p.distance_squared(q) >= r * r) {
+            kept.push((w, q));
+        }
+    }
+    kept.into_iter().map(|(_, q)| q).collect()
 }
+
+/// Spacing of the kept scaffold points, in multiples of their block half-width.
+const SPACING: f64 = 1.0;
 
 #[cfg(test)]
 mod tests {
