@@ -200,7 +200,8 @@ pub struct MeshResult {
     pub mesh: TriMesh,
     /// `balls[i]` circumscribes `mesh.triangles[i]`.
     pub balls: Vec<SurfaceBall>,
-    /// The sample E (all vertices of Del(E)), for two-pass sizing and reports.
+    /// The sample E (the vertices of Del(E) on S: scaffold points left out), for two-pass
+    /// sizing and reports.
     pub sample: Vec<DVec3>,
     pub stats: Stats,
 }
@@ -1691,6 +1692,7 @@ impl<'a> Refiner<'a> {
         st.criteria_met = all_good && unmet.is_empty();
         st.unmet = unmet;
         let sample = (0..self.tri.num_vertices() as u32)
+            .filter(|&v| !self.is_scaffold(v))
             .map(|v| self.tri.point(v))
             .collect();
         MeshResult {
@@ -1834,7 +1836,8 @@ mod tests {
         for out in [&on, &off] {
             assert!(out.stats.criteria_met);
             assert_eq!(out.stats.sample_points, out.mesh.vertices.len());
-            for p in &out.mesh.vertices {
+            assert_eq!(out.sample.len(), out.stats.sample_points);
+            for p in out.mesh.vertices.iter().chain(&out.sample) {
                 assert!(s.value(*p).abs() < 1e-5);
             }
         }
