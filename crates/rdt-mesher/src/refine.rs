@@ -572,7 +572,9 @@ impl<'a> Refiner<'a> {
         self.control.dedup();
         self.stats.control_points = self.control.len();
         if self.opts.scaffold {
-            self.insert_scaffold()?;
+            let lo = pts.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+            let hi = pts.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+            self.insert_scaffold((lo, hi))?;
         }
         self.ensure_vertex_slots();
         // Full scan of Del(E).
@@ -581,8 +583,13 @@ impl<'a> Refiner<'a> {
     }
 
     /// Insert the scaffold points (see `crate::scaffold`) and record their signs.
-    fn insert_scaffold(&mut self) -> Result<(), MeshError> {
-        let pts = crate::scaffold::scaffold_points(self.s, self.opts.criteria.size.as_ref());
+    /// `extent`: a box around the initial sample (the grid's domain).
+    fn insert_scaffold(&mut self, extent: (DVec3, DVec3)) -> Result<(), MeshError> {
+        let pts = crate::scaffold::scaffold_points(
+            self.s,
+            self.opts.criteria.size.as_ref(),
+            Some(extent),
+        );
         let t = Instant::now();
         for p in pts {
             let sign = if self.s.value(p) < 0.0 { -1 } else { 1 };

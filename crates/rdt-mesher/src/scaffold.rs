@@ -18,7 +18,7 @@
 //!   alone. If it fails, the triangulation is rebuilt from the samples alone and the
 //!   refinement resumes (`Refiner::drop_scaffold`): the paper's algorithm, unaccelerated.
 //!
-//! The points: nodes of a grid over the bounding ball, inside S (value < 0), on the ridges of
+//! The points: nodes of a grid over a box around the initial sample, inside S (value < 0), on the ridges of
 //! the half-width of the largest all-inside block of nodes around them (a discrete medial axis
 //! of the solid), where that block is at least twice sigma wide (so that the scaffold stays
 //! clear of the final sample's balls and adds no refinement of its own). Outside points were
@@ -36,12 +36,29 @@ const MAX_BLOCK: usize = 8;
 
 /// Scaffold points of `s` for the size `size` (see the module docs), in a deterministic order:
 /// on a `GRID` grid, or a finer one when that finds fewer than `FEW` points (thin solids).
-pub(crate) fn scaffold_points(s: &dyn Surface, size: Option<&Sizing>) -> Vec<DVec3> {
-    let pts = scaffold_on_grid(s, size, GRID);
+/// The grid covers `extent` (a box around the initial sample, enlarged by 10%), or the
+/// bounding ball's cube.
+pub(crate) fn scaffold_points(
+    s: &dyn Surface,
+    size: Option<&Sizing>,
+    extent: Option<(DVec3, DVec3)>,
+) -> Vec<DVec3> {
+    let ball = s.bounding_sphere();
+    let (center, half) = match extent {
+        Some((lo, hi)) if (lo.is_finite() && hi.is_finite() && hi.cmpge(lo).all()) => {
+            let half = (0.55 * (hi - lo).max_element()).min(ball.radius);
+            (0.5 * (lo + hi), half)
+        }
+        _ => (ball.center, ball.radius),
+    };
+    if half.is_nan() || half <= 0.0 {
+        return Vec::new();
+    }
+    let pts = scaffold_on_grid(s, size, center, half, GRID);
     if pts.len() >= FEW {
         return pts;
     }
-    scaffold_on_grid(s, size, FINE_GRID)
+    scaffold_on_grid(s, size, center, half, FINE_GRID)
 }
 
 /// Finer grid of `scaffold_points`.
@@ -49,10 +66,16 @@ const FINE_GRID: usize = 48;
 /// Fewer scaffold points than this on the `GRID` grid: try the `FINE_GRID` one.
 const FEW: usize = 16;
 
-fn scaffold_on_grid(s: &dyn Surface, size: Option<&Sizing>, n: usize) -> Vec<DVec3> {
-    let ball = s.bounding_sphere();
-    let g = 2.0 * ball.radius / (n - 1) as f64;
-    let lo = ball.center - DVec3::splat(ball.radius);
+/// `n`^3 nodes over the cube of center `center` and half-side `half`.
+fn scaffold_on_grid(
+    s: &dyn Surface,
+    size: Option<&Sizing>,
+    center: DVec3,
+    half: f64,
+    n: usize,
+) -> Vec<DVec3> {
+    let g = 2.0 * half / (n - 1) as f64;
+    let lo = center - DVec3::splat(half);
     let node = |i: usize, j: usize, k: usize| lo + DVec3::new(i as f64, j as f64, k as f64) * g;
     // Inside nodes (value < 0); NaN and 0 count as not inside.
     let inside: Vec<bool> = (0..n * n * n)
@@ -134,13 +157,14 @@ fn scaffold_on_grid(s: &dyn Surface, size: Option<&Sizing>, n: usize) -> Vec<DVe
             }
         }
     }
-    // Thin the ridge to points about `SPACING` x their block half-width apart, widest first
-    // (a plateau of the width would otherwise give a solid of points).
+    // Thin the ridge to points about `SPACING` x (their block half-width + 1), i.e. about their
+    // distance to S, apart, widest first (ridges of a grid are thick and broken, and more
+    // points than that slow the refinement down again).
     let spacing = SPACING;
     out.sort_by_key(|&(w, _)| std::cmp::Reverse(w)); // stable: grid order among equals
     let mut kept: Vec<(usize, DVec3)> = Vec::new();
     for (w, q) in out {
-        let r = spacing * w as f64 * g;
+        let r = spacing * (w + 1) as f64 * g;
         if kept.iter().all(|&(_, p)| p.distance_squared(q) >= r * r) {
             kept.push((w, q));
         }
@@ -148,7 +172,7 @@ fn scaffold_on_grid(s: &dyn Surface, size: Option<&Sizing>, n: usize) -> Vec<DVe
     kept.into_iter().map(|(_, q)| q).collect()
 }
 
-/// Spacing of the kept scaffold points, in multiples of their block half-width.
+/// Spacing of the kept scaffold points, in multiples of their block half-width + 1.
 const SPACING: f64 = 1.0;
 
 #[cfg(test)]
@@ -175,7 +199,7 @@ mod tests {
         let s = Shell;
         let g = 4.0 / (GRID - 1) as f64;
         for sigma in [0.01, 0.05, 0.1] {
-            let pts = scaffold_points(&s, Some(&Sizing::Constant(sigma)));
+            let pts = scaffold_points(&s, Some(&Sizing::Constant(sigma)), None);
             assert!(!pts.is_empty(), "sigma {sigma}");
             for p in &pts {
                 // Inside the wall 0.5 < |p| < 1.5, at least a grid step and 2 sigma from S.
@@ -188,6 +212,6 @@ mod tests {
             }
         }
         // A wall too thin for the size: no scaffold.
-        assert!(scaffold_points(&s, Some(&Sizing::Constant(0.6))).is_empty());
+        assert!(scaffold_points(&s, Some(&Sizing::Constant(0.6)), None).is_empty());
     }
 }
