@@ -1824,6 +1824,34 @@ mod tests {
         }
     }
 
+    /// A run stopped early by a budget, while facets at scaffold points remain, leaves them out
+    /// of the mesh (every output vertex is on S) and says so among the unmet criteria.
+    #[test]
+    fn budget_stop_leaves_scaffold_facets_out() {
+        let s = catalog::surface("torus").unwrap();
+        let mut saw_scaffold_facets = false;
+        for max in [120, 200, 400, 800] {
+            let out = mesh(
+                &s,
+                &MeshOptions {
+                    max_vertices: Some(max),
+                    ..torus_opts()
+                },
+            )
+            .unwrap();
+            assert!(out.stats.stopped_by.is_some());
+            assert!(out.stats.scaffold_points > 0);
+            for p in out.mesh.vertices.iter().chain(&out.sample) {
+                assert!(s.value(*p).abs() < 1e-5, "{p} is not on S");
+            }
+            saw_scaffold_facets |= out.stats.unmet.iter().any(|u| u.starts_with("scaffold"));
+        }
+        assert!(
+            saw_scaffold_facets,
+            "no budget stopped with facets at scaffold points"
+        );
+    }
+
     /// Scaffold or not, the output is a mesh of S: every vertex on S, the same topology, and
     /// sizes within a few percent.
     #[test]
