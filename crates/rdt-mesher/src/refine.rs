@@ -1173,12 +1173,11 @@ impl<'a> Refiner<'a> {
 
     /// Refinement steps in batches: take up to `batch_size()` fresh entries from the queue
     /// (worst first), find their conflict zones at once (in parallel when there are several
-    /// threads: a read-only search), insert in queue order those whose zones touch no zone
-    /// inserted before them in the batch (the others go back to the queue), then update
-    /// Del_S(E) for all created cells at once. Disjoint zones (cells and their outside
-    /// neighbors) stay exact after the earlier insertions: a new cell's circumball lies in the
-    /// union of the circumballs of the destroyed cell and the outside neighbor it replaces, so a
-    /// later point in conflict with it would be in conflict with one of those. The batches
+    /// threads: a read-only search), insert in queue order those whose cells and outside
+    /// neighbors include no cell destroyed by a zone inserted before them in the batch (the
+    /// others go back to the queue), then update Del_S(E) for all created cells at once. Such
+    /// zones stay exact after the earlier insertions (they may share outside neighbors; proof
+    /// in `delaunay3::Triangulation::insert_cavity`). The batches
     /// depend only on the queue, never on the thread count, so the mesh is the same on any
     /// number of threads. Returns false when the queue is empty or a budget stopped the run.
     fn refine_batch(&mut self, since_progress: &mut usize) -> Result<bool, MeshError> {
