@@ -89,22 +89,8 @@ impl Criteria {
         }
         let circle = (self.min_angle_deg > 0.0 || self.max_distance.is_some())
             .then(|| triangle_circumcircle(tri));
-        if let (true, Some((_, rc))) = (self.min_angle_deg > 0.0, circle) {
-            // radius-edge ratio: R / l_min = 1 / (2 sin(theta_min)).
-            let lmin = (tri[1] - tri[0])
-                .length()
-                .min((tri[2] - tri[1]).length())
-                .min((tri[0] - tri[2]).length());
-            let bound = 1.0 / (2.0 * self.min_angle_deg.to_radians().sin());
-            if lmin > 0.0 && rc.is_finite() {
-                // Slightly relaxed so that facets at exactly the bound are not refined forever.
-                let ratio = (rc / lmin) / bound;
-                if ratio > 1.0 + 1e-12 {
-                    bad = bad.max(ratio);
-                }
-            } else {
-                bad = bad.max(f64::MAX / 4.0);
-            }
+        if let Some((_, rc)) = circle {
+            bad = bad.max(self.angle_badness(tri, rc));
         }
         if let (Some(d), Some((cc, _))) = (self.max_distance, circle) {
             let dist = (cc - c).length();
@@ -113,6 +99,90 @@ impl Criteria {
             }
         }
         bad
+    }
+
+    /// A lower bound of [`Criteria::badness`] over every ball circumscribing the triangle
+    /// `tri`, known without the ball: the angle criterion (a property of the triangle), and
+    /// with a constant sigma the triangle's circumradius over sigma (a circumscribing ball
+    /// is at least as large as the circumcircle). The mesher uses it to delay the oracle's
+    /// crossing for facets that are bad anyway.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use rdt_mesher::Criteria;
+    /// let c = Criteria::uniform(0.1);
+    /// let tri = [DVec3::ZERO, DVec3::X, DVec3::Y];
+    /// // Circumradius sqrt(2)/2 over sigma 0.1, whatever the ball's center.
+    /// let lb = c.badness_lower_bound(tri);
+    /// assert!((lb - 0.5f64.sqrt() / 0.1).abs() < 1e-12);
+    /// assert!(c.badness(tri, DVec3::new(0.5, 0.5, 0.3), 0.5f64.sqrt().hypot(0.3)) >= lb);
+    /// ```
+    pub fn badness_lower_bound(&self, tri: [DVec3; 3]) -> f64 {
+        self.facet_bound(tri).0
+    }
+
+    /// [`Criteria::badness_lower_bound`] and the triangle's circumcenter (when the angle or
+    /// distance criterion needs it, else NaN): the part of the badness that does not depend
+    /// on the ball, for [`Criteria::badness_from_bound`].
+    pub(crate) fn facet_bound(&self, tri: [DVec3; 3]) -> (f64, DVec3) {
+        let constant = match self.size {
+            Some(Sizing::Constant(s)) => Some(s),
+            _ => None,
+        };
+        if self.min_angle_deg <= 0.0 && self.max_distance.is_none() && constant.is_none() {
+            return (0.0, DVec3::NAN);
+        }
+        let (cc, rc) = triangle_circumcircle(tri);
+        let mut bad: f64 = 0.0;
+        if let Some(s) = constant
+            && rc.is_finite()
+        {
+            bad = rc / s;
+        }
+        (bad.max(self.angle_badness(tri, rc)), cc)
+    }
+
+    /// [`Criteria::badness_with_sigma`] from the facet's [`Criteria::facet_bound`] `(lb, cc)`:
+    /// the same value, up to rounding (with a constant sigma the bound's rc / sigma is at most
+    /// r / sigma).
+    pub(crate) fn badness_from_bound(
+        &self,
+        (lb, cc): (f64, DVec3),
+        c: DVec3,
+        r: f64,
+        sigma: Option<f64>,
+    ) -> f64 {
+        let mut bad = lb;
+        if let Some(sigma) = sigma {
+            bad = bad.max(r / sigma);
+        }
+        if let Some(d) = self.max_distance {
+            let dist = (cc - c).length();
+            if dist.is_finite() {
+                bad = bad.max(dist / d);
+            }
+        }
+        bad
+    }
+
+    /// The angle criterion's badness of `tri` with circumradius `rc` (0 when it holds or is
+    /// off): the radius-edge ratio over its bound, R / l_min = 1 / (2 sin(theta_min)).
+    fn angle_badness(&self, tri: [DVec3; 3], rc: f64) -> f64 {
+        if self.min_angle_deg <= 0.0 {
+            return 0.0;
+        }
+        let lmin = (tri[1] - tri[0])
+            .length()
+            .min((tri[2] - tri[1]).length())
+            .min((tri[0] - tri[2]).length());
+        let bound = 1.0 / (2.0 * self.min_angle_deg.to_radians().sin());
+        if lmin > 0.0 && rc.is_finite() {
+            // Slightly relaxed so that facets at exactly the bound are not refined forever.
+            let ratio = (rc / lmin) / bound;
+            if ratio > 1.0 + 1e-12 { ratio } else { 0.0 }
+        } else {
+            f64::MAX / 4.0
+        }
     }
 }
 
@@ -178,5 +248,38 @@ mod tests {
         let t = [DVec3::ZERO, DVec3::X, DVec3::Y];
         assert!(c.badness(t, DVec3::ZERO, 0.2) > 1.0);
         assert!(c.badness(t, DVec3::ZERO, 0.05) <= 1.0);
+    }
+
+    proptest::proptest! {
+        /// For any triangle and any ball through its vertices (centered on the line through
+        /// its circumcenter, normal to its plane), the lower bound is at most the badness, and
+        /// the badness from the bound equals the direct one, up to rounding.
+        #[test]
+        fn lower_bound_holds_for_every_circumscribing_ball(
+            a in proptest::array::uniform3(-1.0f64..1.0),
+            b in proptest::array::uniform3(-1.0f64..1.0),
+            c in proptest::array::uniform3(-1.0f64..1.0),
+            h in -3.0f64..3.0,
+            sigma in 0.01f64..2.0,
+            angle in proptest::sample::select(vec![0.0, 20.0, 30.0]),
+            dist in proptest::option::of(0.01f64..1.0),
+        ) {
+            let tri = [DVec3::from(a), DVec3::from(b), DVec3::from(c)];
+            let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+            proptest::prop_assume!(n.length() > 1e-6);
+            let (cc, _) = triangle_circumcircle(tri);
+            let center = cc + n.normalize() * h;
+            let r = tri.iter().map(|v| v.distance(center)).fold(0.0, f64::max);
+            let crit = Criteria {
+                size: Some(Sizing::Constant(sigma)),
+                min_angle_deg: angle,
+                max_distance: dist,
+            };
+            let direct = crit.badness(tri, center, r);
+            let lb = crit.badness_lower_bound(tri);
+            proptest::prop_assert!(lb <= direct * (1.0 + 1e-12), "{lb} > {direct}");
+            let via = crit.badness_from_bound(crit.facet_bound(tri), center, r, Some(sigma));
+            proptest::prop_assert!((via - direct).abs() <= 1e-12 * direct.max(1.0), "{via} vs {direct}");
+        }
     }
 }

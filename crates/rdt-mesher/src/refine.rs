@@ -253,6 +253,12 @@ struct PendingFacet {
     fp: f64,
     q: DVec3,
     fq: f64,
+    /// A lower bound of the facet's badness known without its ball, and the facet's
+    /// circumcenter (see `Refiner::known_badness`).
+    lb: f64,
+    cc: DVec3,
+    /// Bad anyway (`lb > LAZY_MIN`, bipolar oracle): its crossing is delayed.
+    lazy: bool,
 }
 
 /// Running mean of the wall time of one oracle call (over the last ~thousand batches).
@@ -290,6 +296,10 @@ const PARALLEL_CELLS: usize = 256;
 
 /// Badness of a restricted facet with a scaffold vertex (refined before anything else).
 const SCAFFOLD_BAD: f64 = 1e300;
+
+/// A facet whose badness is known to exceed this without its ball is registered lazily
+/// (`RFacet::lazy`): the margin above 1 covers the rounding of r >= circumradius.
+const LAZY_MIN: f64 = 1.0 + 1e-9;
 
 /// Queue length below which `Refiner::purge_stale` leaves stale entries alone.
 const PURGE_MIN: usize = 4096;
@@ -340,7 +350,7 @@ pub fn mesh_with_progress(
     rayon::scope(|_| {
         let mut r = Refiner::new(surface, opts);
         r.run(progress)?;
-        Ok(r.finish())
+        r.finish()
     })
 }
 
@@ -436,6 +446,9 @@ pub(crate) struct Refiner<'a> {
     start: Instant,
     values: u64,
     crossing_calls: u64,
+    /// Delay the crossing of facets known bad without it (`RFacet::lazy`; bipolar oracle).
+    /// Off only in tests that compare with the eager computation.
+    lazy_balls: bool,
 }
 
 impl<'a> Refiner<'a> {
@@ -483,6 +496,7 @@ impl<'a> Refiner<'a> {
             start: Instant::now(),
             values: 0,
             crossing_calls: 0,
+            lazy_balls: true,
         }
     }
 
@@ -825,6 +839,9 @@ impl<'a> Refiner<'a> {
         if bipolar && inside(fp) == inside(fq) {
             return None;
         }
+        let (lb, cc) = self.known_badness(verts);
+        // Only with the bipolar oracle: its facet orientation is known without the crossing.
+        let lazy = self.lazy_balls && bipolar && lb > LAZY_MIN;
         Some(PendingFacet {
             f,
             m,
@@ -833,13 +850,122 @@ impl<'a> Refiner<'a> {
             fp,
             q,
             fq,
+            lb,
+            cc,
+            lazy,
         })
+    }
+
+    /// A lower bound of the badness of any surface Delaunay ball of the facet `verts` (a
+    /// facet at a scaffold point is always bad, else [`crate::Criteria::badness_lower_bound`]),
+    /// and its circumcenter.
+    fn known_badness(&self, verts: [VertexId; 3]) -> (f64, DVec3) {
+        let (mut lb, cc) = self
+            .opts
+            .criteria
+            .facet_bound(verts.map(|v| self.tri.point(v)));
+        if self.scaffold_count > 0 && verts.iter().any(|&v| self.is_scaffold(v)) {
+            lb = SCAFFOLD_BAD;
+        }
+        (lb, cc)
+    }
+
+    /// Compute the surface Delaunay ball of the lazy facet in slot `idx` (`RFacet::lazy`)
+    /// and store it. Its cells are live (a fresh entry's facet is registered, and a
+    /// destroyed cell's facets are removed), so its dual is the one it was registered with.
+    /// Returns the resolved facet.
+    fn resolve_lazy(&mut self, idx: u32, rf: RFacet) -> Result<RFacet, MeshError> {
+        debug_assert!(rf.lazy);
+        let f = rf.facet;
+        let m = self.tri.mirror_facet(f);
+        let verts = self.tri.facet_vertices(f);
+        let (p, fp, q, fq) = self
+            .clipped_dual(f, m, verts)
+            .expect("a registered facet has a clipped dual");
+        let (lb, cc) = self.known_badness(verts);
+        let pf = PendingFacet {
+            f,
+            m,
+            verts,
+            p,
+            fp,
+            q,
+            fq,
+            lb,
+            cc,
+            lazy: false,
+        };
+        // (Not timed: a clock read would cost a tenth of the call.)
+        self.crossing_calls += 1;
+        let hit = self.resolve_facet(&pf, &mut Vec::new());
+        let (center, _) = hit.expect("the bipolar oracle always finds a crossing");
+        if !center.is_finite() {
+            return Err(OracleError::NaN(center.x, center.y, center.z).into());
+        }
+        let (radius, bad) = self.ball_badness(verts, (lb, cc), center)?;
+        let slot = self
+            .restricted
+            .get_mut(idx, rf.version)
+            .expect("resolve_lazy takes a live facet");
+        slot.center = center;
+        slot.radius = radius;
+        // Bad anyway (the bound was > 1), up to rounding: then it stays a bad facet.
+        slot.bad = bad.max(rf.bad);
+        slot.lazy = false;
+        Ok(*slot)
+    }
+
+    /// Resolve every lazy facet left (after a budget stop, or before a pass that reads the
+    /// balls of all facets).
+    fn resolve_all_lazy(&mut self) -> Result<(), MeshError> {
+        let lazy: Vec<(u32, RFacet)> = self
+            .restricted
+            .iter()
+            .filter(|(_, _, rf)| rf.lazy)
+            .map(|(i, _, rf)| (i, *rf))
+            .collect();
+        for (idx, rf) in lazy {
+            self.resolve_lazy(idx, rf)?;
+        }
+        Ok(())
+    }
+
+    /// The radius and badness of the surface Delaunay ball of `verts` centered at `center`,
+    /// from the facet's `known_badness`.
+    fn ball_badness(
+        &self,
+        verts: [VertexId; 3],
+        bound: (f64, DVec3),
+        center: DVec3,
+    ) -> Result<(f64, f64), MeshError> {
+        let pts = verts.map(|v| self.tri.point(v));
+        let radius = pts.iter().map(|v| v.distance(center)).fold(0.0, f64::max);
+        let sigma = self.opts.criteria.size.as_ref().map(|s| s.at(center));
+        if let (Some(crate::Sizing::Field(_)), Some(s)) = (&self.opts.criteria.size, sigma)
+            && !(s > 0.0 && s.is_finite())
+        {
+            return Err(MeshError::InvalidSizeField {
+                value: s,
+                at: center,
+            });
+        }
+        // The bound includes SCAFFOLD_BAD for a facet at a scaffold point: never kept (see
+        // `crate::scaffold`).
+        let bad = self
+            .opts
+            .criteria
+            .badness_from_bound(bound, center, radius, sigma);
+        Ok((radius, bad))
     }
 
     /// The oracle half of a facet test (pure: may run on any thread): the surface Delaunay
     /// ball's center and whether the dual leaves `f.cell` outward (from inside S to outside).
+    /// A lazy facet (`pf.lazy`) gets a NaN center: its crossing is delayed.
     fn resolve_facet(&self, pf: &PendingFacet, buf: &mut Vec<DVec3>) -> Option<(DVec3, bool)> {
         let PendingFacet { p, fp, q, fq, .. } = *pf;
+        if pf.lazy {
+            return Some((DVec3::NAN, inside(fp)));
+        }
         match self.opts.oracle {
             OracleKind::Bipolar => {
                 // Values on the ball boundary are positive by contract; pass a finite one.
@@ -888,11 +1014,12 @@ impl<'a> Refiner<'a> {
             self.pending_buf = pending;
             return Ok(());
         }
-        self.crossing_calls += pending.len() as u64;
+        let eager = pending.iter().filter(|pf| !pf.lazy).count();
+        self.crossing_calls += eager as u64;
         let t = Instant::now();
         let mut hits = std::mem::take(&mut self.hits_buf);
         hits.clear();
-        if self.count_parallel(self.parallel_worthwhile(pending.len(), self.crossing_cost)) {
+        if self.count_parallel(self.parallel_worthwhile(eager, self.crossing_cost)) {
             use rayon::prelude::*;
             let this = &*self;
             pending
@@ -908,7 +1035,7 @@ impl<'a> Refiner<'a> {
         }
         let dt = t.elapsed();
         self.t_oracle += dt;
-        self.crossing_cost.observe(dt, pending.len());
+        self.crossing_cost.observe(dt, eager);
         for (pf, hit) in pending.iter().zip(&hits) {
             if let Some(hit) = *hit {
                 self.register_facet(pf, hit)?;
@@ -938,28 +1065,18 @@ impl<'a> Refiner<'a> {
         (center, outward_from_cell): (DVec3, bool),
     ) -> Result<(), MeshError> {
         let PendingFacet { f, m, verts, .. } = *pf;
-        if !center.is_finite() {
-            return Err(OracleError::NaN(center.x, center.y, center.z).into());
-        }
         let key = sorted3(verts);
-        let pts = verts.map(|v| self.tri.point(v));
-        let radius = pts.iter().map(|v| v.distance(center)).fold(0.0, f64::max);
-        let sigma = self.opts.criteria.size.as_ref().map(|s| s.at(center));
-        if let (Some(crate::Sizing::Field(_)), Some(s)) = (&self.opts.criteria.size, sigma)
-            && !(s > 0.0 && s.is_finite())
-        {
-            return Err(MeshError::InvalidSizeField {
-                value: s,
-                at: center,
-            });
-        }
-        let mut bad = self
-            .opts
-            .criteria
-            .badness_with_sigma(pts, center, radius, sigma);
-        if self.scaffold_count > 0 && verts.iter().any(|&v| self.is_scaffold(v)) {
-            bad = bad.max(SCAFFOLD_BAD); // never kept: see `crate::scaffold`
-        }
+        let lazy = pf.lazy;
+        let (center, radius, bad) = if lazy {
+            // Never read before `resolve_lazy`.
+            (DVec3::NAN, 0.0, pf.lb)
+        } else {
+            if !center.is_finite() {
+                return Err(OracleError::NaN(center.x, center.y, center.z).into());
+            }
+            let (radius, bad) = self.ball_badness(verts, (pf.lb, pf.cc), center)?;
+            (center, radius, bad)
+        };
         let oriented = if outward_from_cell {
             verts
         } else {
@@ -973,6 +1090,7 @@ impl<'a> Refiner<'a> {
             radius,
             bad,
             version: self.version,
+            lazy,
         };
         let idx = self.restricted.insert(key, rf, m);
         let need = f.cell.max(m.cell) as usize + 1;
@@ -1189,10 +1307,13 @@ impl<'a> Refiner<'a> {
         let sep = NEAR_FACTOR;
         while batch.len() < k {
             let Some(e) = self.queue.pop() else { break };
-            let Some(rf) = self.restricted.get(e.idx, e.version).copied() else {
+            let Some(mut rf) = self.restricted.get(e.idx, e.version).copied() else {
                 self.stale_in_queue = self.stale_in_queue.saturating_sub(1);
                 continue;
             };
+            if rf.lazy {
+                rf = self.resolve_lazy(e.idx, rf)?;
+            }
             if e.forced && rf.radius < self.manifold_floor(rf.center) {
                 continue;
             }
@@ -1430,7 +1551,7 @@ impl<'a> Refiner<'a> {
                 continue;
             }
             // Section 6.6.1: the manifold patch.
-            if self.opts.manifold && self.push_nonmanifold() > 0 {
+            if self.opts.manifold && self.push_nonmanifold()? > 0 {
                 continue;
             }
             if self.scaffold_count > 0 && !self.scaffold_clear() {
@@ -1488,13 +1609,14 @@ impl<'a> Refiner<'a> {
 
     /// Queue (forced) every restricted facet at a non-manifold edge or vertex, or at a
     /// boundary edge. Returns how many facets were queued.
-    fn push_nonmanifold(&mut self) -> usize {
+    fn push_nonmanifold(&mut self) -> Result<usize, MeshError> {
+        self.resolve_all_lazy()?;
         self.stats.manifold_passes += 1;
         let (bad_edges, bad_vertices) = self.nonmanifold_elements();
         if bad_edges.is_empty() && bad_vertices.is_empty() {
             // Del_S(E) changes only with the vertices: `finish` reuses this.
             self.last_nonmanifold = Some((self.tri.num_vertices(), (bad_edges, bad_vertices)));
-            return 0;
+            return Ok(0);
         }
         let mut keys: Vec<(u32, RFacet)> = Vec::new();
         for (idx, k, rf) in self.restricted.iter() {
@@ -1518,7 +1640,7 @@ impl<'a> Refiner<'a> {
                 self.stats.stopped_by = Some(format!(
                     "manifold patch: no progress in {MANIFOLD_STALL_PASSES} passes ({bad} non-manifold elements left)"
                 ));
-                return 0;
+                return Ok(0);
             }
         }
         keys.retain(|(_, rf)| rf.radius >= self.manifold_floor(rf.center));
@@ -1532,7 +1654,7 @@ impl<'a> Refiner<'a> {
                 forced: true,
             });
         }
-        n
+        Ok(n)
     }
 
     /// Facets smaller than this are not refined by the manifold patch: a tenth of sigma(c)
@@ -1581,7 +1703,9 @@ impl<'a> Refiner<'a> {
         Ok(missing + extra + invalid)
     }
 
-    fn finish(mut self) -> MeshResult {
+    fn finish(mut self) -> Result<MeshResult, MeshError> {
+        // Lazy facets are left only by a budget stop: they are in the mesh, with their balls.
+        self.resolve_all_lazy()?;
         let mut facets = self.sorted_facets();
         // A run stopped by a budget may still have facets at scaffold points: not part of
         // the mesh of S (the stop is reported; the criteria are unmet anyway).
@@ -1701,7 +1825,7 @@ impl<'a> Refiner<'a> {
             .filter(|&v| !self.is_scaffold(v))
             .map(|v| self.tri.point(v))
             .collect();
-        MeshResult {
+        Ok(MeshResult {
             mesh: TriMesh {
                 vertices,
                 triangles,
@@ -1709,7 +1833,7 @@ impl<'a> Refiner<'a> {
             balls,
             sample,
             stats: self.stats,
-        }
+        })
     }
 }
 
@@ -1809,7 +1933,7 @@ mod tests {
             0,
             "incremental Del_S(E) differs from a full scan"
         );
-        let out = r.finish();
+        let out = r.finish().unwrap();
         assert!(out.stats.criteria_met, "{:?}", out.stats.unmet);
         assert_eq!(
             crate::topology::nonmanifold_elements(&out.mesh.triangles),
@@ -1849,6 +1973,73 @@ mod tests {
             saw_scaffold_facets,
             "no budget stopped with facets at scaffold points"
         );
+    }
+
+    /// Every surface Delaunay ball of `out` is centered on S and passes through its facet's
+    /// vertices (a lazy facet resolved: no NaN or placeholder left).
+    fn assert_balls_on_s(s: &dyn Surface, out: &MeshResult) {
+        assert_eq!(out.balls.len(), out.mesh.triangles.len());
+        for (t, b) in out.mesh.triangles.iter().zip(&out.balls) {
+            assert!(b.center.is_finite() && b.radius > 0.0, "{b:?}");
+            assert!(s.value(b.center).abs() < 1e-5, "center {} off S", b.center);
+            for &v in t {
+                let d = out.mesh.vertices[v as usize].distance(b.center);
+                assert!(
+                    (d - b.radius).abs() <= 1e-9 * b.radius.max(1.0),
+                    "{d} vs {b:?}"
+                );
+            }
+        }
+    }
+
+    /// Delaying the crossing of facets known bad without it changes the refinement order
+    /// only: both runs meet the criteria with a valid Del_S(E) (audit) and balls on S, at
+    /// sizes within 5%, and the lazy run calls the crossing oracle less.
+    #[test]
+    fn lazy_balls_change_the_order_not_the_guarantees() {
+        let s = catalog::surface("torus").unwrap();
+        let opts = torus_opts();
+        let mut runs = Vec::new();
+        for lazy in [false, true] {
+            let mut r = Refiner::new(&s, &opts);
+            r.lazy_balls = lazy;
+            r.run(&mut |_| {}).unwrap();
+            assert_eq!(r.audit().unwrap(), 0, "lazy {lazy}: Del_S(E) differs");
+            // The audit's full scan registered everything again, lazily or not: refine the
+            // facets it queued (none should be bad), then finish.
+            r.refine_loop(&mut |_| {}).unwrap();
+            let out = r.finish().unwrap();
+            assert!(out.stats.criteria_met, "lazy {lazy}: {:?}", out.stats.unmet);
+            assert_balls_on_s(&s, &out);
+            runs.push((out.stats.vertices, out.stats.oracle_crossing_calls));
+        }
+        let (eager, lazy) = (runs[0], runs[1]);
+        let ratio = lazy.0 as f64 / eager.0 as f64;
+        assert!(
+            (0.95..=1.05).contains(&ratio),
+            "sizes {eager:?} vs {lazy:?}"
+        );
+        assert!(lazy.1 < eager.1, "crossing calls {eager:?} vs {lazy:?}");
+    }
+
+    /// A budget stop leaves lazy facets in Del_S(E): `finish` computes their balls.
+    #[test]
+    fn budget_stop_resolves_lazy_balls() {
+        let s = catalog::surface("torus").unwrap();
+        for max in [150, 700] {
+            let opts = MeshOptions {
+                max_vertices: Some(max),
+                scaffold: false,
+                ..torus_opts()
+            };
+            let mut r = Refiner::new(&s, &opts);
+            r.run(&mut |_| {}).unwrap();
+            let lazy = r.restricted.iter().filter(|(_, _, f)| f.lazy).count();
+            assert!(lazy > 0, "max {max}: no lazy facet left to resolve");
+            let out = r.finish().unwrap();
+            assert!(out.stats.stopped_by.is_some());
+            assert_balls_on_s(&s, &out);
+        }
     }
 
     /// Scaffold or not, the output is a mesh of S: every vertex on S, the same topology, and

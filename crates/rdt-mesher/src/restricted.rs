@@ -24,6 +24,10 @@ pub(crate) struct RFacet {
     pub radius: f64,
     pub bad: f64,
     pub version: u32,
+    /// The surface Delaunay ball is not computed yet: the facet was known bad without it
+    /// (`Refiner::test_facets`). Then `center` is NaN, `radius` 0 and `bad` a lower bound of
+    /// its badness, > 1. Resolved (`Refiner::resolve_lazy`) when its queue entry is popped.
+    pub lazy: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -61,6 +65,13 @@ impl Restricted {
     pub fn get(&self, idx: u32, version: u32) -> Option<&RFacet> {
         let s = self.slots.get(idx as usize)?;
         (s.key[0] != FREE && s.rf.version == version).then_some(&s.rf)
+    }
+
+    /// Mutable access to the facet in slot `idx` if it is live with `version`.
+    #[inline]
+    pub fn get_mut(&mut self, idx: u32, version: u32) -> Option<&mut RFacet> {
+        let s = self.slots.get_mut(idx as usize)?;
+        (s.key[0] != FREE && s.rf.version == version).then_some(&mut s.rf)
     }
 
     /// Register `rf` under `key` (which must not be registered), pointed at from the facet
@@ -128,6 +139,7 @@ mod tests {
             radius: 1.0,
             bad: 0.5,
             version,
+            lazy: false,
         }
     }
 
