@@ -35,6 +35,7 @@ mod restricted;
 mod scaffold;
 pub mod sizing;
 pub mod topology;
+mod tuner;
 
 pub use criteria::{Criteria, Sizing};
 pub use refine::{

@@ -15,6 +15,7 @@
 
 use crate::criteria::Criteria;
 use crate::restricted::{RFacet, Restricted};
+use crate::tuner::Tuner;
 use delaunay3::{
     Cavity, CellId, Changes, Facet, INFINITE_VERTEX, Insertion, Triangulation, VertexId,
 };
@@ -165,6 +166,11 @@ pub struct Stats {
     /// Refinement points whose conflict zone overlapped an earlier one of the same batch and
     /// went back to the queue (see `refine_batch`).
     pub batch_deferrals: u64,
+    /// Refinement batches whose parallel sections ran on one thread and on several: with
+    /// several threads the mode is chosen from measured speed, and never changes the mesh
+    /// (all batches are sequential on one thread).
+    pub sequential_batches: u64,
+    pub parallel_batches: u64,
     /// Scaffold points inserted (vertices of Del(E), not samples; see `MeshOptions::scaffold`).
     pub scaffold_points: usize,
     /// Times the final check of the scaffold failed and the triangulation was rebuilt from the
@@ -437,7 +443,8 @@ pub(crate) struct Refiner<'a> {
     /// Measured costs of the oracle's calls, to decide when a batch runs in parallel.
     value_cost: CostEstimate,
     crossing_cost: CostEstimate,
-    threads: usize,
+    /// Whether the parallel sections run on several threads now (see `crate::tuner`).
+    tuner: Tuner,
     control: Vec<VertexId>,
     rng: SplitMix64,
     stats: Stats,
@@ -487,7 +494,7 @@ impl<'a> Refiner<'a> {
             touch_round: 0,
             value_cost: CostEstimate::default(),
             crossing_cost: CostEstimate::default(),
-            threads: rayon::current_num_threads(),
+            tuner: Tuner::new(rayon::current_num_threads(), true),
             control: Vec::new(),
             rng: SplitMix64(opts.seed ^ 0xA076_1D64_78BD_642F),
             stats: Stats::default(),
@@ -999,7 +1006,7 @@ impl<'a> Refiner<'a> {
     fn test_facets(&mut self, pairs: &[(Facet, Facet)]) -> Result<(), MeshError> {
         let mut pending = std::mem::take(&mut self.pending_buf);
         pending.clear();
-        if pairs.len() >= PARALLEL_CELLS && self.threads > 1 {
+        if pairs.len() >= PARALLEL_CELLS && self.tuner.parallel() {
             use rayon::prelude::*;
             let this = &*self;
             let prepared: Vec<Option<PendingFacet>> = pairs
@@ -1050,7 +1057,7 @@ impl<'a> Refiner<'a> {
     /// threads (only when there are several, and the batch takes long enough to pay rayon's
     /// fork-join, a few microseconds).
     fn parallel_worthwhile(&self, n: usize, cost: CostEstimate) -> bool {
-        n >= 2 && self.threads > 1 && cost.ns_per_call() * n as f64 > PARALLEL_BATCH_NS
+        n >= 2 && self.tuner.parallel() && cost.ns_per_call() * n as f64 > PARALLEL_BATCH_NS
     }
 
     fn count_parallel(&mut self, parallel: bool) -> bool {
@@ -1202,7 +1209,7 @@ impl<'a> Refiner<'a> {
                 );
                 self.set_cell(c, info);
             }
-        } else if created.len() >= PARALLEL_CELLS && self.threads > 1 {
+        } else if created.len() >= PARALLEL_CELLS && self.tuner.parallel() {
             use rayon::prelude::*;
             let this = &*self;
             let infos: Vec<CellInfo> = created.par_iter().map(|&c| this.cell_info(c)).collect();
@@ -1230,7 +1237,7 @@ impl<'a> Refiner<'a> {
         }
         let mut pairs = std::mem::take(&mut self.pairs_buf);
         pairs.clear();
-        if created.len() >= PARALLEL_CELLS && self.threads > 1 {
+        if created.len() >= PARALLEL_CELLS && self.tuner.parallel() {
             use rayon::prelude::*;
             let this = &*self;
             let parts: Vec<Vec<(Facet, Facet)>> = created
@@ -1299,6 +1306,7 @@ impl<'a> Refiner<'a> {
     /// depend only on the queue, never on the thread count, so the mesh is the same on any
     /// number of threads. Returns false when the queue is empty or a budget stopped the run.
     fn refine_batch(&mut self, since_progress: &mut usize) -> Result<bool, MeshError> {
+        let batch_start = Instant::now();
         let k = self.batch_size();
         self.purge_stale();
         let mut batch = std::mem::take(&mut self.batch_buf);
@@ -1358,7 +1366,7 @@ impl<'a> Refiner<'a> {
         let pending_infos = std::mem::take(&mut self.pending_infos);
         let tri = Arc::clone(&self.tri);
         let ball = self.ball;
-        let threads = self.threads;
+        let parallel = self.tuner.parallel();
         let search_all = {
             let (batch, cavs, zone_infos) = (&batch, &mut cavs, &mut zone_infos);
             move || {
@@ -1375,7 +1383,7 @@ impl<'a> Refiner<'a> {
                         infos.extend(cav.new_cells(NEW).map(|v| cell_info_of(&tri, &ball, v, p)));
                         Ok(())
                     };
-                let found: Vec<Result<(), delaunay3::Error>> = if threads > 1 {
+                let found: Vec<Result<(), delaunay3::Error>> = if parallel {
                     use rayon::prelude::*;
                     batch
                         .par_iter()
@@ -1392,9 +1400,18 @@ impl<'a> Refiner<'a> {
                 (found, t.elapsed())
             }
         };
-        let ((found, dt), processed) = rayon::join(search_all, || {
-            self.process_created(&pending, &pending_infos)
-        });
+        let ((found, dt), processed) = if parallel {
+            rayon::join(search_all, || {
+                self.process_created(&pending, &pending_infos)
+            })
+        } else {
+            // `search_all` is consumed (it holds a clone of the triangulation's `Arc`).
+            fn call<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
+            let found = call(search_all);
+            (found, self.process_created(&pending, &pending_infos))
+        };
         self.t_delaunay += dt;
         self.pending_created = pending;
         self.pending_created.clear();
@@ -1416,6 +1433,7 @@ impl<'a> Refiner<'a> {
         let mut created_infos = std::mem::take(&mut self.pending_infos);
         let mut changes = std::mem::take(&mut self.changes);
         let mut stop = false;
+        let mut inserted = 0usize;
         let mut result = Ok(());
         for (i, (&(e, _), res)) in batch.iter().zip(&found).enumerate() {
             if let Err(err) = res {
@@ -1460,7 +1478,9 @@ impl<'a> Refiner<'a> {
             created.extend_from_slice(&changes.created);
             created_infos.extend_from_slice(&zone_infos[i]);
             self.count_insertion(e.forced, since_progress);
+            inserted += 1;
         }
+        self.tuner.end_batch(inserted, batch_start.elapsed());
         self.changes = changes;
         self.cavities = cavs;
         self.zone_infos = zone_infos;
@@ -1780,6 +1800,7 @@ impl<'a> Refiner<'a> {
         st.control_points_missing = missing;
         st.oracle_value_calls = self.values;
         st.oracle_crossing_calls = self.crossing_calls;
+        [st.sequential_batches, st.parallel_batches] = self.tuner.batches;
         st.time_total_s = self.start.elapsed().as_secs_f64();
         st.time_delaunay_s = self.t_delaunay.as_secs_f64();
         st.time_oracle_s = self.t_oracle.as_secs_f64();
