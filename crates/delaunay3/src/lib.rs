@@ -717,7 +717,8 @@ impl Triangulation {
         let Some(c0) = self.vertex_cell(v) else {
             return out;
         };
-        let mut seen = std::collections::HashSet::new();
+        // Stars have tens to hundreds of cells: a fast hash (cell ids are not adversarial).
+        let mut seen = rustc_hash::FxHashSet::default();
         out.push(c0);
         seen.insert(c0);
         let mut k = 0;

@@ -90,7 +90,7 @@ impl Criteria {
         let circle = (self.min_angle_deg > 0.0 || self.max_distance.is_some())
             .then(|| triangle_circumcircle(tri));
         if let Some((_, rc)) = circle {
-            bad = bad.max(self.angle_badness(tri, rc));
+            bad = bad.max(self.angle_badness(tri, rc, self.two_sin_min_angle()));
         }
         if let (Some(d), Some((cc, _))) = (self.max_distance, circle) {
             let dist = (cc - c).length();
@@ -118,13 +118,19 @@ impl Criteria {
     /// assert!(c.badness(tri, DVec3::new(0.5, 0.5, 0.3), 0.5f64.sqrt().hypot(0.3)) >= lb);
     /// ```
     pub fn badness_lower_bound(&self, tri: [DVec3; 3]) -> f64 {
-        self.facet_bound(tri).0
+        self.facet_bound(tri, self.two_sin_min_angle()).0
+    }
+
+    /// 2 sin(min_angle_deg): the angle criterion holds when R / l_min <= 1 / (2 sin(theta)).
+    pub(crate) fn two_sin_min_angle(&self) -> f64 {
+        2.0 * self.min_angle_deg.to_radians().sin()
     }
 
     /// [`Criteria::badness_lower_bound`] and the triangle's circumcenter (when the angle or
     /// distance criterion needs it, else NaN): the part of the badness that does not depend
-    /// on the ball, for [`Criteria::badness_from_bound`].
-    pub(crate) fn facet_bound(&self, tri: [DVec3; 3]) -> (f64, DVec3) {
+    /// on the ball, for [`Criteria::badness_from_bound`]. `two_sin` is
+    /// [`Criteria::two_sin_min_angle`] (computed once by the caller).
+    pub(crate) fn facet_bound(&self, tri: [DVec3; 3], two_sin: f64) -> (f64, DVec3) {
         let constant = match self.size {
             Some(Sizing::Constant(s)) => Some(s),
             _ => None,
@@ -139,7 +145,7 @@ impl Criteria {
         {
             bad = rc / s;
         }
-        (bad.max(self.angle_badness(tri, rc)), cc)
+        (bad.max(self.angle_badness(tri, rc, two_sin)), cc)
     }
 
     /// [`Criteria::badness_with_sigma`] from the facet's [`Criteria::facet_bound`] `(lb, cc)`:
@@ -167,7 +173,7 @@ impl Criteria {
 
     /// The angle criterion's badness of `tri` with circumradius `rc` (0 when it holds or is
     /// off): the radius-edge ratio over its bound, R / l_min = 1 / (2 sin(theta_min)).
-    fn angle_badness(&self, tri: [DVec3; 3], rc: f64) -> f64 {
+    fn angle_badness(&self, tri: [DVec3; 3], rc: f64, two_sin: f64) -> f64 {
         if self.min_angle_deg <= 0.0 {
             return 0.0;
         }
@@ -175,10 +181,9 @@ impl Criteria {
             .length()
             .min((tri[2] - tri[1]).length())
             .min((tri[0] - tri[2]).length());
-        let bound = 1.0 / (2.0 * self.min_angle_deg.to_radians().sin());
         if lmin > 0.0 && rc.is_finite() {
             // Slightly relaxed so that facets at exactly the bound are not refined forever.
-            let ratio = (rc / lmin) / bound;
+            let ratio = (rc / lmin) * two_sin;
             if ratio > 1.0 + 1e-12 { ratio } else { 0.0 }
         } else {
             f64::MAX / 4.0
@@ -199,17 +204,24 @@ pub fn triangle_circumcircle(t: [DVec3; 3]) -> (DVec3, f64) {
     (t[0] + v, v.length())
 }
 
-/// Smallest angle of a triangle, in degrees (0 for a degenerate triangle).
+/// Smallest angle of a triangle, in degrees (0 for a degenerate triangle): the angle
+/// opposite the shortest edge.
 pub fn min_angle_deg(t: [DVec3; 3]) -> f64 {
-    let mut m = f64::INFINITY;
-    for i in 0..3 {
-        let p = t[i];
-        let u = t[(i + 1) % 3] - p;
-        let v = t[(i + 2) % 3] - p;
-        let ang = u.cross(v).length().atan2(u.dot(v)).to_degrees();
-        m = m.min(ang);
-    }
-    if m.is_finite() { m } else { 0.0 }
+    // Edge i is opposite vertex i.
+    let len2 = |i: usize| (t[(i + 2) % 3] - t[(i + 1) % 3]).length_squared();
+    let (l0, l1, l2) = (len2(0), len2(1), len2(2));
+    let i = if l0 <= l1 && l0 <= l2 {
+        0
+    } else if l1 <= l2 {
+        1
+    } else {
+        2
+    };
+    let p = t[i];
+    let u = t[(i + 1) % 3] - p;
+    let v = t[(i + 2) % 3] - p;
+    let ang = u.cross(v).length().atan2(u.dot(v)).to_degrees();
+    if ang.is_finite() { ang } else { 0.0 }
 }
 
 #[cfg(test)]
@@ -251,6 +263,25 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// The angle opposite the shortest edge is the smallest of the three.
+        #[test]
+        fn min_angle_is_the_smallest_of_the_three(
+            a in proptest::array::uniform3(-1.0f64..1.0),
+            b in proptest::array::uniform3(-1.0f64..1.0),
+            c in proptest::array::uniform3(-1.0f64..1.0),
+        ) {
+            let t = [DVec3::from(a), DVec3::from(b), DVec3::from(c)];
+            let reference = (0..3)
+                .map(|i| {
+                    let u = t[(i + 1) % 3] - t[i];
+                    let v = t[(i + 2) % 3] - t[i];
+                    u.cross(v).length().atan2(u.dot(v)).to_degrees()
+                })
+                .fold(f64::INFINITY, f64::min);
+            proptest::prop_assert!((min_angle_deg(t) - reference).abs() < 1e-9, "{} vs {reference}", min_angle_deg(t));
+        }
+
+
         /// For any triangle and any ball through its vertices (centered on the line through
         /// its circumcenter, normal to its plane), the lower bound is at most the badness, and
         /// the badness from the bound equals the direct one, up to rounding.
@@ -278,7 +309,8 @@ mod tests {
             let direct = crit.badness(tri, center, r);
             let lb = crit.badness_lower_bound(tri);
             proptest::prop_assert!(lb <= direct * (1.0 + 1e-12), "{lb} > {direct}");
-            let via = crit.badness_from_bound(crit.facet_bound(tri), center, r, Some(sigma));
+            let bound = crit.facet_bound(tri, crit.two_sin_min_angle());
+            let via = crit.badness_from_bound(bound, center, r, Some(sigma));
             proptest::prop_assert!((via - direct).abs() <= 1e-12 * direct.max(1.0), "{via} vs {direct}");
         }
     }

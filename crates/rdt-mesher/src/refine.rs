@@ -456,6 +456,8 @@ pub(crate) struct Refiner<'a> {
     /// Delay the crossing of facets known bad without it (`RFacet::lazy`; bipolar oracle).
     /// Off only in tests that compare with the eager computation.
     lazy_balls: bool,
+    /// `opts.criteria.two_sin_min_angle()`.
+    two_sin: f64,
 }
 
 impl<'a> Refiner<'a> {
@@ -504,6 +506,7 @@ impl<'a> Refiner<'a> {
             values: 0,
             crossing_calls: 0,
             lazy_balls: true,
+            two_sin: opts.criteria.two_sin_min_angle(),
         }
     }
 
@@ -870,7 +873,7 @@ impl<'a> Refiner<'a> {
         let (mut lb, cc) = self
             .opts
             .criteria
-            .facet_bound(verts.map(|v| self.tri.point(v)));
+            .facet_bound(verts.map(|v| self.tri.point(v)), self.two_sin);
         if self.scaffold_count > 0 && verts.iter().any(|&v| self.is_scaffold(v)) {
             lb = SCAFFOLD_BAD;
         }
