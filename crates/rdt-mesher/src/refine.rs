@@ -1692,9 +1692,13 @@ impl<'a> Refiner<'a> {
     }
 
     fn sorted_facets(&self) -> Vec<([VertexId; 3], RFacet)> {
-        let mut v: Vec<_> = self.restricted.iter().map(|(_, k, f)| (k, *f)).collect();
-        v.sort_unstable_by_key(|(k, _)| *k);
-        v
+        // Sort the (unique) keys with their slots, then gather: cheaper than moving facets.
+        let mut keys: Vec<([VertexId; 3], u32)> =
+            self.restricted.iter().map(|(i, k, _)| (k, i)).collect();
+        keys.sort_unstable();
+        keys.into_iter()
+            .map(|(k, i)| (k, *self.restricted.slot(i)))
+            .collect()
     }
 
     /// Edges (sorted pairs) with other than two restricted facets, and vertices whose link is
@@ -1737,12 +1741,19 @@ impl<'a> Refiner<'a> {
             facets.retain(|(k, _)| !k.iter().any(|&v| self.is_scaffold(v)));
         }
         let scaffold_dropped = before - facets.len();
-        let mut used: Vec<VertexId> = facets.iter().flat_map(|(k, _)| *k).collect();
-        used.sort_unstable();
-        used.dedup();
-        let mut remap = vec![u32::MAX; used.last().map_or(0, |&v| v as usize + 1)];
-        for (i, &v) in used.iter().enumerate() {
-            remap[v as usize] = i as u32;
+        // The vertices of the facets, in id order.
+        let mut remap = vec![u32::MAX; self.tri.num_vertices()];
+        for (k, _) in &facets {
+            for &v in k {
+                remap[v as usize] = 0;
+            }
+        }
+        let mut used: Vec<VertexId> = Vec::new();
+        for (v, r) in remap.iter_mut().enumerate() {
+            if *r == 0 {
+                *r = used.len() as u32;
+                used.push(v as VertexId);
+            }
         }
         let vertices: Vec<DVec3> = used.iter().map(|&v| self.tri.point(v)).collect();
         let triangles: Vec<[u32; 3]> = facets

@@ -117,6 +117,14 @@ impl Restricted {
         Some(s.rf)
     }
 
+    /// The facet in live slot `idx` (as given by [`Restricted::iter`]).
+    #[inline]
+    pub fn slot(&self, idx: u32) -> &RFacet {
+        let s = &self.slots[idx as usize];
+        debug_assert!(s.key[0] != FREE);
+        &s.rf
+    }
+
     /// Live facets with their keys, in slot order (deterministic, not sorted).
     pub fn iter(&self) -> impl Iterator<Item = (u32, [VertexId; 3], &RFacet)> + '_ {
         self.slots
