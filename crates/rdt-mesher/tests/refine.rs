@@ -207,7 +207,7 @@ fn parallel_oracle_batches_do_not_change_the_mesh() {
 }
 
 /// Refinement runs in batches of up to 32 points whose conflict zones are searched in
-/// parallel: at ~9k vertices (full batches) the mesh is the same on 1 and on 4 threads, with
+/// parallel (or not: see the tuner): at ~9k vertices (full batches) the mesh is the same on 1 and on 4 threads, with
 /// both oracles, and the Delaunay triangulation and Del_S(E) stay exact (audit).
 #[test]
 fn batched_refinement_is_independent_of_the_thread_count() {
@@ -222,6 +222,15 @@ fn batched_refinement_is_independent_of_the_thread_count() {
         assert!(one.stats.vertices > 5000, "{}", one.stats.vertices);
         assert!(one.stats.criteria_met, "{:?}", one.stats.unmet);
         assert_eq!(one.mesh, four.mesh, "{oracle:?}");
+        // The tuner ran batches in both modes on 4 threads (its first window alternates
+        // them), none in parallel on 1 thread: mixing the modes leaves the mesh unchanged.
+        assert_eq!(one.stats.parallel_batches, 0);
+        assert!(
+            four.stats.sequential_batches > 0 && four.stats.parallel_batches > 0,
+            "{} sequential, {} parallel batches",
+            four.stats.sequential_batches,
+            four.stats.parallel_batches
+        );
         check_closed_manifold(&four, 1);
         let audit = in_pool(4, || rdt_mesher::refine::audit(&torus(), &opts).unwrap());
         assert_eq!(audit, 0);
