@@ -157,9 +157,11 @@ pub trait Surface: Send + Sync {
         ) / (2.0 * h)
     }
 
-    /// Closest point of S to `p`, if the backend can compute it (used by `verify`).
+    /// Closest point of S to `p`, if the backend can compute it (used by `verify`). The
+    /// default: gradient steps from `p`, else the nearest crossing on rays from `p`
+    /// ([`roots::project_robust`]).
     fn project(&self, p: DVec3) -> Option<DVec3> {
-        roots::project_newton(self, p)
+        roots::project_robust(self, p)
     }
 
     /// How far (degrees) the direction of [`Surface::gradient`] at `p` may be from the normal

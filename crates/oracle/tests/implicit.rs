@@ -756,6 +756,31 @@ fn gradient_and_projection() {
     assert!((q.length() - 1.0).abs() < 1e-7);
 }
 
+/// A value function that is flat away from S (clamped to +-0.05: the unit sphere) stalls the
+/// gradient steps; the projection then falls back to the nearest crossing on rays, a point
+/// of S no closer to `p` than the true distance and not much farther.
+#[test]
+fn projection_falls_back_to_rays_where_the_value_is_flat() {
+    let s = ImplicitSurface::from_fn(|p: DVec3| (p.length() - 1.0).clamp(-0.05, 0.05), ball(3.0))
+        .unwrap();
+    let mut rng = SplitMix64(17);
+    for _ in 0..40 {
+        let dir = rng.unit_vector();
+        for r in [0.3, 0.6, 1.6, 2.5] {
+            let p = dir * r;
+            assert!(roots::project_newton(&s, p).is_none(), "flat at {p}");
+            let q = s.project(p).expect("rays meet the sphere");
+            assert!((q.length() - 1.0).abs() < 1e-6, "{q} is not on S");
+            let d = (r - 1.0f64).abs();
+            let got = (q - p).length();
+            assert!(
+                got >= d - 1e-6 && got <= 1.02 * d + 1e-3,
+                "r {r}: {got} vs {d}"
+            );
+        }
+    }
+}
+
 // ---------------------------------------------------------------- catalog
 
 #[test]
