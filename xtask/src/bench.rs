@@ -119,33 +119,50 @@ fn run_cgal(prog: &str, args: &[String]) -> Result<serde_json::Value> {
     Ok(serde_json::from_str(line)?)
 }
 
-pub(crate) fn cgal_rows(
-    group: &str,
-    case: &str,
-    prog: &str,
+/// A CGAL baseline program, run once after each of our runs (alternating, so that both
+/// medians sample the same phases of a shared machine: a slow spell of a few seconds falls on
+/// both tools, instead of on whichever ran then).
+pub(crate) struct CgalBaseline {
+    prog: &'static str,
     args: Vec<String>,
-    runs: usize,
-    size_key: &str,
-    unit: &str,
-) -> Result<Row> {
-    let mut times = Vec::new();
-    let mut last = serde_json::Value::Null;
-    for _ in 0..runs {
-        let v = run_cgal(prog, &args)?;
-        times.push(v["seconds"].as_f64().context("CGAL JSON without seconds")?);
-        last = v;
+    times: Vec<f64>,
+    last: serde_json::Value,
+}
+
+impl CgalBaseline {
+    /// `None` unless `enabled` (`--vs-cgal`).
+    pub(crate) fn new(enabled: bool, prog: &'static str, args: Vec<String>) -> Option<Self> {
+        enabled.then(|| CgalBaseline {
+            prog,
+            args,
+            times: Vec::new(),
+            last: serde_json::Value::Null,
+        })
     }
-    let size = last[size_key].as_u64().unwrap_or(0) as usize;
-    Ok(Row {
-        group: group.into(),
-        case: case.into(),
-        tool: "cgal".into(),
-        median_s: median(&mut times.clone()),
-        runs: times,
-        size,
-        size_unit: unit.into(),
-        extra: last,
-    })
+
+    /// One run of the program; its `seconds` join the times.
+    pub(crate) fn run_once(&mut self) -> Result<()> {
+        let v = run_cgal(self.prog, &self.args)?;
+        self.times
+            .push(v["seconds"].as_f64().context("CGAL JSON without seconds")?);
+        self.last = v;
+        Ok(())
+    }
+
+    /// The row of the runs made (size read from the last run's JSON field `size_key`).
+    pub(crate) fn row(self, group: &str, case: &str, size_key: &str, unit: &str) -> Row {
+        let size = self.last[size_key].as_u64().unwrap_or(0) as usize;
+        Row {
+            group: group.into(),
+            case: case.into(),
+            tool: "cgal".into(),
+            median_s: median(&mut self.times.clone()),
+            runs: self.times,
+            size,
+            size_unit: unit.into(),
+            extra: self.last,
+        }
+    }
 }
 
 fn bench_delaunay(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
@@ -156,6 +173,18 @@ fn bench_delaunay(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
     }
     for (n, dist) in cases {
         let pts = random_points(n, 1, dist);
+        let mut cgal = CgalBaseline::new(
+            a.vs_cgal,
+            "cgal_delaunay",
+            vec![
+                "--random".into(),
+                n.to_string(),
+                "--seed".into(),
+                "1".into(),
+                "--distribution".into(),
+                dist.into(),
+            ],
+        );
         let mut times = Vec::new();
         let mut cells = 0;
         let mut bytes = 0;
@@ -166,6 +195,10 @@ fn bench_delaunay(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             times.push(t.elapsed().as_secs_f64());
             cells = tri.num_finite_cells();
             bytes = tri.memory_bytes();
+            drop(tri);
+            if let Some(c) = cgal.as_mut() {
+                c.run_once()?;
+            }
         }
         let case = format!("{n} {dist}");
         let med = median(&mut times.clone());
@@ -179,23 +212,8 @@ fn bench_delaunay(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             size_unit: "points".into(),
             extra: serde_json::json!({"finite_cells": cells, "points_per_s": n as f64 / med, "bytes_per_point": bytes as f64 / n as f64}),
         });
-        if a.vs_cgal {
-            rows.push(cgal_rows(
-                "delaunay",
-                &case,
-                "cgal_delaunay",
-                vec![
-                    "--random".into(),
-                    n.to_string(),
-                    "--seed".into(),
-                    "1".into(),
-                    "--distribution".into(),
-                    dist.into(),
-                ],
-                a.runs,
-                "n",
-                "points",
-            )?);
+        if let Some(c) = cgal {
+            rows.push(c.row("delaunay", &case, "n", "points"));
         }
     }
     Ok(())
@@ -217,6 +235,21 @@ fn bench_mesh(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             },
             ..Default::default()
         };
+        let mut cgal = CgalBaseline::new(
+            a.vs_cgal,
+            "cgal_surface_mesher",
+            vec![
+                "--surface".into(),
+                name.into(),
+                "--angle".into(),
+                "30".into(),
+                "--radius".into(),
+                r.to_string(),
+                "--distance".into(),
+                r.to_string(),
+                "--manifold".into(),
+            ],
+        );
         let mut times = Vec::new();
         let mut res = None;
         for _ in 0..a.runs {
@@ -224,6 +257,9 @@ fn bench_mesh(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             let out = rdt_mesher::mesh(surf.as_ref(), &opts)?;
             times.push(t.elapsed().as_secs_f64());
             res = Some(out.stats);
+            if let Some(c) = cgal.as_mut() {
+                c.run_once()?;
+            }
         }
         let st = res.unwrap();
         let case = format!("{name} r={r}");
@@ -237,26 +273,8 @@ fn bench_mesh(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             size_unit: "vertices".into(),
             extra: serde_json::json!({"facets": st.facets, "time_delaunay_s": st.time_delaunay_s, "time_oracle_s": st.time_oracle_s, "criteria_met": st.criteria_met}),
         });
-        if a.vs_cgal {
-            rows.push(cgal_rows(
-                "mesh",
-                &case,
-                "cgal_surface_mesher",
-                vec![
-                    "--surface".into(),
-                    name.into(),
-                    "--angle".into(),
-                    "30".into(),
-                    "--radius".into(),
-                    r.to_string(),
-                    "--distance".into(),
-                    r.to_string(),
-                    "--manifold".into(),
-                ],
-                a.runs,
-                "vertices",
-                "vertices",
-            )?);
+        if let Some(c) = cgal {
+            rows.push(c.row("mesh", &case, "vertices", "vertices"));
         }
     }
     Ok(())
@@ -332,6 +350,6 @@ fn print_table(rows: &[Row]) {
         );
     }
     outln!(
-        "(medians of the runs; 'vs cgal' = CGAL median / our median, measured in this run: >1 means we are faster)"
+        "(medians of the runs; 'vs cgal' = CGAL median / our median, the two tools run alternately in this run: >1 means we are faster)"
     );
 }

@@ -21,7 +21,7 @@
 //! dominates; the image oracle's crossing walks a per-block sign summary (7% fewer cycles at
 //! 256^3, neutral at 128^3).
 
-use crate::bench::{BenchArgs, Row, cgal_rows, median};
+use crate::bench::{BenchArgs, CgalBaseline, Row, median};
 use anyhow::{Context, Result};
 use oracle::image::{ImageOptions, ImageSurface, NiftiWriteOptions, synthetic};
 use rdt_mesher::{Criteria, MeshOptions, Sizing};
@@ -57,6 +57,26 @@ pub fn bench_image(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             },
             ..Default::default()
         };
+        let mut cgal = CgalBaseline::new(
+            a.vs_cgal,
+            "cgal_image_mesher",
+            vec![
+                "--tanglecube-grid".into(),
+                n.to_string(),
+                "--iso".into(),
+                "0".into(),
+                "--angle".into(),
+                "30".into(),
+                "--radius".into(),
+                r.to_string(),
+                "--distance".into(),
+                r.to_string(),
+                "--write-inr".into(),
+                dir.join(format!("cgal_tanglecube_{n}.inr"))
+                    .display()
+                    .to_string(),
+            ],
+        );
         let (mut load, mut scan, mut dm, mut times) = (vec![], vec![], vec![], vec![]);
         let mut last = None;
         for _ in 0..a.runs {
@@ -77,6 +97,9 @@ pub fn bench_image(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             let out = rdt_mesher::mesh(&s, &opts)?;
             times.push(t.elapsed().as_secs_f64());
             last = Some((out, comps, dm_inf));
+            if let Some(c) = cgal.as_mut() {
+                c.run_once()?;
+            }
         }
         let (out, comps, dm_inf) = last.expect("at least one run");
         let st = &out.stats;
@@ -118,31 +141,8 @@ pub fn bench_image(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             }),
         });
         let _ = std::fs::remove_file(&path);
-        if a.vs_cgal {
-            rows.push(cgal_rows(
-                "image",
-                &case,
-                "cgal_image_mesher",
-                vec![
-                    "--tanglecube-grid".into(),
-                    n.to_string(),
-                    "--iso".into(),
-                    "0".into(),
-                    "--angle".into(),
-                    "30".into(),
-                    "--radius".into(),
-                    r.to_string(),
-                    "--distance".into(),
-                    r.to_string(),
-                    "--write-inr".into(),
-                    dir.join(format!("cgal_tanglecube_{n}.inr"))
-                        .display()
-                        .to_string(),
-                ],
-                a.runs,
-                "vertices",
-                "vertices",
-            )?);
+        if let Some(c) = cgal {
+            rows.push(c.row("image", &case, "vertices", "vertices"));
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
