@@ -1706,7 +1706,7 @@ impl<'a> Refiner<'a> {
     fn nonmanifold_elements(&self) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
         // The order of the triangles does not matter to the result.
         let tris: Vec<[VertexId; 3]> = self.restricted.iter().map(|(_, k, _)| k).collect();
-        crate::topology::nonmanifold_elements(&tris)
+        crate::topology::nonmanifold_elements_with(&tris, self.tuner.parallel())
     }
 
     /// Recompute Del_S(E) from scratch and count the facets on which the incremental
@@ -1767,22 +1767,25 @@ impl<'a> Refiner<'a> {
                 radius: rf.radius,
             })
             .collect();
-        // Per-facet measures in parallel, then min / max (order-independent).
+        // Per-facet measures (in parallel when the tuner says it pays), then min / max
+        // (order-independent).
         let measures: Vec<(f64, Option<f64>, Option<f64>, bool)> = {
             use rayon::prelude::*;
             let (tri, criteria) = (&self.tri, &self.opts.criteria);
-            facets
-                .par_iter()
-                .map(|(_, rf)| {
-                    let pts = rf.oriented.map(|v| tri.point(v));
-                    let rs = criteria.size.as_ref().map(|s| rf.radius / s.at(rf.center));
-                    let dist = criteria.max_distance.map(|d| {
-                        let (cc, _) = crate::criteria::triangle_circumcircle(pts);
-                        (cc - rf.center).length() / d
-                    });
-                    (crate::criteria::min_angle_deg(pts), rs, dist, rf.bad > 1.0)
-                })
-                .collect()
+            let measure = |(_, rf): &([VertexId; 3], RFacet)| {
+                let pts = rf.oriented.map(|v| tri.point(v));
+                let rs = criteria.size.as_ref().map(|s| rf.radius / s.at(rf.center));
+                let dist = criteria.max_distance.map(|d| {
+                    let (cc, _) = crate::criteria::triangle_circumcircle(pts);
+                    (cc - rf.center).length() / d
+                });
+                (crate::criteria::min_angle_deg(pts), rs, dist, rf.bad > 1.0)
+            };
+            if self.tuner.parallel() {
+                facets.par_iter().map(measure).collect()
+            } else {
+                facets.iter().map(measure).collect()
+            }
         };
         let max_opt = |a: Option<f64>, b: Option<f64>| match (a, b) {
             (Some(x), Some(y)) => Some(x.max(y)),

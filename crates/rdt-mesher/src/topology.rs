@@ -15,6 +15,15 @@ use delaunay3::VertexId;
 /// assert_eq!((e.len(), v.len()), (3, 3));
 /// ```
 pub fn nonmanifold_elements(tris: &[[VertexId; 3]]) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
+    nonmanifold_elements_with(tris, true)
+}
+
+/// [`nonmanifold_elements`], its vertex pass on rayon's threads only when `parallel` (the
+/// mesher follows its tuner). The result is the same either way.
+pub(crate) fn nonmanifold_elements_with(
+    tris: &[[VertexId; 3]],
+    parallel: bool,
+) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
     // The link of every vertex, bucketed by vertex (counting sort): the triangle (a, b, c)
     // puts the link edge (b, c) in a's bucket, and so on. The edge (a, x) has as many
     // triangles as x has link edges in a's bucket, so one pass over the links finds both the
@@ -77,10 +86,12 @@ pub fn nonmanifold_elements(tris: &[[VertexId; 3]]) -> (Vec<[VertexId; 2]>, Vec<
     };
     use rayon::prelude::*;
     const CHUNK: usize = 4096;
-    let parts: Vec<_> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|k| check(k * CHUNK..((k + 1) * CHUNK).min(n)))
-        .collect();
+    let chunk = |k: usize| check(k * CHUNK..((k + 1) * CHUNK).min(n));
+    let parts: Vec<_> = if parallel {
+        (0..n.div_ceil(CHUNK)).into_par_iter().map(chunk).collect()
+    } else {
+        (0..n.div_ceil(CHUNK)).map(chunk).collect()
+    };
     let mut bad_edges = Vec::new();
     let mut bad_vertices = Vec::new();
     for (e, v) in parts {
