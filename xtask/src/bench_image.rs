@@ -12,14 +12,13 @@
 //! (`.nii`, uncompressed, from a temporary file), the scan alone and the d_M^inf estimate (not
 //! needed with a given size) are reported separately in `extra` and on stderr.
 //!
-//! Measured 2026-11-22 03:31 UTC on the quiet 2-core machine (`cargo xtask bench image
-//! --vs-cgal --runs 9`, twice): 128^3, 18 486 vertices in 0.161 / 0.164 s vs CGAL 19 493 in
-//! 0.807 / 0.808 s (5.01x / 4.93x; earlier runs 5.46x, 5.08x, 4.99x); 256^3, 24 655 vertices
-//! in 0.262 / 0.271 s vs CGAL 25 869 in 1.173 / 1.179 s (4.5x / 4.35x). Separately: .nii read
-//! 0.004 / 0.04 s, scan 0.003 / 0.016 s, d_M^inf 0.06 / 0.38 s (not needed with a size; `mesh`
-//! computes it on first use only). The mesher core (Delaunay, restricted-facet bookkeeping)
-//! dominates; the image oracle's crossing walks a per-block sign summary (7% fewer cycles at
-//! 256^3, neutral at 128^3).
+//! Measured 2026-11-22 06:36-06:55 UTC on the 2-vCPU machine (`cargo xtask bench image
+//! --vs-cgal --runs 9`, CGAL alternating with us run by run): 128^3, 18 538 vertices in
+//! 0.095-0.105 s vs CGAL 19 493 in 0.77-0.86 s (7.6-8.2x; 5.55-6.8x in the VM's lost-core
+//! phases, where the tuner runs sequential batches; one thread 5.3-6.0x); 256^3, 24 764
+//! vertices in 0.166-0.186 s vs CGAL 25 869 in 1.12-1.21 s (6.5-6.8x). Separately: .nii read
+//! 0.004 / 0.037 s, scan 0.003 / 0.016 s, d_M^inf 0.06 / 0.38 s (not needed with a size;
+//! `mesh` computes it on first use only).
 
 use crate::bench::{BenchArgs, CgalBaseline, Row, median};
 use anyhow::{Context, Result};
