@@ -402,6 +402,7 @@ pub fn run(a: &MeshArgs) -> Result<()> {
             "oracle": format!("{:?}", a.oracle).to_lowercase(),
             "manifold": !a.no_manifold,
             "scaffold": !a.no_scaffold,
+            "initialization": a.initialization.name(),
             "seed": a.seed,
             "notes": notes,
             "stats": st,
@@ -417,6 +418,16 @@ pub fn run(a: &MeshArgs) -> Result<()> {
 pub enum InitArg {
     ControlPoints,
     PersistentFacets,
+}
+
+impl InitArg {
+    /// The option's value, as given on the command line.
+    fn name(self) -> &'static str {
+        match self {
+            InitArg::ControlPoints => "control-points",
+            InitArg::PersistentFacets => "persistent-facets",
+        }
+    }
 }
 
 impl From<InitArg> for rdt_mesher::Initialization {
@@ -550,6 +561,7 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
     if let Some(r) = &a.report {
         let report = serde_json::json!({
             "input": spec, "output": out_path, "epsilon": e, "dm_inf": dm,
+            "initialization": a.initialization.name(),
             "sigma0": tp.sigma0, "eps_prime": tp.eps_prime,
             "first": s1, "second": s2, "verify": check,
         });

@@ -1,4 +1,4 @@
-//! `cargo xtask verify mesh.ply [--against SURFACE] [--epsilon E] [--report r.json]`.
+//! `cargo xtask verify mesh.ply [--against SURFACE] [--epsilon E] [--dm auto|poles|D] [--report r.json]`.
 
 use crate::surface_spec::{self, SurfaceOptions};
 use anyhow::{Context, Result};
@@ -17,6 +17,11 @@ pub struct VerifyArgs {
     /// Requested epsilon of the loose epsilon-sample certificate.
     #[arg(long)]
     pub epsilon: Option<f64>,
+    /// Where the certificate takes d_M from (with --against): `auto` (the surface's d_M^inf,
+    /// when its backend knows one), `poles` (estimated from the Voronoi poles of the mesh's
+    /// vertices), or a positive number (a constant d_M).
+    #[arg(long, default_value = "auto", allow_hyphen_values = true)]
+    pub dm: String,
     /// FAIL if the two-sided Hausdorff estimate exceeds this distance.
     #[arg(long)]
     pub max_hausdorff: Option<f64>,
@@ -33,13 +38,35 @@ pub struct VerifyArgs {
     pub surface: SurfaceOptions,
 }
 
+/// `--dm`: `auto`, `poles` or a positive finite number.
+fn parse_dm(v: &str) -> Result<verify::DmSource> {
+    match v {
+        "auto" => Ok(verify::DmSource::Auto),
+        "poles" => Ok(verify::DmSource::Poles),
+        _ => match v.parse::<f64>() {
+            Ok(d) if d > 0.0 && d.is_finite() => Ok(verify::DmSource::Constant(d)),
+            _ => anyhow::bail!(
+                "--dm '{v}': use auto, poles, or a positive number (a constant d_M, in the mesh's units)"
+            ),
+        },
+    }
+}
+
 pub fn run(a: &VerifyArgs) -> Result<()> {
+    let dm = parse_dm(&a.dm)?;
+    if a.against.is_none() && !matches!(dm, verify::DmSource::Auto) {
+        anyhow::bail!(
+            "--dm {} needs --against SURFACE (the certificate is about a surface)",
+            a.dm
+        );
+    }
     let mesh = meshio::read(&a.mesh)?;
     let opts = verify::Options {
         epsilon: a.epsilon,
         max_hausdorff: a.max_hausdorff,
         min_angle_deg: a.min_angle,
         samples_per_edge: a.samples_per_edge,
+        dm,
         ..Default::default()
     };
     let report = match &a.against {

@@ -159,6 +159,8 @@ fn check_sphere_run(dir: &Path, stdout: &str, report: &serde_json::Value, certif
     assert!(st["min_angle_deg"].as_f64().unwrap() >= 30.0 - 1e-9);
     assert_eq!(report["sigma"], 0.2);
     assert_eq!(report["manifold"], true);
+    assert_eq!(report["initialization"], "control-points");
+    assert_eq!(report["scaffold"], true);
     let mut bad = not_passed(report);
     if !certified {
         assert_eq!(status_of(report, "loose-epsilon"), "SKIP");
@@ -367,6 +369,59 @@ fn verify_command_on_a_good_mesh_and_on_its_report() {
     let v = json(&d.join("v.json"));
     let checks = v["checks"].as_array().unwrap();
     assert!(checks.iter().all(|c| c["status"] != "FAIL"), "{checks:?}");
+}
+
+/// `verify --dm`: an expression has no d_M^inf hint, so the certificate is skipped unless d_M
+/// comes from the Voronoi poles of the mesh or is given; a bad value or a missing surface is
+/// an error naming the option.
+#[test]
+fn verify_dm_source_for_expressions() {
+    let d = scratch("verify_dm");
+    let expr = "implicit:x^2+y^2+z^2-1";
+    ok(&xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            expr,
+            "--bounding-sphere",
+            "0,0,0,2",
+            "--size",
+            "0.1",
+            "--no-verify",
+            "-o",
+            "e.ply",
+        ],
+    ));
+    let base = [
+        "verify",
+        "e.ply",
+        "--against",
+        expr,
+        "--bounding-sphere",
+        "0,0,0,2",
+    ];
+    let run = |extra: &[&str]| {
+        let mut args: Vec<&str> = base.to_vec();
+        args.extend_from_slice(extra);
+        xtask(&d, &args)
+    };
+    let s = ok(&run(&["--epsilon", "0.12"]));
+    assert!(s.contains("SKIP loose-epsilon"), "{s}");
+    for dm in [["--dm", "poles"], ["--dm", "1"]] {
+        let s = ok(&run(&["--epsilon", "0.12", dm[0], dm[1]]));
+        assert!(s.contains("PASS loose-epsilon"), "{dm:?}: {s}");
+    }
+    // A d_M far below the truth: the balls are too big for it.
+    let out = run(&["--epsilon", "0.12", "--dm", "0.1"]);
+    let e = failure(&out, true);
+    mentions(&e, &["e.ply", "loose-epsilon"]);
+    for bad in ["-3", "nan", "polls"] {
+        let e = failure(&run(&["--dm", bad]), false);
+        mentions(&e, &["--dm", bad]);
+    }
+    let e = failure(&xtask(&d, &["verify", "e.ply", "--dm", "poles"]), false);
+    mentions(&e, &["--dm", "--against"]);
 }
 
 #[test]

@@ -672,7 +672,7 @@ fn against(r: &mut Report, mesh: &TriMesh, bvh: &bvh::Bvh, surface: &dyn Surface
                 r.push(
                     "loose-epsilon",
                     Status::Skipped,
-                    "no d_M: the surface gives no dm_inf_hint; set Options::dm".into(),
+                    "no d_M: the surface gives no dm_inf_hint; set Options::dm (command line: --dm poles or --dm VALUE)".into(),
                 );
             }
             r.push(
