@@ -299,7 +299,9 @@ fn ray_directions() -> Vec<DVec3> {
 /// searched in shells of doubling radius, from 4 [`Surface::crossing_step`]s up to the
 /// bounding sphere's diameter, until one meets S; then 4 rounds of 16 rays in narrowing cones
 /// around the best ray (half-angles 0.35 to 0.044 rad), each as long as the best distance so
-/// far. `None` if no ray meets S (or `p` is not finite).
+/// far. Rays are clipped to the bounding sphere (S lies inside it), so the work is at most
+/// about 64 rays across it, wherever `p` is; non-finite crossings (a NaN value on the way)
+/// are skipped. `None` if no ray meets S (or `p` is not finite).
 pub fn nearest_crossing_on_rays<S: Surface + ?Sized>(s: &S, p: DVec3) -> Option<DVec3> {
     if !p.is_finite() {
         return None;
@@ -313,11 +315,14 @@ pub fn nearest_crossing_on_rays<S: Surface + ?Sized>(s: &S, p: DVec3) -> Option<
     let mut buf = Vec::new();
     let mut nearest = |dirs: &[DVec3], r0: f64, r1: f64, best: &mut Option<(f64, DVec3)>| {
         for d in dirs {
+            let Some((a, b)) = bs.clip_segment(p + *d * r0, p + *d * r1) else {
+                continue;
+            };
             buf.clear();
-            s.crossings(p + *d * r0, p + *d * r1, &mut buf);
+            s.crossings(a, b, &mut buf);
             for &q in &buf {
                 let dist = (q - p).length();
-                if best.is_none_or(|b| dist < b.0) {
+                if q.is_finite() && best.is_none_or(|b| dist < b.0) {
                     *best = Some((dist, q));
                 }
             }

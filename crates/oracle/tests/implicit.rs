@@ -779,6 +779,29 @@ fn projection_falls_back_to_rays_where_the_value_is_flat() {
             );
         }
     }
+    // A NaN region on some rays: the crossings there are skipped, the others still count.
+    struct NanBeyond;
+    impl Surface for NanBeyond {
+        fn bounding_sphere(&self) -> BoundingSphere {
+            BoundingSphere {
+                center: DVec3::ZERO,
+                radius: 3.0,
+            }
+        }
+        fn value(&self, p: DVec3) -> f64 {
+            if p.x > 1.5 {
+                f64::NAN
+            } else {
+                (p.length() - 1.0).clamp(-0.05, 0.05)
+            }
+        }
+    }
+    let q = NanBeyond.project(DVec3::new(1.3, 0.0, 0.0)).unwrap();
+    assert!(q.is_finite() && (q - DVec3::X).length() < 0.01, "{q}");
+    // Far outside the bounding sphere: the rays are clipped to it, so this stays cheap, and
+    // the point found is on S.
+    let q = s.project(DVec3::new(1e3, 0.0, 0.0)).unwrap();
+    assert!((q.length() - 1.0).abs() < 1e-6 && q.x > 0.99, "{q}");
 }
 
 // ---------------------------------------------------------------- catalog

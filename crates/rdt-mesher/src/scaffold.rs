@@ -7,7 +7,7 @@
 //! torus at sigma = 0.0194 the refinement takes about 40% fewer cycles on one thread.
 //!
 //! Scaffold points are vertices of Del(E) but not samples, and never appear in the output:
-//! - a restricted facet with a scaffold vertex is always bad (`Refiner::register_facet`), so
+//! - a restricted facet with a scaffold vertex is always bad (`Refiner::known_badness`), so
 //!   the refinement keeps inserting surface points until no Voronoi edge of a scaffold point
 //!   meets S (it terminates: such a facet's ball has radius at least the scaffold point's
 //!   distance to S, which is positive);

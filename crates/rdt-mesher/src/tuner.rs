@@ -146,7 +146,8 @@ mod tests {
 
     #[test]
     fn picks_the_faster_mode_and_keeps_checking() {
-        // 32 batches per window: the first window alternates, then 5 windows of the winner.
+        // 32 batches per window: the first window alternates, then EXPLOIT_WINDOWS windows of
+        // the winner.
         let per_window = WINDOW / 32;
         let cycle = per_window * (1 + EXPLOIT_WINDOWS as usize);
         for par_faster in [true, false] {
