@@ -1147,6 +1147,17 @@ fn stats_over_many_chunks() {
     let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
     let e = vol.stats().unwrap_err();
     assert!(matches!(e, ImageError::NaN { index, .. } if index == vol.unindex(300_001)));
+    // An infinity alone, near the start or at the very end, is caught the same way.
+    for at in [7, 511_999] {
+        let mut v = vec![3.0f32; n * n * n];
+        v[at] = f32::NEG_INFINITY;
+        let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+        let e = vol.stats().unwrap_err();
+        assert!(
+            matches!(e, ImageError::NaN { index, .. } if index == vol.unindex(at)),
+            "{at}"
+        );
+    }
 }
 
 /// Component seeds always come first and are never diluted: seed_points has at most

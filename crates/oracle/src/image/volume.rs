@@ -317,21 +317,47 @@ impl Volume {
     pub fn stats(&self) -> Result<Stats, ImageError> {
         type Scan = (f64, f64, Option<(f64, f64)>);
         /// Per chunk: (min, max, up to 3 distinct values) or the index of a non-finite voxel.
+        /// Two loops: the distinct values from the start (most images have 3 within a few
+        /// voxels), then a branch-free min / max / finiteness pass that the compiler
+        /// vectorizes; only a chunk with a non-finite voxel is scanned again for its index.
         fn chunk<T: Voxel>(d: &[T], base: usize) -> Result<(f64, f64, Vec<T>), usize> {
-            let mut lo = f64::INFINITY;
-            let mut hi = f64::NEG_INFINITY;
             let mut distinct: Vec<T> = Vec::with_capacity(3);
-            for (i, &v) in d.iter().enumerate() {
-                let x = v.to_f64();
-                if !x.is_finite() {
-                    return Err(base + i);
+            for &v in d {
+                if distinct.len() == 3 {
+                    break;
                 }
-                lo = lo.min(x);
-                hi = hi.max(x);
-                if distinct.len() < 3 && !distinct.contains(&v) {
+                if !distinct.contains(&v) {
                     distinct.push(v);
                 }
             }
+            // Eight independent lanes (no dependency between them, so they vectorize);
+            // x * 0 is 0 for a finite x, NaN for NaN and infinities, and a NaN loses every
+            // comparison, so only `fin` sees it.
+            const L: usize = 8;
+            let mut lo = [f64::INFINITY; L];
+            let mut hi = [f64::NEG_INFINITY; L];
+            let mut fin = [0.0f64; L];
+            let mut lanes = d.chunks_exact(L);
+            for c in &mut lanes {
+                for k in 0..L {
+                    let x = c[k].to_f64();
+                    lo[k] = if x < lo[k] { x } else { lo[k] };
+                    hi[k] = if x > hi[k] { x } else { hi[k] };
+                    fin[k] += x * 0.0;
+                }
+            }
+            for &v in lanes.remainder() {
+                let x = v.to_f64();
+                lo[0] = if x < lo[0] { x } else { lo[0] };
+                hi[0] = if x > hi[0] { x } else { hi[0] };
+                fin[0] += x * 0.0;
+            }
+            if fin.iter().any(|&f| f != 0.0) {
+                let i = d.iter().position(|v| !v.to_f64().is_finite()).unwrap_or(0);
+                return Err(base + i);
+            }
+            let lo = lo.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+            let hi = hi.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
             Ok((lo, hi, distinct))
         }
         /// Parallel over chunks, merged in chunk order (deterministic: the first bad voxel).
