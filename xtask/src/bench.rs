@@ -119,6 +119,20 @@ fn run_cgal(prog: &str, args: &[String]) -> Result<serde_json::Value> {
     Ok(serde_json::from_str(line)?)
 }
 
+/// CGAL's criteria of the mesh and image groups: angle 30, radius = distance = `r`.
+pub(crate) fn cgal_criteria_args(r: f64) -> Vec<String> {
+    [
+        "--angle",
+        "30",
+        "--radius",
+        &r.to_string(),
+        "--distance",
+        &r.to_string(),
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
 /// A CGAL baseline program, run once after each of our runs (alternating, so that both
 /// medians sample the same phases of a shared machine: a slow spell of a few seconds falls on
 /// both tools, instead of on whichever ran then).
@@ -238,17 +252,12 @@ fn bench_mesh(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
         let mut cgal = CgalBaseline::new(
             a.vs_cgal,
             "cgal_surface_mesher",
-            vec![
-                "--surface".into(),
-                name.into(),
-                "--angle".into(),
-                "30".into(),
-                "--radius".into(),
-                r.to_string(),
-                "--distance".into(),
-                r.to_string(),
-                "--manifold".into(),
-            ],
+            [
+                vec!["--surface".into(), name.into()],
+                cgal_criteria_args(r),
+                vec!["--manifold".into()],
+            ]
+            .concat(),
         );
         let mut times = Vec::new();
         let mut res = None;

@@ -20,7 +20,7 @@
 //! 0.004 / 0.037 s, scan 0.003 / 0.016 s, d_M^inf 0.06 / 0.38 s (not needed with a size;
 //! `mesh` computes it on first use only).
 
-use crate::bench::{BenchArgs, CgalBaseline, Row, median};
+use crate::bench::{BenchArgs, CgalBaseline, Row, cgal_criteria_args, median};
 use anyhow::{Context, Result};
 use oracle::image::{ImageOptions, ImageSurface, NiftiWriteOptions, synthetic};
 use rdt_mesher::{Criteria, MeshOptions, Sizing};
@@ -59,22 +59,22 @@ pub fn bench_image(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
         let mut cgal = CgalBaseline::new(
             a.vs_cgal,
             "cgal_image_mesher",
-            vec![
-                "--tanglecube-grid".into(),
-                n.to_string(),
-                "--iso".into(),
-                "0".into(),
-                "--angle".into(),
-                "30".into(),
-                "--radius".into(),
-                r.to_string(),
-                "--distance".into(),
-                r.to_string(),
-                "--write-inr".into(),
-                dir.join(format!("cgal_tanglecube_{n}.inr"))
-                    .display()
-                    .to_string(),
-            ],
+            [
+                vec![
+                    "--tanglecube-grid".into(),
+                    n.to_string(),
+                    "--iso".into(),
+                    "0".into(),
+                ],
+                cgal_criteria_args(r),
+                vec![
+                    "--write-inr".into(),
+                    dir.join(format!("cgal_tanglecube_{n}.inr"))
+                        .display()
+                        .to_string(),
+                ],
+            ]
+            .concat(),
         );
         let (mut load, mut scan, mut dm, mut times) = (vec![], vec![], vec![], vec![]);
         let mut last = None;
