@@ -269,6 +269,24 @@ pub fn random_line_seeds<S: Surface + ?Sized>(s: &S, lines: usize, seed: u64) ->
 /// gradient steps stall) the nearest crossing found on rays from `p`
 /// ([`nearest_crossing_on_rays`]). The fallback's point is on S but maybe not the closest, so
 /// the distance it gives is an upper bound: a check built on it errs on the safe side.
+///
+/// ```
+/// use glam::DVec3;
+/// use oracle::{BoundingSphere, Surface, roots};
+/// // The unit sphere with a value that is flat (clamped) away from it: gradient steps stall.
+/// struct Flat;
+/// impl Surface for Flat {
+///     fn bounding_sphere(&self) -> BoundingSphere {
+///         BoundingSphere { center: DVec3::ZERO, radius: 2.0 }
+///     }
+///     fn value(&self, p: DVec3) -> f64 { (p.length() - 1.0).clamp(-0.05, 0.05) }
+/// }
+/// let p = DVec3::new(0.0, 0.0, 1.5);
+/// assert!(roots::project_newton(&Flat, p).is_none());
+/// let q = roots::project_robust(&Flat, p).unwrap();
+/// assert!((q.length() - 1.0).abs() < 1e-6); // on S
+/// assert!((q - p).length() < 0.51); // about the true distance 0.5, never below it
+/// ```
 pub fn project_robust<S: Surface + ?Sized>(s: &S, p: DVec3) -> Option<DVec3> {
     project_newton(s, p).or_else(|| nearest_crossing_on_rays(s, p))
 }
