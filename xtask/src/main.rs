@@ -39,6 +39,10 @@ mod verify_cmd;
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
+    /// Worker threads (default: RAYON_NUM_THREADS, else one per core). The results do not
+    /// depend on it; 1 runs everything on one core.
+    #[arg(long, global = true)]
+    threads: Option<usize>,
 }
 
 #[derive(Subcommand)]
@@ -60,6 +64,20 @@ enum Cmd {
 
 fn main() {
     let cli = Cli::parse();
+    if let Some(n) = cli.threads {
+        let built = if n == 0 {
+            Err("--threads 0: give at least 1 thread".to_string())
+        } else {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build_global()
+                .map_err(|e| format!("--threads {n}: {e}"))
+        };
+        if let Err(msg) = built {
+            eprintln!("error: {msg}");
+            std::process::exit(2);
+        }
+    }
     let r = match &cli.cmd {
         Cmd::Mesh(a) => mesh_cmd::run(a),
         Cmd::Delaunay(a) => delaunay_cmd::run(a),

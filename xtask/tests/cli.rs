@@ -424,6 +424,50 @@ fn verify_dm_source_for_expressions() {
     mentions(&e, &["--dm", "--against"]);
 }
 
+/// `--threads N` sizes the pool (any subcommand); the mesh does not depend on it, and 0 is a
+/// usage error naming the option.
+#[test]
+fn threads_option_keeps_the_mesh() {
+    let d = scratch("threads");
+    let run = |t: &str, out: &str| {
+        ok(&xtask(
+            &d,
+            &[
+                "mesh",
+                "-q",
+                "implicit:torus",
+                "--size",
+                "0.05",
+                "--no-verify",
+                "--threads",
+                t,
+                "-o",
+                out,
+            ],
+        ))
+    };
+    run("1", "one.ply");
+    run("3", "three.ply");
+    let one = std::fs::read(d.join("one.ply")).unwrap();
+    let three = std::fs::read(d.join("three.ply")).unwrap();
+    assert!(one.len() > 1000);
+    assert_eq!(one, three, "the mesh depends on the thread count");
+    let out = xtask(
+        &d,
+        &[
+            "--threads",
+            "0",
+            "mesh",
+            "-q",
+            "implicit:sphere",
+            "--size",
+            "0.3",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    mentions(&text(&out.stderr), &["--threads 0"]);
+}
+
 #[test]
 fn verify_mesh_with_boundary_fails() {
     let d = scratch("verify_boundary");
