@@ -90,7 +90,7 @@ pub struct MeshArgs {
     #[command(flatten)]
     pub surface: SurfaceOptions,
     /// Image: `all` meshes every label present except 0, one file per label
-    /// (NAME_label<L>.ply, or -o's stem with _label<L>).
+    /// (`NAME_label<L>.ply`, or -o's stem with `_label<L>`).
     #[arg(long, conflicts_with = "label")]
     pub labels: Option<String>,
 }

@@ -1,7 +1,7 @@
 //! The refinement loop of section 6.1, with the control-point initialization of section 6.4.3
 //! and the manifold patch of section 6.6.1.
 //!
-//! # Invariants kept by [`Refiner`]
+//! # Invariants kept by `Refiner` (private)
 //! - `cells[c]` holds the circumcenter of every live finite cell `c` and the surface value
 //!   there (or "outside the bounding ball"); it is recomputed for every created cell.
 //! - `restricted` holds exactly the facets of Del(E) whose (clipped) dual Voronoi edge meets S
