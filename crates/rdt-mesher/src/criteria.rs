@@ -149,8 +149,10 @@ impl Criteria {
     }
 
     /// [`Criteria::badness_with_sigma`] from the facet's [`Criteria::facet_bound`] `(lb, cc)`:
-    /// the same value, up to rounding (with a constant sigma the bound's rc / sigma is at most
-    /// r / sigma).
+    /// the same value, up to rounding, when `r` is the radius of a ball through the triangle
+    /// (with a constant sigma the bound's rc / sigma is at most r / sigma). The public
+    /// `badness` keeps its own formula: it takes any `r` as given, even one below the
+    /// circumradius.
     pub(crate) fn badness_from_bound(
         &self,
         (lb, cc): (f64, DVec3),
