@@ -51,6 +51,10 @@ pub struct RegressArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Also write each case's mesh as binary PLY here (`CASE-ORACLE.ply`), e.g. to compare
+    /// meshes byte for byte across a refactor.
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
 }
 
 /// One surface of the suite and its two sizes (sigma for ~2k and ~50k vertices, chosen
@@ -213,6 +217,11 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         ..Default::default()
     };
     let res = rdt_mesher::mesh(surface, &opts).with_context(|| format!("meshing {case}"))?;
+    if let Some(dir) = &a.out_dir {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let p = dir.join(format!("{case}-{oname}.ply"));
+        meshio::write(&p, &res.mesh).with_context(|| format!("writing {}", p.display()))?;
+    }
     let st = &res.stats;
     let max_r = res
         .balls
