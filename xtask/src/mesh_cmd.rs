@@ -385,9 +385,9 @@ pub fn run(a: &MeshArgs) -> Result<()> {
         }
     }
     if let Some(s) = &st.stopped_by {
-        outln!("stopped by {s}; unmet: {}", st.unmet.join("; "));
+        outln!("stopped by {s}; unmet: {}", st.unmet_summary());
     } else if !st.unmet.is_empty() {
-        outln!("unmet: {}", st.unmet.join("; "));
+        outln!("unmet: {}", st.unmet_summary());
     }
     if !st.unmet.is_empty() || st.stopped_by.is_some() {
         VERDICT_FAILED.store(true, Ordering::Relaxed);
@@ -554,7 +554,7 @@ fn run_two_pass(a: &MeshArgs, spec: &str, opened: &surface_spec::Opened, e: f64)
     }
     for (name, st) in [("first", s1), ("second", s2)] {
         if let Some(s) = &st.stopped_by {
-            outln!("{name} pass stopped by {s}; unmet: {}", st.unmet.join("; "));
+            outln!("{name} pass stopped by {s}; unmet: {}", st.unmet_summary());
             VERDICT_FAILED.store(true, Ordering::Relaxed);
         }
     }

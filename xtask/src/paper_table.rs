@@ -150,7 +150,7 @@ impl Pass {
             oracle_calls: st.oracle_value_calls + st.oracle_crossing_calls,
             criteria_met: st.criteria_met,
             manifold: st.nonmanifold_edges + st.nonmanifold_vertices == 0,
-            stopped_by: st.stopped_by.clone(),
+            stopped_by: st.stopped_by.as_ref().map(|s| s.to_string()),
         }
     }
 }

@@ -270,7 +270,7 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         failures.push(format!("stopped by {s}"));
     }
     if !st.unmet.is_empty() {
-        failures.push(format!("unmet: {}", st.unmet.join("; ")));
+        failures.push(format!("unmet: {}", st.unmet_summary()));
     }
     // The checks that must have run (a SKIP would hide a guarantee).
     let mut required = vec![

@@ -1,5 +1,9 @@
 //! Refinement criteria: when is a surface Delaunay ball *bad* (paper, sections 6.1 and 6.4.1).
+//!
+//! The size bound sigma is read only through this module ([`Criteria::sigma_at`] and the
+//! crate-internal helpers beside it), and validated here once ([`Criteria::validate`]).
 
+use crate::error::MeshError;
 use glam::DVec3;
 use std::fmt;
 use std::sync::Arc;
@@ -74,10 +78,87 @@ impl Criteria {
         }
     }
 
+    /// Criteria with their bounds checked ([`Criteria::validate`]).
+    ///
+    /// ```
+    /// use rdt_mesher::{Criteria, Sizing};
+    /// assert!(Criteria::new(Some(Sizing::Constant(0.05)), 30.0, None).is_ok());
+    /// assert!(Criteria::new(Some(Sizing::Constant(-1.0)), 30.0, None).is_err());
+    /// assert!(Criteria::new(None, 40.0, None).is_err());
+    /// ```
+    pub fn new(
+        size: Option<Sizing>,
+        min_angle_deg: f64,
+        max_distance: Option<f64>,
+    ) -> Result<Self, MeshError> {
+        let c = Criteria {
+            size,
+            min_angle_deg,
+            max_distance,
+        };
+        c.validate()?;
+        Ok(c)
+    }
+
+    /// Check the bounds: a constant sigma and the distance bound positive and finite, the
+    /// angle bound in [0, 35) degrees. (A sizing field is checked where it is evaluated.)
+    pub fn validate(&self) -> Result<(), MeshError> {
+        if let Some(Sizing::Constant(s)) = &self.size
+            && !(*s > 0.0 && s.is_finite())
+        {
+            return Err(MeshError::InvalidSize(*s));
+        }
+        if !(self.min_angle_deg >= 0.0 && self.min_angle_deg < 35.0) {
+            return Err(MeshError::InvalidAngle(self.min_angle_deg));
+        }
+        if let Some(d) = self.max_distance
+            && !(d > 0.0 && d.is_finite())
+        {
+            return Err(MeshError::InvalidDistance(d));
+        }
+        Ok(())
+    }
+
+    /// sigma(c), or `None` without a size criterion.
+    #[inline]
+    pub fn sigma_at(&self, c: DVec3) -> Option<f64> {
+        self.size.as_ref().map(|s| s.at(c))
+    }
+
+    /// [`Criteria::sigma_at`], with an error where a sizing field is not positive and finite
+    /// (a constant was checked by [`Criteria::validate`]).
+    pub(crate) fn sigma_checked(&self, c: DVec3) -> Result<Option<f64>, MeshError> {
+        let sigma = self.sigma_at(c);
+        if let (Some(Sizing::Field(_)), Some(s)) = (&self.size, sigma)
+            && !(s > 0.0 && s.is_finite())
+        {
+            return Err(MeshError::InvalidSizeField { value: s, at: c });
+        }
+        Ok(sigma)
+    }
+
+    /// The length scale of the criteria at `c`: sigma(c), else the distance bound, else
+    /// `default` (the radius bound of section 6.2's persistent balls).
+    pub(crate) fn scale_at(&self, c: DVec3, default: f64) -> f64 {
+        match self.sigma_at(c) {
+            Some(s) => s,
+            None => self.max_distance.unwrap_or(default),
+        }
+    }
+
+    /// The distance criterion's ratio for the triangle `pts` and a ball centered at `c`:
+    /// distance(circumcenter, c) over the bound (`None` without a distance bound).
+    pub(crate) fn distance_ratio(&self, pts: [DVec3; 3], c: DVec3) -> Option<f64> {
+        self.max_distance.map(|d| {
+            let (cc, _) = triangle_circumcircle(pts);
+            (cc - c).length() / d
+        })
+    }
+
     /// How bad the ball is: a value > 1 means bad (the larger the worse), <= 1 good.
     /// `tri` are the facet's vertices, `c` the ball center, `r` its radius.
     pub fn badness(&self, tri: [DVec3; 3], c: DVec3, r: f64) -> f64 {
-        self.badness_with_sigma(tri, c, r, self.size.as_ref().map(|s| s.at(c)))
+        self.badness_with_sigma(tri, c, r, self.sigma_at(c))
     }
 
     /// [`Criteria::badness`] with sigma(c) already evaluated (`None` without a size

@@ -1,8 +1,8 @@
 //! Choice of sigma (section 6.5): a d_M estimate from the lambda-medial axis of a uniform sample
 //! (Chazal & Lieutier), and the two-pass mesher built on it.
 
-use crate::refine::{MeshError, MeshOptions, MeshResult, mesh_with_progress};
 use crate::{Criteria, Progress, Sizing};
+use crate::{MeshError, MeshOptions, MeshResult, mesh_with_progress};
 use delaunay3::Triangulation;
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};

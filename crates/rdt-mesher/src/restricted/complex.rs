@@ -1,6 +1,6 @@
-//! Del_S(E) as a set of facets of Del(E), stored without hashing: a slab of restricted
-//! facets, reached from the two cells of each facet (`of_facet`) and from queue entries
-//! (slab index + version).
+//! The complex Del_S(E) of section 6.1 as a set of facets of Del(E), stored without hashing:
+//! a slab of restricted facets, reached from the two cells of each facet (`of_facet`) and from
+//! queue entries (slab index + version).
 //!
 //! # Invariants
 //! - A slab slot is live iff `slots[i].key[0] != FREE`; a live key (sorted vertex triple) is
@@ -10,6 +10,10 @@
 //!   `of_facet` compares the key, so a stale pointer is a miss, never a wrong hit.
 //! - Versions are unique per registration (a wrapping `u32`): a queue entry (index, version)
 //!   is fresh iff the slot is live with that version.
+//! - Bit i of `facet_mask[c]`: facet i of cell c may be registered. Set on both cells of a
+//!   facet when it is registered; a set bit without an entry is harmless (a missed lookup),
+//!   a registered facet always has its bits set.
+//! - `vertex_facets[v]` counts the registered facets incident to `v`.
 
 use delaunay3::{CellId, Facet, VertexId};
 use glam::DVec3;
@@ -17,16 +21,21 @@ use glam::DVec3;
 /// A restricted facet and its surface Delaunay ball.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RFacet {
+    /// The facet, seen from a finite cell.
     pub facet: Facet,
     /// Vertex ids oriented counter-clockwise seen from outside (normal toward value > 0).
     pub oriented: [VertexId; 3],
+    /// The center of its surface Delaunay ball (a point of S on its dual).
     pub center: DVec3,
+    /// The radius of that ball.
     pub radius: f64,
+    /// Its badness (`crate::Criteria`): > 1 is bad.
     pub bad: f64,
+    /// Unique per registration (see the invariants).
     pub version: u32,
     /// The surface Delaunay ball is not computed yet: the facet was known bad without it
-    /// (`Refiner::test_facets`). Then `center` is NaN, `radius` 0 and `bad` a lower bound of
-    /// its badness, > 1. Resolved (`Refiner::resolve_lazy`) when its queue entry is popped.
+    /// (see `crate::restricted`). Then `center` is NaN, `radius` 0 and `bad` a lower bound of
+    /// its badness, > 1. Resolved (`Mesher::resolve_lazy`) when its queue entry is popped.
     pub lazy: bool,
 }
 
@@ -36,9 +45,13 @@ struct Slot {
     rf: RFacet,
 }
 
+/// The key of a free slot.
 const FREE: VertexId = VertexId::MAX;
+/// No slot.
 const NONE: u32 = u32::MAX;
 
+/// Del_S(E): the registered facets and their per-cell and per-vertex indexes (see the module
+/// docs).
 #[derive(Default)]
 pub(crate) struct Restricted {
     slots: Vec<Slot>,
@@ -46,18 +59,89 @@ pub(crate) struct Restricted {
     len: usize,
     /// `of_facet[4 c + i]`: the slot last registered for facet i of cell c, or `NONE`.
     of_facet: Vec<u32>,
+    facet_mask: Vec<u8>,
+    vertex_facets: Vec<u32>,
+    version: u32,
 }
 
 impl Restricted {
+    /// Registered facets.
     pub fn len(&self) -> usize {
         self.len
     }
 
+    /// Remove every facet (versions keep counting: entries queued before stay stale).
     pub fn clear(&mut self) {
         self.slots.clear();
         self.free.clear();
         self.len = 0;
         self.of_facet.clear();
+        self.facet_mask.clear();
+        self.vertex_facets.clear();
+    }
+
+    /// Make room for the vertex ids below `n`.
+    pub fn ensure_vertices(&mut self, n: usize) {
+        if self.vertex_facets.len() < n {
+            self.vertex_facets.resize(n, 0);
+        }
+    }
+
+    /// Registered facets incident to vertex `v`.
+    #[inline]
+    pub fn facets_at(&self, v: VertexId) -> u32 {
+        self.vertex_facets.get(v as usize).copied().unwrap_or(0)
+    }
+
+    /// The facets of cell `c` that may be registered (bit i: facet i).
+    #[inline]
+    pub fn mask(&self, c: CellId) -> u8 {
+        self.facet_mask.get(c as usize).copied().unwrap_or(0)
+    }
+
+    /// Cell `c` is new: none of its facets is registered.
+    #[inline]
+    pub fn reset_mask(&mut self, c: CellId) {
+        if let Some(m) = self.facet_mask.get_mut(c as usize) {
+            *m = 0;
+        }
+    }
+
+    /// Register `rf` (its version is assigned here) under `key` (sorted, not registered,
+    /// vertices below `ensure_vertices`), seen from `rf.facet` and its mirror `m`. Returns
+    /// the slot and the facet as stored.
+    pub fn register(&mut self, key: [VertexId; 3], mut rf: RFacet, m: Facet) -> (u32, RFacet) {
+        self.version = self.version.wrapping_add(1);
+        rf.version = self.version;
+        let f = rf.facet;
+        let idx = self.insert(key, rf, m);
+        let need = f.cell.max(m.cell) as usize + 1;
+        if self.facet_mask.len() < need {
+            self.facet_mask.resize(need + need / 2, 0);
+        }
+        self.facet_mask[f.cell as usize] |= 1 << f.index;
+        self.facet_mask[m.cell as usize] |= 1 << m.index;
+        for v in key {
+            self.vertex_facets[v as usize] += 1;
+        }
+        (idx, rf)
+    }
+
+    /// Remove the facet `key`, facet `i` of cell `c`, if registered, and return it.
+    pub fn unregister(&mut self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<RFacet> {
+        let rf = self.remove(c, i, key)?;
+        for v in key {
+            self.vertex_facets[v as usize] -= 1;
+        }
+        Some(rf)
+    }
+
+    /// The facets with their keys, sorted by key.
+    pub fn sorted(&self) -> Vec<([VertexId; 3], RFacet)> {
+        // Sort the (unique) keys with their slots, then gather: cheaper than moving facets.
+        let mut keys: Vec<([VertexId; 3], u32)> = self.iter().map(|(i, k, _)| (k, i)).collect();
+        keys.sort_unstable();
+        keys.into_iter().map(|(k, i)| (k, *self.slot(i))).collect()
     }
 
     /// The facet in slot `idx` if it is live with `version`.
@@ -74,9 +158,9 @@ impl Restricted {
         (s.key[0] != FREE && s.rf.version == version).then_some(&mut s.rf)
     }
 
-    /// Register `rf` under `key` (which must not be registered), pointed at from the facet
-    /// `f` and its mirror `m`. Returns the slot index.
-    pub fn insert(&mut self, key: [VertexId; 3], rf: RFacet, m: Facet) -> u32 {
+    /// Store `rf` under `key` (which must not be registered), pointed at from the facet
+    /// `f` and its mirror `m`. Returns the slot index. (Slab only: see `register`.)
+    fn insert(&mut self, key: [VertexId; 3], rf: RFacet, m: Facet) -> u32 {
         debug_assert!(self.find(rf.facet.cell, rf.facet.index, key).is_none());
         let slot = Slot { key, rf };
         let idx = match self.free.pop() {
@@ -107,8 +191,9 @@ impl Restricted {
         (s.key == key).then_some(idx)
     }
 
-    /// Remove the facet `key`, seen as facet `i` of cell `c`, if registered, and return it.
-    pub fn remove(&mut self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<RFacet> {
+    /// Remove the facet `key`, seen as facet `i` of cell `c`, if stored, and return it.
+    /// (Slab only: see `unregister`.)
+    fn remove(&mut self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<RFacet> {
         let idx = self.find(c, i, key)?;
         let s = &mut self.slots[idx as usize];
         s.key[0] = FREE;
@@ -133,6 +218,21 @@ impl Restricted {
             .filter(|(_, s)| s.key[0] != FREE)
             .map(|(i, s)| (i as u32, s.key, &s.rf))
     }
+}
+
+/// `v` sorted: the key of a facet.
+#[inline]
+pub(crate) fn sorted3(mut v: [VertexId; 3]) -> [VertexId; 3] {
+    if v[0] > v[1] {
+        v.swap(0, 1);
+    }
+    if v[1] > v[2] {
+        v.swap(1, 2);
+    }
+    if v[0] > v[1] {
+        v.swap(0, 1);
+    }
+    v
 }
 
 #[cfg(test)]

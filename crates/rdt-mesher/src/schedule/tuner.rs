@@ -1,4 +1,4 @@
-//! Parallel or sequential: which way the refinement runs, chosen from measured throughput.
+//! Parallel or sequential (ours): which way the refinement runs, chosen from measured throughput.
 //!
 //! The parallel sections of the refinement (conflict-zone searches beside the processing of
 //! the last batch, facet tests, circumcenters) pay off when the threads run on cores of their
@@ -16,7 +16,7 @@
 //! for a while before they sleep, and on a shared core that slows the next batch down). The
 //! faster mode then runs the next [`EXPLOIT_WINDOWS`] windows, and the tuner explores again.
 //! Only the speed depends on it: the refinement computes the same thing in both modes (see
-//! `Refiner::refine_batch`), so the mesh is the same whatever the mode of each batch.
+//! `crate::schedule`), so the mesh is the same whatever the mode of each batch.
 
 use std::time::Duration;
 

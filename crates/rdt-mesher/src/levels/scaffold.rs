@@ -1,4 +1,5 @@
-//! Scaffold points: an acceleration of the refinement that leaves its output unchanged.
+//! Scaffold points (ours): an acceleration of section 6.1's refinement that leaves its
+//! output unchanged.
 //!
 //! The 3D Delaunay triangulation of a sample of a surface with tunnels or thin parts (a
 //! torus, the tanglecube) is full of long cells joining opposite sides of the solid, whose
@@ -7,16 +8,16 @@
 //! torus at sigma = 0.0194 the refinement takes about 40% fewer cycles on one thread.
 //!
 //! Scaffold points are vertices of Del(E) but not samples, and never appear in the output:
-//! - a restricted facet with a scaffold vertex is always bad (`Refiner::known_badness`), so
+//! - a restricted facet with a scaffold vertex is always bad (`Mesher::known_badness`), so
 //!   the refinement keeps inserting surface points until no Voronoi edge of a scaffold point
 //!   meets S (it terminates: such a facet's ball has radius at least the scaffold point's
 //!   distance to S, which is positive);
-//! - at the end, `Refiner::scaffold_clear` checks that every Voronoi vertex of every scaffold
+//! - at the end, `Scaffold::is_clear` checks that every Voronoi vertex of every scaffold
 //!   point (the circumcenters of its cells, whose values are known) is on the scaffold point's
 //!   side of S. If that holds, S does not enter a scaffold point's Voronoi cell through its
 //!   vertices or edges, and Del_S(E) is the restricted Delaunay triangulation of the samples
 //!   alone. If it fails, the triangulation is rebuilt from the samples alone and the
-//!   refinement resumes (`Refiner::drop_scaffold`): the paper's algorithm, unaccelerated.
+//!   refinement resumes (`Mesher::drop_scaffold`): the paper's algorithm, unaccelerated.
 //!
 //! The points: nodes of a grid over a box around the initial sample, inside S (value < 0), on
 //! the ridges of the half-width of the largest all-inside block of nodes around them (a
@@ -25,23 +26,103 @@
 //! thinned to about their distance to S apart. Outside points were measured to slow the torus
 //! and the image down, not up.
 
-use crate::Sizing;
+use crate::criteria::Criteria;
+use crate::restricted::Restricted;
+use crate::voronoi::Voronoi;
+use delaunay3::{Insertion, Triangulation, VertexId};
 use glam::DVec3;
 use oracle::Surface;
 use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// The scaffold points among the vertices of Del(E).
+///
+/// Invariant: `count` is the number of nonzero entries of `sign`.
+#[derive(Default)]
+pub(crate) struct Scaffold {
+    /// By vertex id: 0 for a sample, else the sign of the surface's value at a scaffold point.
+    sign: Vec<i8>,
+    /// Scaffold vertices currently in Del(E).
+    count: usize,
+}
+
+impl Scaffold {
+    /// Scaffold vertices in Del(E).
+    #[inline]
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Whether vertex `v` is a scaffold point.
+    #[inline]
+    pub fn contains(&self, v: VertexId) -> bool {
+        self.sign.get(v as usize).is_some_and(|&s| s != 0)
+    }
+
+    /// Forget the scaffold (the triangulation was rebuilt without it).
+    pub fn clear(&mut self) {
+        self.sign.clear();
+        self.count = 0;
+    }
+
+    /// Insert the scaffold points of `s` for `criteria` into `tri` and record their signs.
+    /// `extent`: a box around the initial sample (the grid's domain). Returns the time spent
+    /// inserting.
+    pub fn insert(
+        &mut self,
+        s: &dyn Surface,
+        criteria: &Criteria,
+        extent: (DVec3, DVec3),
+        tri: &mut Triangulation,
+    ) -> Result<Duration, delaunay3::Error> {
+        let pts = scaffold_points(s, criteria, Some(extent));
+        let t = Instant::now();
+        for p in pts {
+            let sign = if s.value(p) < 0.0 { -1 } else { 1 };
+            if let Insertion::New(v) = tri.insert(p)? {
+                let v = v as usize;
+                if self.sign.len() <= v {
+                    self.sign.resize(v + 1, 0);
+                }
+                self.sign[v] = sign;
+                self.count += 1;
+            }
+        }
+        Ok(t.elapsed())
+    }
+
+    /// The final check (see the module docs): no restricted facet has a scaffold vertex, and
+    /// every Voronoi vertex of a scaffold point (the circumcenters of its cells, whose values
+    /// are cached) is on its side of S.
+    pub fn is_clear(&self, restricted: &Restricted, tri: &Triangulation, vor: &Voronoi) -> bool {
+        (0..self.sign.len()).all(|v| {
+            let sign = self.sign[v];
+            if sign == 0 {
+                return true;
+            }
+            if restricted.facets_at(v as VertexId) != 0 {
+                return false;
+            }
+            tri.incident_cells(v as VertexId).iter().all(|&c| {
+                let f = vor.value_or_nan(c);
+                if sign < 0 { f < 0.0 } else { f > 0.0 }
+            })
+        })
+    }
+}
 
 /// Grid nodes per axis over the grid's cube (see `scaffold_points`).
 pub(crate) const GRID: usize = 32;
 /// Largest block half-width (in grid steps) measured around a node.
 const MAX_BLOCK: usize = 8;
 
-/// Scaffold points of `s` for the size `size` (see the module docs), in a deterministic order:
+/// Scaffold points of `s` for the size bound of `criteria` (see the module docs), in a deterministic order:
 /// on a `GRID` grid, or a finer one when that finds fewer than `FEW` points (thin solids).
 /// The grid covers `extent` (a box around the initial sample, enlarged by 10%), or the
 /// bounding ball's cube.
 pub(crate) fn scaffold_points(
     s: &dyn Surface,
-    size: Option<&Sizing>,
+    criteria: &Criteria,
     extent: Option<(DVec3, DVec3)>,
 ) -> Vec<DVec3> {
     let ball = s.bounding_sphere();
@@ -55,11 +136,11 @@ pub(crate) fn scaffold_points(
     if half.is_nan() || half <= 0.0 {
         return Vec::new();
     }
-    let pts = scaffold_on_grid(s, size, center, half, GRID);
+    let pts = scaffold_on_grid(s, criteria, center, half, GRID);
     if pts.len() >= FEW {
         return pts;
     }
-    scaffold_on_grid(s, size, center, half, FINE_GRID)
+    scaffold_on_grid(s, criteria, center, half, FINE_GRID)
 }
 
 /// Finer grid of `scaffold_points`.
@@ -70,7 +151,7 @@ const FEW: usize = 16;
 /// `n`^3 nodes over the cube of center `center` and half-side `half`.
 fn scaffold_on_grid(
     s: &dyn Surface,
-    size: Option<&Sizing>,
+    criteria: &Criteria,
     center: DVec3,
     half: f64,
     n: usize,
@@ -145,7 +226,7 @@ fn scaffold_on_grid(
                     continue;
                 }
                 let q = node(i, j, k);
-                let sigma = size.map_or(0.0, |s| s.at(q));
+                let sigma = criteria.sigma_at(q).unwrap_or(0.0);
                 if !(sigma.is_finite() && sigma >= 0.0) || (w as f64) * g < 2.0 * sigma {
                     continue;
                 }
@@ -199,7 +280,7 @@ mod tests {
         let s = Shell;
         let g = 4.0 / (GRID - 1) as f64;
         for sigma in [0.01, 0.05, 0.1] {
-            let pts = scaffold_points(&s, Some(&Sizing::Constant(sigma)), None);
+            let pts = scaffold_points(&s, &Criteria::uniform(sigma), None);
             assert!(!pts.is_empty(), "sigma {sigma}");
             for p in &pts {
                 // Inside the wall 0.5 < |p| < 1.5, at least a grid step and 2 sigma from S.
@@ -212,6 +293,6 @@ mod tests {
             }
         }
         // A wall too thin for the size: no scaffold.
-        assert!(scaffold_points(&s, Some(&Sizing::Constant(0.6)), None).is_empty());
+        assert!(scaffold_points(&s, &Criteria::uniform(0.6), None).is_empty());
     }
 }

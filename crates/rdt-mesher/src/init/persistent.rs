@@ -1,4 +1,4 @@
-//! Initial samples: persistent facets (section 6.2, with section 6.4.2's bipolar variant).
+//! Persistent facets (section 6.2, with section 6.4.2's bipolar variant): an initial sample.
 //!
 //! For every control point x (a point of S, at least one per component), a ball B_x of radius
 //! rho_x < min(dist(x, other control points) / 2, d_M(x), sigma(x) / 3) is centered at x and
@@ -17,7 +17,8 @@
 //! intersection oracle [`Surface::crossings`]) are added to the sample until every persistent
 //! facet's dual edge crosses S exactly once; they are far from x, so the facet stays persistent.
 
-use crate::refine::{MeshError, MeshOptions};
+use crate::error::MeshError;
+use crate::options::MeshOptions;
 use delaunay3::{Dual, Insertion, Triangulation, VertexId};
 use glam::DVec3;
 use oracle::Surface;
@@ -92,10 +93,7 @@ pub fn persistent_facets(
         if half <= 0.0 {
             continue; // duplicate control point: the first copy gets the facet
         }
-        let sigma = match &opts.criteria.size {
-            Some(s) => s.at(x),
-            None => opts.criteria.max_distance.unwrap_or(0.1 * bs.radius),
-        };
+        let sigma = opts.criteria.scale_at(x, 0.1 * bs.radius);
         if !(sigma > 0.0 && sigma.is_finite()) {
             return Err(MeshError::InvalidSizeField {
                 value: sigma,

@@ -1,0 +1,150 @@
+//! Control points and rays (section 6.4.3): the control points E'_i (the oracle's seeds, at
+//! least one per component) start the sample; after the queue empties, a random ray and its
+//! opposite are shot from every control point that is not yet a vertex of Del_S(E), and their
+//! first crossings of S are inserted, until every control point is a vertex (lemma 6.6).
+
+use crate::error::MeshError;
+use crate::options::{Initialization, MeshOptions};
+use crate::state::Mesher;
+use delaunay3::Insertion;
+use glam::DVec3;
+use oracle::Surface;
+use std::time::Instant;
+
+/// Rounds of random rays (section 6.4.3) per control point before it is reported missing.
+const MAX_RAY_ROUNDS: u32 = 16;
+
+/// Control points: the oracle's seeds (or the user's), thinned by farthest-point selection.
+fn control_points(s: &dyn Surface, opts: &MeshOptions) -> Vec<DVec3> {
+    let mut pts = match &opts.control_points {
+        Some(p) => p.clone(),
+        None => s.seed_points(opts.seed),
+    };
+    pts.retain(|p| p.is_finite());
+    let k = opts.max_control_points.max(4);
+    if pts.len() <= k {
+        return pts;
+    }
+    // Farthest-point selection, deterministic (starts from the first point).
+    let mut chosen = vec![pts[0]];
+    let mut dist: Vec<f64> = pts.iter().map(|p| p.distance_squared(pts[0])).collect();
+    while chosen.len() < k {
+        let (i, _) = dist
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
+            .unwrap();
+        let p = pts[i];
+        chosen.push(p);
+        for (d, q) in dist.iter_mut().zip(&pts) {
+            *d = d.min(q.distance_squared(p));
+        }
+    }
+    chosen
+}
+
+impl Mesher<'_> {
+    /// The initial sample (control points or persistent facets, the given points, and a few
+    /// random-line seeds if needed for a 3D triangulation), the scaffold, and a full scan of
+    /// Del(E).
+    pub(crate) fn initialize(&mut self) -> Result<(), MeshError> {
+        let mut control = control_points(self.s, self.opts);
+        let persistent = self.opts.initialization == Initialization::PersistentFacets;
+        if persistent {
+            // E_i replaces E'_i; the control-point loop is not used (lemma 6.1 instead).
+            control = super::persistent_facet_points(self.s, &control, self.opts)?;
+        }
+        let mut pts: Vec<DVec3> = control.clone();
+        pts.extend(self.opts.initial_points.iter().copied());
+        if pts.is_empty() {
+            return Err(MeshError::NoSeeds {
+                center: self.ball.center,
+                radius: self.ball.radius,
+            });
+        }
+        // Too few points for a 3D triangulation: add crossings of more random lines.
+        let mut extra_seed = self.opts.seed;
+        let mut tries = 0;
+        while pts.len() < 8 && tries < 8 {
+            extra_seed = extra_seed.wrapping_add(0x9E37);
+            pts.extend(oracle::roots::random_line_seeds(self.s, 64, extra_seed));
+            tries += 1;
+        }
+        let t = Instant::now();
+        let mut ids = Vec::with_capacity(pts.len());
+        for p in &pts {
+            ids.push(match self.tri_mut().insert(*p)? {
+                Insertion::New(v) | Insertion::Duplicate(v) => v,
+            });
+        }
+        self.t_delaunay += t.elapsed();
+        if self.tri.dimension() < 3 {
+            return Err(MeshError::DegenerateSeeds(pts.len()));
+        }
+        let vertices = &mut self.control.vertices;
+        *vertices = if persistent {
+            Vec::new()
+        } else {
+            ids[..control.len()].to_vec()
+        };
+        vertices.sort_unstable();
+        vertices.dedup();
+        self.stats.control_points = vertices.len();
+        if self.opts.scaffold {
+            let lo = pts.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+            let hi = pts.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+            let tri = crate::state::unique(&mut self.tri);
+            self.t_delaunay += self
+                .scaffold
+                .insert(self.s, &self.opts.criteria, (lo, hi), tri)?;
+            self.stats.scaffold_points = self.scaffold.count();
+        }
+        self.ensure_vertex_slots();
+        self.full_scan()
+    }
+
+    /// For each control point not on Del_S(E), insert the first crossings of a random ray and
+    /// of its opposite. Returns whether anything was inserted.
+    pub(crate) fn shoot_control_rays(&mut self) -> Result<bool, MeshError> {
+        let mut any = false;
+        let control = self.control.vertices.clone();
+        if self.control.ray_attempts.len() < control.len() {
+            self.control.ray_attempts.resize(control.len(), 0);
+        }
+        for (k, v) in control.into_iter().enumerate() {
+            if self.restricted.facets_at(v) > 0 {
+                continue;
+            }
+            // Lemma 6.6 needs a smooth surface; near a singular point a control point may
+            // never become a vertex and the rays would insert points without end: give up
+            // after a few rounds and report the control point as missing.
+            if self.control.ray_attempts[k] >= MAX_RAY_ROUNDS {
+                continue;
+            }
+            self.control.ray_attempts[k] += 1;
+            if self.budget_exceeded() {
+                return Ok(false);
+            }
+            let x = self.tri.point(v);
+            let dir = self.control.rng.unit_vector();
+            for d in [dir, -dir] {
+                let start = x + d * (100.0 * self.s.tolerance());
+                let Some((a, b)) = self.ball.clip_ray(start, d) else {
+                    continue;
+                };
+                let mut buf = Vec::new();
+                let t = Instant::now();
+                self.crossing_calls += 1;
+                self.s.crossings(a, b, &mut buf);
+                self.t_oracle += t.elapsed();
+                if let Some(&c) = buf.first()
+                    && self.insert(c, None)?
+                {
+                    self.stats.ray_insertions += 1;
+                    any = true;
+                }
+            }
+        }
+        Ok(any)
+    }
+}

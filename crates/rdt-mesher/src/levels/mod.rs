@@ -1,0 +1,45 @@
+//! What runs after the queue of section 6.1 empties, level by level (as CGAL's surface mesher
+//! layers its refinement): the manifold patch of section 6.6.1 (`manifold`), and the final
+//! check of the scaffold (`scaffold`, ours), which may rebuild Del(E) without it.
+
+pub(crate) mod manifold;
+pub(crate) mod scaffold;
+
+use crate::error::MeshError;
+use crate::state::Mesher;
+use delaunay3::{Insertion, Triangulation, VertexId};
+use std::sync::Arc;
+use std::time::Instant;
+
+impl Mesher<'_> {
+    /// Rebuild Del(E) from the samples alone (the scaffold dropped) and re-scan it: the
+    /// refinement then resumes as the paper's algorithm.
+    pub(crate) fn drop_scaffold(&mut self) -> Result<(), MeshError> {
+        let t = Instant::now();
+        let n = self.tri.num_vertices();
+        let mut new_id = vec![VertexId::MAX; n];
+        let mut tri = Triangulation::new();
+        for v in 0..n as VertexId {
+            if self.scaffold.contains(v) {
+                continue;
+            }
+            new_id[v as usize] = match tri.insert(self.tri.point(v))? {
+                Insertion::New(w) | Insertion::Duplicate(w) => w,
+            };
+        }
+        self.t_delaunay += t.elapsed();
+        self.tri = Arc::new(tri);
+        for c in self.control.vertices.iter_mut() {
+            *c = new_id[*c as usize];
+        }
+        self.scaffold.clear();
+        self.stats.scaffold_rebuilds += 1;
+        self.voronoi.clear();
+        self.restricted.clear();
+        self.created_stamp.clear();
+        self.queue.clear();
+        self.manifold.last = None;
+        self.ensure_vertex_slots();
+        self.full_scan()
+    }
+}

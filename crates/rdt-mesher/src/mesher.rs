@@ -1,0 +1,95 @@
+//! The algorithm of section 6.1 from start to end: initialize (sections 6.2 / 6.4.3), refine
+//! bad surface Delaunay balls worst first until none is left, shoot the control rays of
+//! section 6.4.3, apply the manifold patch of section 6.6.1, check the scaffold, output.
+
+use crate::error::MeshError;
+use crate::options::MeshOptions;
+use crate::schedule::batch::Scheduler;
+use crate::state::Mesher;
+use crate::stats::{MeshResult, Progress};
+use oracle::Surface;
+
+/// Mesh `surface` with `opts`. See [`mesh_with_progress`].
+pub fn mesh(surface: &dyn Surface, opts: &MeshOptions) -> Result<MeshResult, MeshError> {
+    mesh_with_progress(surface, opts, &mut |_| {})
+}
+
+/// Mesh `surface` with `opts`, calling `progress` every few hundred insertions.
+pub fn mesh_with_progress(
+    surface: &dyn Surface,
+    opts: &MeshOptions,
+    progress: &mut (dyn FnMut(Progress) + Send),
+) -> Result<MeshResult, MeshError> {
+    opts.validate()?;
+    // The refinement loop runs on a thread of rayon's pool, so that its parallel sections
+    // (`crate::schedule`) are split by work stealing with the other workers instead of each
+    // waking the pool from outside.
+    rayon::scope(|_| {
+        let mut r = Mesher::new(surface, opts);
+        r.run(progress)?;
+        r.finish()
+    })
+}
+
+/// Insertions between two calls of the progress callback.
+const PROGRESS_EVERY: usize = 500;
+
+impl Mesher<'_> {
+    /// Initialize, then refine (see the module docs).
+    pub(crate) fn run(
+        &mut self,
+        progress: &mut (dyn FnMut(Progress) + Send),
+    ) -> Result<(), MeshError> {
+        self.initialize()?;
+        self.refine_loop(progress)
+    }
+
+    /// The refinement proper, from the current state (see `run`).
+    pub(crate) fn refine_loop(
+        &mut self,
+        progress: &mut (dyn FnMut(Progress) + Send),
+    ) -> Result<(), MeshError> {
+        self.ensure_vertex_slots();
+        let mut sched = Scheduler::default();
+        let mut since_progress = 0usize;
+        loop {
+            // Main loop: refine bad balls, worst first (in batches).
+            while !self.queue.is_empty() || sched.has_pending() {
+                if !sched.step(self, &mut since_progress)? {
+                    if self.stats.stopped_by.is_some() {
+                        return Ok(());
+                    }
+                    continue;
+                }
+                if since_progress >= PROGRESS_EVERY {
+                    since_progress = 0;
+                    progress(Progress {
+                        sample_points: self.sample_points(),
+                        restricted_facets: self.restricted.len(),
+                        queue: self.queue.len(),
+                    });
+                }
+            }
+            // Section 6.4.3: every control point must be a vertex of Del_S(E).
+            if self.shoot_control_rays()? {
+                continue;
+            }
+            // Section 6.6.1: the manifold patch.
+            if self.opts.manifold && self.push_nonmanifold()? > 0 {
+                continue;
+            }
+            if self.scaffold.count() > 0
+                && !self
+                    .scaffold
+                    .is_clear(&self.restricted, &self.tri, &self.voronoi)
+            {
+                self.drop_scaffold()?;
+                continue;
+            }
+            return Ok(());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

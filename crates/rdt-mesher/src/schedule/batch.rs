@@ -1,0 +1,238 @@
+//! Refinement steps of section 6.1 in batches (ours): the insertions of one batch are those
+//! of a sequential run, in queue order, with their conflict-zone searches done at once.
+//!
+//! A step takes up to `batch_size()` fresh entries from the queue (worst first), finds their
+//! conflict zones at once (in parallel when the tuner says so: a read-only search), inserts
+//! in queue order those whose cells and outside neighbors include no cell destroyed by a
+//! zone inserted before them in the batch (the others go back to the queue), and leaves the
+//! cells created for the next step to process (Del_S(E) and its queue are updated then, while
+//! that step's zones are searched). Such zones stay exact after the earlier insertions (they
+//! may share outside neighbors; proof in `delaunay3::Triangulation::insert_cavity`). The
+//! batches depend only on the queue, never on the thread count, so the mesh is the same on
+//! any number of threads.
+
+use crate::error::MeshError;
+use crate::queue::QEntry;
+use crate::restricted::RFacet;
+use crate::state::Mesher;
+use crate::voronoi::{CellInfo, NEW, cell_info_of};
+use delaunay3::{Cavity, CellId, Changes, Insertion};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Two refinement points closer than this many times the sum of their balls' radii are not
+/// put in the same batch (their conflict zones would likely overlap).
+const NEAR_FACTOR: f64 = 3.0;
+
+/// Largest batch.
+const MAX_BATCH: usize = 32;
+
+/// A batch point's conflict zone, and the `cell_info` of the cells its insertion will create
+/// (`Cavity::new_cells` order, which is `Changes::created` order).
+#[derive(Default)]
+struct Zone {
+    cav: Cavity,
+    infos: Vec<CellInfo>,
+}
+
+/// The batch scheduler of one refinement loop: its batch and the cells the last batch
+/// created (see the module docs).
+///
+/// Invariant: between steps, `pending` are the cells created by the last batch whose
+/// circumcenters, values and facets are not processed yet, with their `pending_infos`
+/// (computed during the search); both empty when the loop ends.
+#[derive(Default)]
+pub(crate) struct Scheduler {
+    batch: Vec<(QEntry, RFacet)>,
+    zones: Vec<Zone>,
+    pending: Vec<CellId>,
+    pending_infos: Vec<CellInfo>,
+    /// `touched[c] == touch_round`: cell c was destroyed by a zone inserted in this batch.
+    touched: Vec<u32>,
+    touch_round: u32,
+    changes: Changes,
+}
+
+impl Scheduler {
+    /// Cells created by the last batch are not processed yet.
+    pub fn has_pending(&self) -> bool {
+        !self.pending.is_empty()
+    }
+
+    /// One refinement step (see the module docs). Returns false when the queue is empty or
+    /// a budget stopped the run (then Del_S(E) is up to date).
+    pub fn step(&mut self, m: &mut Mesher, since_progress: &mut usize) -> Result<bool, MeshError> {
+        let batch_start = Instant::now();
+        self.take_batch(m)?;
+        if self.batch.is_empty() {
+            if self.pending.is_empty() {
+                return Ok(false);
+            }
+            // The last batch's cells may queue new bad balls.
+            self.process_pending(m)?;
+            return Ok(true);
+        }
+        let found = self.search_and_process(m)?;
+        let (inserted, stop, result) = self.insert_disjoint(m, &found, since_progress);
+        m.policy.tuner.end_batch(inserted, batch_start.elapsed());
+        result?;
+        if stop {
+            // The run ends here: bring Del_S(E) up to date with the triangulation.
+            self.process_pending(m)?;
+        }
+        Ok(!stop)
+    }
+
+    /// Fill `batch` with up to `batch_size` fresh entries, worst first (lazy balls resolved),
+    /// leaving for the next batch, without a search, those close to one already taken.
+    fn take_batch(&mut self, m: &mut Mesher) -> Result<(), MeshError> {
+        let k = batch_size(m);
+        m.queue.purge_stale(&m.restricted);
+        self.batch.clear();
+        let mut near = Vec::new();
+        while self.batch.len() < k {
+            let Some((e, mut rf)) = m.queue.pop_fresh(&m.restricted) else {
+                break;
+            };
+            if rf.lazy {
+                rf = m.resolve_lazy(e.idx, rf)?;
+            }
+            if e.forced && rf.radius < m.manifold_floor(rf.center) {
+                continue;
+            }
+            // A point close to one already in the batch has overlapping conflict zones.
+            if self.batch.iter().any(|(_, b)| {
+                b.center.distance_squared(rf.center)
+                    < (NEAR_FACTOR * (b.radius + rf.radius)).powi(2)
+            }) {
+                near.push(e);
+                continue;
+            }
+            self.batch.push((e, rf));
+        }
+        m.stats.batch_deferrals += near.len() as u64;
+        for e in near {
+            m.queue.push(e);
+        }
+        Ok(())
+    }
+
+    /// `Mesher::process_created` on the pending cells, then clear them.
+    fn process_pending(&mut self, m: &mut Mesher) -> Result<(), MeshError> {
+        let r = m.process_created(&self.pending, &self.pending_infos);
+        self.pending.clear();
+        self.pending_infos.clear();
+        r
+    }
+
+    /// The conflict zones of this batch (read-only on the triangulation), while the cells
+    /// created by the previous batch are processed (which reads the triangulation and writes
+    /// only the mesher's own state). This batch was taken from the queue before those cells'
+    /// facets were registered: a fixed one-step delay, the same on any number of threads.
+    /// Its entries stay valid: processing creates no cell and removes no facet.
+    fn search_and_process(
+        &mut self,
+        m: &mut Mesher,
+    ) -> Result<Vec<Result<(), delaunay3::Error>>, MeshError> {
+        if self.zones.len() < self.batch.len() {
+            self.zones.resize_with(self.batch.len(), Zone::default);
+        }
+        let tri = Arc::clone(&m.tri);
+        let ball = m.ball;
+        let exec = m.policy.batch();
+        let (batch, zones) = (&self.batch, &mut self.zones);
+        let search_all = move || {
+            let t = Instant::now();
+            // The zone, then the circumcenters of the cells it will create: their points
+            // were just read by the search.
+            let found = exec.map_zip_mut(batch, zones, |(e, rf), z| {
+                let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version);
+                tri.find_cavity(rf.center, Some(rf.facet.cell), seed, &mut z.cav)?;
+                z.infos.clear();
+                let p = z.cav.point();
+                z.infos.extend(
+                    z.cav
+                        .new_cells(NEW)
+                        .map(|v| cell_info_of(&tri, &ball, v, p)),
+                );
+                Ok(())
+            });
+            (found, t.elapsed())
+        };
+        let (pending, pending_infos) = (&self.pending, &self.pending_infos);
+        let ((found, dt), processed): ((_, Duration), _) =
+            exec.join(search_all, || m.process_created(pending, pending_infos));
+        m.t_delaunay += dt;
+        self.pending.clear();
+        self.pending_infos.clear();
+        processed?;
+        Ok(found)
+    }
+
+    /// Insert, in queue order, the zones found that no earlier insertion of the batch
+    /// touched (the others go back to the queue), until a budget is exhausted. Returns the
+    /// insertions, whether a budget stopped the run, and the first search error.
+    fn insert_disjoint(
+        &mut self,
+        m: &mut Mesher,
+        found: &[Result<(), delaunay3::Error>],
+        since_progress: &mut usize,
+    ) -> (usize, bool, Result<(), MeshError>) {
+        self.touch_round = self.touch_round.wrapping_add(1);
+        if self.touch_round == 0 {
+            self.touched.iter_mut().for_each(|x| *x = 0);
+            self.touch_round = 1;
+        }
+        let round = self.touch_round;
+        let mut inserted = 0usize;
+        for (i, (&(e, _), res)) in self.batch.iter().zip(found).enumerate() {
+            if let Err(err) = res {
+                return (inserted, false, Err(MeshError::from(err.clone())));
+            }
+            let z = &self.zones[i];
+            if z.cav.duplicate().is_some() {
+                continue;
+            }
+            if z.cav
+                .touched_cells()
+                .any(|c| self.touched.get(c as usize).is_some_and(|&r| r == round))
+            {
+                m.queue.push(e); // its zone overlaps an earlier one: next batch
+                m.stats.batch_deferrals += 1;
+                continue;
+            }
+            if m.budget_exceeded() {
+                // The rest of the batch stays queued (for a caller that continues).
+                for &(e, _) in &self.batch[i..] {
+                    m.queue.push(e);
+                }
+                return (inserted, true, Ok(()));
+            }
+            // Only destroyed cells invalidate later zones (see `insert_cavity`).
+            for &c in z.cav.cells() {
+                let c = c as usize;
+                if c >= self.touched.len() {
+                    self.touched.resize(c + 1 + c / 2, 0);
+                }
+                self.touched[c] = round;
+            }
+            let t = Instant::now();
+            let ins = m.tri_mut().insert_cavity(&z.cav, Some(&mut self.changes));
+            m.t_delaunay += t.elapsed();
+            debug_assert!(matches!(ins, Insertion::New(_)));
+            m.remove_destroyed(&self.changes);
+            debug_assert_eq!(self.changes.created.len(), z.infos.len());
+            self.pending.extend_from_slice(&self.changes.created);
+            self.pending_infos.extend_from_slice(&z.infos);
+            m.count_insertion(e.forced, since_progress);
+            inserted += 1;
+        }
+        (inserted, false, Ok(()))
+    }
+}
+
+/// Batch size: 1 while the triangulation is small (zones overlap), up to `MAX_BATCH`. A
+/// function of the state only (never of the thread count).
+fn batch_size(m: &Mesher) -> usize {
+    (m.tri.num_vertices() / 128).clamp(1, MAX_BATCH)
+}

@@ -1,0 +1,244 @@
+//! What a run returns (ours): the mesh of Del_S(E) with its surface Delaunay balls
+//! (section 6.1), figures, and typed outcomes (the budget that stopped it, the criteria unmet).
+
+use glam::DVec3;
+use meshio::TriMesh;
+use std::fmt;
+
+/// A surface Delaunay ball B(c, r) circumscribing a restricted facet.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct SurfaceBall {
+    /// Its center c, a point of S.
+    pub center: DVec3,
+    /// Its radius r.
+    pub radius: f64,
+}
+
+/// Why a run stopped before every criterion held.
+///
+/// `Display` gives the text the CLI prints after "stopped by".
+///
+/// ```
+/// use rdt_mesher::StopReason;
+/// assert_eq!(StopReason::MaxVertices { limit: 500 }.to_string(), "max_vertices (500)");
+/// ```
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum StopReason {
+    /// [`crate::MeshOptions::max_vertices`] was reached.
+    MaxVertices {
+        /// The budget.
+        limit: usize,
+    },
+    /// [`crate::MeshOptions::time_limit`] was reached.
+    TimeLimit {
+        /// The budget, in seconds.
+        seconds: f64,
+    },
+    /// The manifold patch (section 6.6.1) made no progress for `passes` passes.
+    ManifoldStalled {
+        /// Passes without a decrease of the count of non-manifold elements.
+        passes: u32,
+        /// Non-manifold elements (edges and vertices) left.
+        left: usize,
+    },
+}
+
+impl fmt::Display for StopReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StopReason::MaxVertices { limit } => write!(f, "max_vertices ({limit})"),
+            StopReason::TimeLimit { seconds } => write!(f, "time_limit ({seconds:.3} s)"),
+            StopReason::ManifoldStalled { passes, left } => write!(
+                f,
+                "manifold patch: no progress in {passes} passes ({left} non-manifold elements left)"
+            ),
+        }
+    }
+}
+
+/// A criterion that does not hold on the output.
+///
+/// ```
+/// use rdt_mesher::Unmet;
+/// let u = Unmet::ControlPoints { missing: 1 };
+/// assert_eq!(u.to_string(), "control points: 1 not on the mesh");
+/// ```
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Unmet {
+    /// Some ball is larger than sigma at its center.
+    Size {
+        /// max over the facets of r / sigma(c), > 1.
+        max_r_over_sigma: f64,
+    },
+    /// Some facet has an angle below the bound.
+    Angle {
+        /// The smallest facet angle, degrees.
+        min_angle_deg: f64,
+        /// The bound, degrees.
+        bound_deg: f64,
+    },
+    /// Some facet's circumcenter is farther than the distance bound from its ball's center.
+    Distance {
+        /// max over the facets of the distance over the bound, > 1.
+        max_ratio: f64,
+    },
+    /// Facets at scaffold points were left out of the mesh (a run stopped early).
+    Scaffold {
+        /// How many.
+        facets: usize,
+    },
+    /// Del_S(E) is not a closed 2-manifold.
+    Manifold {
+        /// Non-manifold or boundary edges.
+        edges: usize,
+        /// Non-manifold vertices.
+        vertices: usize,
+    },
+    /// Control points (section 6.4.3) that are not vertices of the mesh.
+    ControlPoints {
+        /// How many.
+        missing: usize,
+    },
+}
+
+impl fmt::Display for Unmet {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Unmet::Size { max_r_over_sigma } => {
+                write!(f, "size: max r/sigma = {max_r_over_sigma:.4} > 1")
+            }
+            Unmet::Angle {
+                min_angle_deg,
+                bound_deg,
+            } => write!(f, "angle: min angle {min_angle_deg:.2} < {bound_deg}"),
+            Unmet::Distance { max_ratio } => write!(f, "distance: max ratio {max_ratio:.4} > 1"),
+            Unmet::Scaffold { facets } => write!(
+                f,
+                "scaffold: {facets} facets at scaffold points left out (run stopped early)"
+            ),
+            Unmet::Manifold { edges, vertices } => write!(
+                f,
+                "manifold: {edges} non-manifold or boundary edges, {vertices} non-manifold vertices"
+            ),
+            Unmet::ControlPoints { missing } => {
+                write!(f, "control points: {missing} not on the mesh")
+            }
+        }
+    }
+}
+
+/// Figures of a run, for the report.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Stats {
+    /// Vertices of the output mesh.
+    pub vertices: usize,
+    /// Facets of the output mesh.
+    pub facets: usize,
+    /// Points of the sample E (vertices of Del(E)).
+    pub sample_points: usize,
+    /// Control points E'_i used for initialization.
+    pub control_points: usize,
+    /// Control points that are not vertices of Del_S(E) at the end.
+    pub control_points_missing: usize,
+    /// Refinement insertions (centers of bad balls).
+    pub refinement_insertions: usize,
+    /// Points inserted by the rays of section 6.4.3.
+    pub ray_insertions: usize,
+    /// Insertions forced by the manifold patch.
+    pub manifold_insertions: usize,
+    /// Manifold checks performed.
+    pub manifold_passes: usize,
+    /// Oracle value evaluations made by the mesher (circumcenters).
+    pub oracle_value_calls: u64,
+    /// Oracle crossing (bipolar or intersection) queries.
+    pub oracle_crossing_calls: u64,
+    /// Batches of oracle calls that ran on several threads (they are chosen from measured
+    /// call costs, so this varies from run to run; the mesh does not).
+    pub parallel_oracle_batches: u64,
+    /// Refinement points whose conflict zone overlapped an earlier one of the same batch and
+    /// went back to the queue (see `crate::schedule`).
+    pub batch_deferrals: u64,
+    /// Refinement batches whose parallel sections ran on one thread: with several threads
+    /// the mode is chosen from measured speed, and never changes the mesh (all batches are
+    /// sequential on one thread).
+    pub sequential_batches: u64,
+    /// Refinement batches whose parallel sections ran on several threads.
+    pub parallel_batches: u64,
+    /// Scaffold points inserted (vertices of Del(E), not samples; see `MeshOptions::scaffold`).
+    pub scaffold_points: usize,
+    /// Times the final check of the scaffold failed and the triangulation was rebuilt from the
+    /// samples alone (0 or 1).
+    pub scaffold_rebuilds: usize,
+    /// Wall time of the run, seconds.
+    pub time_total_s: f64,
+    /// Of which in the Delaunay triangulation (insertions, conflict zones).
+    pub time_delaunay_s: f64,
+    /// Of which in the oracle.
+    pub time_oracle_s: f64,
+    /// Everything else: circumcenters, restricted-facet tests and bookkeeping, criteria, queue.
+    pub time_queue_s: f64,
+    /// max over the output facets of r / sigma(c) (<= 1 when the size criterion holds).
+    pub max_r_over_sigma: Option<f64>,
+    /// Smallest facet angle of the output, degrees.
+    pub min_angle_deg: f64,
+    /// max over facets of distance(circumcenter, c) / distance bound.
+    pub max_distance_ratio: Option<f64>,
+    /// Every criterion holds on every output facet.
+    pub criteria_met: bool,
+    /// The budget that stopped the run early, if any.
+    pub stopped_by: Option<StopReason>,
+    /// Criteria that do not hold at the end (empty when the run completed).
+    pub unmet: Vec<Unmet>,
+    /// Edges of the output with other than two facets (0 for a closed 2-manifold).
+    pub nonmanifold_edges: usize,
+    /// Vertices with other than one umbrella (0 for a closed 2-manifold).
+    pub nonmanifold_vertices: usize,
+}
+
+impl Stats {
+    /// The unmet criteria as one line, separated by "; " (empty when all hold).
+    ///
+    /// ```
+    /// use rdt_mesher::{Stats, Unmet};
+    /// let st = Stats {
+    ///     unmet: vec![Unmet::Scaffold { facets: 2 }, Unmet::ControlPoints { missing: 1 }],
+    ///     ..Default::default()
+    /// };
+    /// assert_eq!(
+    ///     st.unmet_summary(),
+    ///     "scaffold: 2 facets at scaffold points left out (run stopped early); \
+    ///      control points: 1 not on the mesh"
+    /// );
+    /// ```
+    pub fn unmet_summary(&self) -> String {
+        let parts: Vec<String> = self.unmet.iter().map(Unmet::to_string).collect();
+        parts.join("; ")
+    }
+}
+
+/// The result of a run: the mesh of Del_S(E), one surface Delaunay ball per triangle, stats.
+#[derive(Clone, Debug)]
+pub struct MeshResult {
+    /// Oriented triangles (counter-clockwise seen from outside, i.e. normals toward value > 0).
+    pub mesh: TriMesh,
+    /// `balls[i]` circumscribes `mesh.triangles[i]`.
+    pub balls: Vec<SurfaceBall>,
+    /// The sample E (the vertices of Del(E) on S: scaffold points left out), for two-pass
+    /// sizing and reports.
+    pub sample: Vec<DVec3>,
+    /// Figures and outcome of the run.
+    pub stats: Stats,
+}
+
+/// Progress of a run, passed to the callback of [`crate::mesh_with_progress`].
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Points of the sample E so far.
+    pub sample_points: usize,
+    /// Facets of Del_S(E) so far.
+    pub restricted_facets: usize,
+    /// Entries in the refinement queue (some may be stale).
+    pub queue: usize,
+}
