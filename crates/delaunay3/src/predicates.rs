@@ -21,8 +21,11 @@ use robust::{Coord, Coord3D};
 /// The sign of a predicate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Sign {
+    /// Below zero.
     Negative,
+    /// Exactly zero (a degenerate configuration).
     Zero,
+    /// Above zero.
     Positive,
 }
 
@@ -205,6 +208,7 @@ fn insphere_int(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Option<Sign
 
 /// [`insphere_dd_with`], with a hardware FMA when the CPU has one (runtime detection).
 #[inline(never)]
+#[allow(unsafe_code)]
 fn insphere_dd(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("fma") {

@@ -2,9 +2,7 @@ mod common;
 
 use common::*;
 use delaunay3::predicates::{Sign, orient3d};
-use delaunay3::{
-    Changes, DVec3, Dual, Error, Facet, INFINITE_VERTEX, Insertion, Location, Triangulation,
-};
+use delaunay3::{Changes, DVec3, Dual, Error, Facet, Insertion, Location, Triangulation, VertexId};
 use proptest::prelude::*;
 
 fn uniform(n: usize, seed: u64) -> Vec<DVec3> {
@@ -76,11 +74,17 @@ fn invalid_points_are_errors() {
 fn degenerate_starts() {
     let mut t = Triangulation::new();
     assert_eq!(t.dimension(), -1);
-    assert_eq!(t.insert(DVec3::ZERO).unwrap(), Insertion::New(0));
-    assert_eq!(t.insert(DVec3::ZERO).unwrap(), Insertion::Duplicate(0));
+    assert_eq!(
+        t.insert(DVec3::ZERO).unwrap(),
+        Insertion::New(VertexId::from_index(0))
+    );
+    assert_eq!(
+        t.insert(DVec3::ZERO).unwrap(),
+        Insertion::Duplicate(VertexId::from_index(0))
+    );
     assert_eq!(
         t.insert(DVec3::new(-0.0, 0.0, 0.0)).unwrap(),
-        Insertion::Duplicate(0)
+        Insertion::Duplicate(VertexId::from_index(0))
     );
     assert_eq!(t.dimension(), 0);
     for i in 1..20 {
@@ -97,13 +101,13 @@ fn degenerate_starts() {
     assert!(t.is_valid().is_ok());
     assert_eq!(
         t.insert(DVec3::new(3.0, 2.0, 0.0)).unwrap(),
-        Insertion::Duplicate(33)
+        Insertion::Duplicate(VertexId::from_index(33))
     );
     let mut ch = Changes::default();
     let r = t
         .insert_with(DVec3::new(2.5, 1.5, 1.0), None, Some(&mut ch))
         .unwrap();
-    assert_eq!(r, Insertion::New(100));
+    assert_eq!(r, Insertion::New(VertexId::from_index(100)));
     assert_eq!(t.dimension(), 3);
     assert!(t.is_valid().is_ok());
     assert_eq!(ch.created.len(), t.num_cells());
@@ -113,9 +117,9 @@ fn degenerate_starts() {
     assert!(t.num_finite_cells() >= 98);
     assert_eq!(
         t.insert(DVec3::new(3.0, 2.0, 0.0)).unwrap(),
-        Insertion::Duplicate(33)
+        Insertion::Duplicate(VertexId::from_index(33))
     );
-    for v in 0..101 {
+    for v in (0..101).map(VertexId::from_index) {
         assert!(t.vertex_cell(v).is_some());
     }
 }
@@ -133,7 +137,7 @@ fn changes_match_conflict_zone_and_star() {
     queries.extend_from_slice(&pts[..20]);
     for p in queries {
         let (zone, boundary) = t.conflict_zone(p, None).unwrap();
-        let mut before: Vec<[u32; 4]> = zone.iter().map(|&c| t.cell_vertices(c)).collect();
+        let mut before: Vec<[VertexId; 4]> = zone.iter().map(|&c| t.cell_vertices(c)).collect();
         let res = t.insert_with(p, None, Some(&mut ch)).unwrap();
         match res {
             Insertion::Duplicate(_) => {
@@ -179,21 +183,21 @@ fn facet_orientation_and_duals() {
             b.sort_unstable();
             assert_eq!(a, b);
             let opp = t.cell_vertices(c)[i as usize];
-            if !fv.contains(&INFINITE_VERTEX) {
+            if !fv.contains(&VertexId::INFINITE) {
                 let [p, q, r] = fv.map(|v| t.point(v));
                 // The normal points away from the opposite vertex (or from infinity).
-                if opp != INFINITE_VERTEX {
+                if opp != VertexId::INFINITE {
                     assert_eq!(orient3d(p, q, r, t.point(opp)), Sign::Positive);
                 }
                 let w = t.cell_vertices(m.cell)[m.index as usize];
-                if w != INFINITE_VERTEX {
+                if w != VertexId::INFINITE {
                     assert_eq!(orient3d(p, q, r, t.point(w)), Sign::Negative);
                 }
             }
             match t.dual(f) {
                 None => {
                     nones += 1;
-                    assert!(fv.contains(&INFINITE_VERTEX));
+                    assert!(fv.contains(&VertexId::INFINITE));
                 }
                 Some(Dual::Segment(a, b)) => {
                     segs += 1;

@@ -1,0 +1,224 @@
+//! Voronoi poles (Amenta & Bern, "Surface reconstruction by Voronoi filtering"; used for the
+//! d_M estimate of paper section 6.5): the poles of a sample point are the farthest vertex
+//! of its Voronoi cell and the farthest one on the other side of the point. For a dense
+//! sample of a surface S they lie near the medial axis of S, so the distance to the nearest
+//! pole estimates d_M. The section 6.5 lambda-medial axis is made of Voronoi vertices too:
+//! [`Triangulation::voronoi_vertices`] gives the vertices of one Voronoi cell.
+
+use glam::DVec3;
+
+use crate::ids::{CellId, VertexId};
+use crate::triangulation::Triangulation;
+
+/// A pole: a Voronoi vertex (a circumcenter) and its squared distance to the sample point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pole {
+    /// The Voronoi vertex.
+    pub point: DVec3,
+    /// Its squared distance to the sample point.
+    pub distance_squared: f64,
+}
+
+/// The (at most two) finite poles of one sample vertex, on the two sides of a reference
+/// direction: a given normal, else the outward hull direction for a hull vertex (whose
+/// Voronoi cell is unbounded: its pole on that side is at infinity, so `plus` is `None`),
+/// else the direction of the farthest Voronoi vertex (then `plus` is that vertex).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VertexPoles {
+    /// The farthest Voronoi vertex on the positive side of the reference direction.
+    pub plus: Option<Pole>,
+    /// The farthest Voronoi vertex on the negative side.
+    pub minus: Option<Pole>,
+}
+
+impl Triangulation {
+    /// The poles of every finite vertex (indexed by [`VertexId::index`]); `normal(v)` is an
+    /// optional reference direction per vertex (outward or inward normal), used to pick the
+    /// two poles on opposite sides. See [`poles_from_centers`] (this computes the
+    /// circumcenters of [`Triangulation::finite_cells`] first).
+    pub fn poles(&self, normal: impl Fn(VertexId) -> Option<DVec3>) -> Vec<VertexPoles> {
+        let cells: Vec<CellId> = self.finite_cells().collect();
+        let centers: Vec<DVec3> = cells.iter().map(|&c| self.circumcenter(c)).collect();
+        poles_from_centers(self, &cells, &centers, normal)
+    }
+
+    /// The vertices of the Voronoi cell of the finite vertex `v`: the circumcenters of its
+    /// finite incident cells, in [`Triangulation::incident_cells`] order, and whether the
+    /// cell is bounded (no incident infinite cell, i.e. `v` is not on the hull).
+    pub fn voronoi_vertices(&self, v: VertexId) -> (Vec<DVec3>, bool) {
+        let mut bounded = true;
+        let mut out = Vec::new();
+        for c in self.incident_cells(v) {
+            if self.is_infinite(c) {
+                bounded = false;
+            } else {
+                out.push(self.circumcenter(c));
+            }
+        }
+        (out, bounded)
+    }
+}
+
+/// [`Triangulation::poles`] from precomputed circumcenters: `centers[i]` is the
+/// circumcenter of the finite cell `cells[i]`, and `cells` are the finite cells in
+/// [`Triangulation::finite_cells`] order (ties between equally far Voronoi vertices go to the
+/// first in that order). Non-finite circumcenters (flat cells) are skipped.
+pub fn poles_from_centers(
+    t: &Triangulation,
+    cells: &[CellId],
+    centers: &[DVec3],
+    normal: impl Fn(VertexId) -> Option<DVec3>,
+) -> Vec<VertexPoles> {
+    assert_eq!(cells.len(), centers.len(), "one circumcenter per cell");
+    let nv = t.num_vertices();
+    let point = |v: VertexId| t.point(v);
+    // Pass 1: per vertex, its farthest Voronoi vertex and the outward direction of its hull
+    // facets.
+    let mut far = vec![(0.0f64, DVec3::ZERO); nv];
+    let mut hull_dir = vec![DVec3::ZERO; nv];
+    for (&c, &cc) in cells.iter().zip(centers) {
+        let vs = t.cell_vertices(c);
+        let pts = vs.map(point);
+        for k in 0..4 {
+            let v = vs[k].index();
+            if cc.is_finite() {
+                let d = (cc - pts[k]).length_squared();
+                if d > far[v].0 {
+                    far[v] = (d, cc);
+                }
+            }
+            if t.is_infinite(t.neighbor(c, k)) {
+                // Hull facet opposite vs[k]: its outward normal points away from vs[k].
+                let f: Vec<DVec3> = (0..4).filter(|&j| j != k).map(|j| pts[j]).collect();
+                let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
+                if n.dot(pts[k] - f[0]) > 0.0 {
+                    n = -n;
+                }
+                let n = n.normalize_or_zero();
+                for j in (0..4).filter(|&j| j != k) {
+                    hull_dir[vs[j].index()] += n;
+                }
+            }
+        }
+    }
+    // The reference direction per vertex, and whether a pole on its positive side is finite.
+    let reference: Vec<(DVec3, bool)> = t
+        .vertices()
+        .map(|v| {
+            if let Some(n) = normal(v) {
+                (n, true)
+            } else if hull_dir[v.index()] != DVec3::ZERO {
+                (hull_dir[v.index()], false)
+            } else {
+                (far[v.index()].1 - point(v), true)
+            }
+        })
+        .collect();
+    // Pass 2: the farthest Voronoi vertex on each side.
+    let mut out = vec![VertexPoles::default(); nv];
+    for (&c, &cc) in cells.iter().zip(centers) {
+        if !cc.is_finite() {
+            continue;
+        }
+        for v in t.cell_vertices(c) {
+            let p = point(v);
+            let d = (cc - p).length_squared();
+            let (dir, plus_finite) = reference[v.index()];
+            let side = (cc - p).dot(dir);
+            let slot = if side > 0.0 && plus_finite {
+                &mut out[v.index()].plus
+            } else if side < 0.0 {
+                &mut out[v.index()].minus
+            } else {
+                continue;
+            };
+            if d > slot.map_or(0.0, |s| s.distance_squared) {
+                *slot = Some(Pole {
+                    point: cc,
+                    distance_squared: d,
+                });
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points near the unit sphere (a golden-angle spiral, radii slightly varied so that no
+    /// five are cospherical) plus its center region empty: the medial axis is the center.
+    fn sphere(n: usize) -> Vec<DVec3> {
+        let ga = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        (0..n)
+            .map(|i| {
+                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let r = (1.0 - z * z).sqrt();
+                let a = ga * i as f64;
+                let s = 1.0 + 1e-3 * ((i * 7919 % 13) as f64 / 13.0);
+                DVec3::new(r * a.cos(), r * a.sin(), z) * s
+            })
+            .collect()
+    }
+
+    #[test]
+    fn poles_are_the_farthest_voronoi_vertices_and_near_the_medial_axis() {
+        let pts = sphere(400);
+        let mut t = Triangulation::new();
+        t.insert_bulk(&pts).unwrap();
+        let poles = t.poles(|_| None);
+        assert_eq!(poles.len(), t.num_vertices());
+        for v in t.vertices() {
+            let (vor, bounded) = t.voronoi_vertices(v);
+            // Every sample is on the hull: its Voronoi cell is unbounded, only the inner
+            // pole is finite, and it is the farthest Voronoi vertex (all are inside).
+            assert!(!bounded);
+            let vp = poles[v.index()];
+            assert!(vp.plus.is_none());
+            let inner = vp.minus.expect("inner pole");
+            let p = t.point(v);
+            let farthest = vor
+                .iter()
+                .filter(|c| c.is_finite())
+                .map(|&c| (c - p).length_squared())
+                .fold(0.0, f64::max);
+            assert_eq!(inner.distance_squared, farthest);
+            // The medial axis of a sphere is its center.
+            assert!(inner.point.length() < 0.2, "pole {:?}", inner.point);
+        }
+    }
+
+    #[test]
+    fn a_normal_picks_the_sides_and_interior_vertices_have_bounded_cells() {
+        let mut pts = sphere(200);
+        pts.push(DVec3::new(0.01, 0.02, 0.03));
+        let mut t = Triangulation::new();
+        let ids = t.insert_bulk(&pts).unwrap();
+        let center = ids[200];
+        assert!(
+            t.voronoi_vertices(center).1,
+            "the inner point's cell is bounded"
+        );
+        let poles = t.poles(|v| Some(t.point(v)));
+        // With the outward normal as reference the outer pole is finite for the samples
+        // whose Voronoi vertices lie on both sides; the inner one exists for all.
+        for &v in &ids[..200] {
+            let vp = poles[v.index()];
+            let inner = vp.minus.expect("inner pole");
+            assert!((inner.point - t.point(v)).dot(t.point(v)) < 0.0);
+            if let Some(outer) = vp.plus {
+                assert!((outer.point - t.point(v)).dot(t.point(v)) > 0.0);
+            }
+        }
+        let same = poles_from_centers(
+            &t,
+            &t.finite_cells().collect::<Vec<_>>(),
+            &t.finite_cells()
+                .map(|c| t.circumcenter(c))
+                .collect::<Vec<_>>(),
+            |v| Some(t.point(v)),
+        );
+        assert_eq!(same, poles);
+    }
+}
