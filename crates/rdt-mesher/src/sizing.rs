@@ -106,84 +106,23 @@ impl MedialAxisEstimate {
             center: keep.center,
             radius: keep.radius * 3.0,
         };
-        let nv = tri.num_vertices();
         let cells: Vec<_> = tri.finite_cells().collect();
         let centers: Vec<DVec3> = cells.iter().map(|&c| tri.circumcenter(c)).collect();
         let mut candidates: Vec<(DVec3, f64)> = Vec::new();
-        // Pass 1: the lambda-medial vertices; per sample, its farthest Voronoi vertex and the
-        // outward direction of its hull facets (a hull sample's cell is unbounded: its pole
-        // on that side is at infinity).
-        let mut farthest = vec![(0.0f64, DVec3::ZERO); nv];
-        let mut hull_dir = vec![DVec3::ZERO; nv];
+        // The lambda-medial vertices.
         for (&c, &cc) in cells.iter().zip(&centers) {
-            let vs = tri.cell_vertices(c);
-            let pts = vs.map(|v| tri.point(v));
-            let finite = cc.is_finite();
-            if finite && far.contains(cc) && smallest_enclosing_radius(&pts) >= lambda {
+            let pts = tri.cell_vertices(c).map(|v| tri.point(v));
+            if cc.is_finite() && far.contains(cc) && smallest_enclosing_radius(&pts) >= lambda {
                 candidates.push((cc, cc.distance(pts[0])));
-            }
-            for k in 0..4 {
-                let v = vs[k] as usize;
-                if finite {
-                    let d = cc.distance_squared(pts[k]);
-                    if d > farthest[v].0 {
-                        farthest[v] = (d, cc);
-                    }
-                }
-                if tri.is_infinite(tri.neighbor(c, k)) {
-                    let f: Vec<DVec3> = (0..4).filter(|&j| j != k).map(|j| pts[j]).collect();
-                    let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
-                    if n.dot(pts[k] - f[0]) > 0.0 {
-                        n = -n;
-                    }
-                    let n = n.normalize_or_zero();
-                    for j in (0..4).filter(|&j| j != k) {
-                        hull_dir[vs[j] as usize] += n;
-                    }
-                }
             }
         }
         let lambda_vertices = candidates.len();
-        // Pass 2: the poles. Reference direction: the first pole's, or the outward hull
-        // direction (then only the inner pole is finite).
-        let reference: Vec<(DVec3, bool)> = (0..nv)
-            .map(|v| {
-                if hull_dir[v] != DVec3::ZERO {
-                    (hull_dir[v], false)
-                } else {
-                    (farthest[v].1 - tri.point(v as u32), true)
-                }
-            })
-            .collect();
-        let mut plus = vec![(0.0f64, None::<DVec3>); nv];
-        let mut minus = vec![(0.0f64, None::<DVec3>); nv];
-        for (&c, &cc) in cells.iter().zip(&centers) {
-            if !cc.is_finite() {
-                continue;
-            }
-            for v in tri.cell_vertices(c) {
-                let p = tri.point(v);
-                let d = cc.distance_squared(p);
-                let (dir, plus_finite) = reference[v as usize];
-                let side = (cc - p).dot(dir);
-                let slot = if side > 0.0 && plus_finite {
-                    &mut plus[v as usize]
-                } else if side < 0.0 {
-                    &mut minus[v as usize]
-                } else {
-                    continue;
-                };
-                if d > slot.0 {
-                    *slot = (d, Some(cc));
-                }
-            }
-        }
+        // The poles (a hull sample's Voronoi cell is unbounded: only its inner pole is finite).
         let mut poles = 0;
-        for v in 0..nv {
-            for (d2, pole) in [plus[v], minus[v]] {
-                let Some(pole) = pole else { continue };
-                if far.contains(pole) {
-                    candidates.push((pole, d2.sqrt()));
+        for vp in delaunay3::poles::poles_from_centers(&tri, &cells, &centers, |_| None) {
+            for pole in [vp.plus, vp.minus].into_iter().flatten() {
+                if far.contains(pole.point) {
+                    candidates.push((pole.point, pole.distance_squared.sqrt()));
                     poles += 1;
                 }
             }

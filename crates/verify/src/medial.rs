@@ -43,7 +43,8 @@ impl MedialAxisEstimate {
     /// Without normals the first pole of a sample is the farthest vertex of its Voronoi cell
     /// (none if the cell is unbounded: the pole is at infinity) and the second the farthest
     /// vertex on the other side of the sample (negative dot product with the first pole's
-    /// direction, or with the averaged hull normal for an unbounded cell).
+    /// direction, or with the averaged hull normal for an unbounded cell): see
+    /// [`delaunay3::poles`].
     pub fn new(samples: &[DVec3], normals: Option<&[DVec3]>) -> Result<Self, MedialError> {
         if let Some(n) = normals
             && n.len() != samples.len()
@@ -66,92 +67,21 @@ impl MedialAxisEstimate {
             return Err(MedialError::Flat(samples.len()));
         }
         let nv = dt.num_vertices();
-        // Per Delaunay vertex: a reference direction (normal or first-pole direction or
-        // outward hull direction), the best pole on each side.
         let mut sample_of_vertex = vec![usize::MAX; nv];
         for (i, &v) in vid.iter().enumerate() {
-            if sample_of_vertex[v as usize] == usize::MAX {
-                sample_of_vertex[v as usize] = i;
+            if sample_of_vertex[v.index()] == usize::MAX {
+                sample_of_vertex[v.index()] = i;
             }
         }
-        let point = |v: VertexId| dt.point(v);
-        let cells: Vec<u32> = dt.finite_cells().collect();
-        let mut hull_dir = vec![DVec3::ZERO; nv];
-        let mut far = vec![(0.0f64, DVec3::ZERO); nv]; // farthest Voronoi vertex
-        for &c in &cells {
-            let vs = dt.cell_vertices(c);
-            let cc = dt.circumcenter(c);
-            for (k, &v) in vs.iter().enumerate() {
-                let d = (cc - point(v)).length_squared();
-                if cc.is_finite() && d > far[v as usize].0 {
-                    far[v as usize] = (d, cc);
-                }
-                let nb = dt.neighbor(c, k);
-                if dt.is_infinite(nb) {
-                    // Hull facet opposite v: outward normal points away from v.
-                    let f: Vec<DVec3> = vs
-                        .iter()
-                        .enumerate()
-                        .filter(|&(j, _)| j != k)
-                        .map(|(_, &w)| point(w))
-                        .collect();
-                    let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
-                    if n.dot(point(v) - f[0]) > 0.0 {
-                        n = -n;
-                    }
-                    let n = n.normalize_or_zero();
-                    for (j, &w) in vs.iter().enumerate() {
-                        if j != k {
-                            hull_dir[w as usize] += n;
-                        }
-                    }
-                }
-            }
-        }
-        // Reference direction per vertex.
-        let reference: Vec<(DVec3, bool)> = (0..nv)
-            .map(|v| {
-                let s = sample_of_vertex[v];
-                if let (Some(n), true) = (normals, s != usize::MAX) {
-                    (n[s], true)
-                } else if hull_dir[v] != DVec3::ZERO {
-                    (hull_dir[v], false) // pole at infinity on that side
-                } else {
-                    (far[v].1 - point(v as VertexId), true)
-                }
-            })
-            .collect();
-        let mut plus = vec![(0.0f64, None::<DVec3>); nv];
-        let mut minus = vec![(0.0f64, None::<DVec3>); nv];
-        for &c in &cells {
-            let cc = dt.circumcenter(c);
-            if !cc.is_finite() {
-                continue;
-            }
-            for &v in &dt.cell_vertices(c) {
-                let p = point(v);
-                let d = (cc - p).length_squared();
-                let (dir, finite_plus) = reference[v as usize];
-                let side = (cc - p).dot(dir);
-                let slot = if side > 0.0 {
-                    if !finite_plus {
-                        continue;
-                    }
-                    &mut plus[v as usize]
-                } else if side < 0.0 {
-                    &mut minus[v as usize]
-                } else {
-                    continue;
-                };
-                if d > slot.0 {
-                    *slot = (d, Some(cc));
-                }
-            }
-        }
+        // The reference direction of a vertex: its sample's normal, if given.
+        let vertex_poles = dt.poles(|v| {
+            let s = sample_of_vertex[v.index()];
+            normals.filter(|_| s != usize::MAX).map(|n| n[s])
+        });
         let mut poles: Vec<DVec3> = Vec::new();
-        for v in 0..nv {
-            poles.extend(plus[v].1);
-            poles.extend(minus[v].1);
+        for vp in &vertex_poles {
+            poles.extend(vp.plus.map(|p| p.point));
+            poles.extend(vp.minus.map(|p| p.point));
         }
         if poles.is_empty() {
             return Err(MedialError::NoPoles);
