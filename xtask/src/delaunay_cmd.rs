@@ -147,7 +147,7 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
         let seconds = t0.elapsed().as_secs_f64();
         let mut first = vec![u32::MAX; t.num_vertices()];
         for (i, &v) in ids.iter().enumerate() {
-            let f = &mut first[v as usize];
+            let f = &mut first[v.index()];
             if *f == u32::MAX {
                 *f = i as u32;
             }
@@ -156,7 +156,7 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
             .with_context(|| format!("cannot create {}", output.display()))?;
         let mut w = BufWriter::new(out);
         for c in t.finite_cells() {
-            let [a, b, c, d] = t.cell_vertices(c).map(|v| first[v as usize]);
+            let [a, b, c, d] = t.cell_vertices(c).map(|v| first[v.index()]);
             writeln!(w, "{a} {b} {c} {d}")?;
         }
         w.flush()

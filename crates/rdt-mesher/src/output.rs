@@ -45,7 +45,8 @@ impl Mesher<'_> {
             .collect();
         let ext = self.extremes(&facets);
         self.fill_stats(&mesh, &ext, scaffold_dropped);
-        let sample = (0..self.tri.num_vertices() as u32)
+        let sample = (0..self.tri.num_vertices())
+            .map(VertexId::from_index)
             .filter(|&v| !self.scaffold.contains(v))
             .map(|v| self.tri.point(v))
             .collect();
@@ -62,20 +63,20 @@ impl Mesher<'_> {
         let mut remap = vec![u32::MAX; self.tri.num_vertices()];
         for (k, _) in facets {
             for &v in k {
-                remap[v as usize] = 0;
+                remap[v.index()] = 0;
             }
         }
         let mut used: Vec<VertexId> = Vec::new();
         for (v, r) in remap.iter_mut().enumerate() {
             if *r == 0 {
                 *r = used.len() as u32;
-                used.push(v as VertexId);
+                used.push(VertexId::from_index(v));
             }
         }
         let vertices: Vec<DVec3> = used.iter().map(|&v| self.tri.point(v)).collect();
         let triangles: Vec<[u32; 3]> = facets
             .iter()
-            .map(|(_, rf)| rf.oriented.map(|v| remap[v as usize]))
+            .map(|(_, rf)| rf.oriented.map(|v| remap[v.index()]))
             .collect();
         TriMesh {
             vertices,

@@ -1,6 +1,8 @@
 //! Combinatorial manifold checks on a set of triangles (used by the manifold patch).
 
-use delaunay3::VertexId;
+/// A vertex of the triangle soup: a mesh index, or a raw Delaunay id
+/// ([`delaunay3::VertexId::to_u32`]).
+type VertexId = u32;
 
 /// Edges (sorted vertex pairs) with other than two incident triangles, and vertices whose link
 /// is not a single cycle (more than one umbrella, or a boundary). Both lists are sorted.

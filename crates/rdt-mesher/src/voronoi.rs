@@ -8,7 +8,7 @@
 
 use crate::error::MeshError;
 use crate::schedule::Exec;
-use delaunay3::{CellId, INFINITE_VERTEX, Triangulation, VertexId};
+use delaunay3::{CellId, Triangulation, VertexId};
 use glam::DVec3;
 use oracle::{BoundingSphere, OracleError, Surface};
 
@@ -23,7 +23,7 @@ pub(crate) struct CellInfo {
 }
 
 /// Placeholder id of a point being inserted in `Cavity::new_cells`.
-pub(crate) const NEW: VertexId = INFINITE_VERTEX - 1;
+pub(crate) const NEW: VertexId = VertexId::NONE;
 
 /// The cache of Voronoi vertices, by cell id.
 #[derive(Default)]
@@ -35,18 +35,18 @@ impl Voronoi {
     /// The cached info of cell `c` (which must have been set).
     #[inline]
     pub fn get(&self, c: CellId) -> CellInfo {
-        self.cells[c as usize]
+        self.cells[c.index()]
     }
 
     /// The cached value at cell `c`'s Voronoi vertex, NaN if `c` was never set.
     #[inline]
     pub fn value_or_nan(&self, c: CellId) -> f64 {
-        self.cells.get(c as usize).map_or(f64::NAN, |i| i.f)
+        self.cells.get(c.index()).map_or(f64::NAN, |i| i.f)
     }
 
     /// Set the info of cell `c`.
     pub fn set(&mut self, c: CellId, info: CellInfo) {
-        let idx = c as usize;
+        let idx = c.index();
         if idx >= self.cells.len() {
             self.cells.resize(idx + 1 + idx / 2, CellInfo::default());
         }
@@ -69,18 +69,18 @@ impl Voronoi {
     ) -> Result<u64, MeshError> {
         let info = &self.cells;
         let vals: Vec<f64> = exec.map(cells, |&c| {
-            let i = info[c as usize];
+            let i = info[c.index()];
             if i.f.is_nan() { s.value(i.cc) } else { i.f }
         });
         let mut evaluated = 0;
         for (&c, v) in cells.iter().zip(vals) {
-            let info = self.cells[c as usize];
+            let info = self.cells[c.index()];
             if info.f.is_nan() {
                 evaluated += 1;
                 if v.is_nan() {
                     return Err(OracleError::NaN(info.cc.x, info.cc.y, info.cc.z).into());
                 }
-                self.cells[c as usize].f = v;
+                self.cells[c.index()].f = v;
             }
         }
         Ok(evaluated)
@@ -97,7 +97,7 @@ pub(crate) fn cell_info_of(
     v: [VertexId; 4],
     new: DVec3,
 ) -> CellInfo {
-    if v.contains(&INFINITE_VERTEX) {
+    if v.contains(&VertexId::INFINITE) {
         return CellInfo {
             cc: DVec3::ZERO,
             f: f64::INFINITY,

@@ -80,7 +80,16 @@ impl Mesher<'_> {
     /// not a single cycle. Both lists sorted.
     pub(crate) fn nonmanifold_elements(&self) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
         // The order of the triangles does not matter to the result.
-        let tris: Vec<[VertexId; 3]> = self.restricted.iter().map(|(_, k, _)| k).collect();
-        crate::topology::nonmanifold_elements_with(&tris, self.policy.tuner.parallel())
+        let tris: Vec<[u32; 3]> = self
+            .restricted
+            .iter()
+            .map(|(_, k, _)| k.map(VertexId::to_u32))
+            .collect();
+        let (e, v) =
+            crate::topology::nonmanifold_elements_with(&tris, self.policy.tuner.parallel());
+        (
+            e.into_iter().map(|e| e.map(VertexId::from_u32)).collect(),
+            v.into_iter().map(VertexId::from_u32).collect(),
+        )
     }
 }

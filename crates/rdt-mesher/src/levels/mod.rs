@@ -17,20 +17,20 @@ impl Mesher<'_> {
     pub(crate) fn drop_scaffold(&mut self) -> Result<(), MeshError> {
         let t = Instant::now();
         let n = self.tri.num_vertices();
-        let mut new_id = vec![VertexId::MAX; n];
+        let mut new_id = vec![VertexId::INFINITE; n];
         let mut tri = Triangulation::new();
-        for v in 0..n as VertexId {
+        for v in (0..n).map(VertexId::from_index) {
             if self.scaffold.contains(v) {
                 continue;
             }
-            new_id[v as usize] = match tri.insert(self.tri.point(v))? {
+            new_id[v.index()] = match tri.insert(self.tri.point(v))? {
                 Insertion::New(w) | Insertion::Duplicate(w) => w,
             };
         }
         self.t_delaunay += t.elapsed();
         self.tri = Arc::new(tri);
         for c in self.control.vertices.iter_mut() {
-            *c = new_id[*c as usize];
+            *c = new_id[(*c).index()];
         }
         self.scaffold.clear();
         self.stats.scaffold_rebuilds += 1;

@@ -56,7 +56,7 @@ impl Scaffold {
     /// Whether vertex `v` is a scaffold point.
     #[inline]
     pub fn contains(&self, v: VertexId) -> bool {
-        self.sign.get(v as usize).is_some_and(|&s| s != 0)
+        self.sign.get(v.index()).is_some_and(|&s| s != 0)
     }
 
     /// Forget the scaffold (the triangulation was rebuilt without it).
@@ -80,7 +80,7 @@ impl Scaffold {
         for p in pts {
             let sign = if s.value(p) < 0.0 { -1 } else { 1 };
             if let Insertion::New(v) = tri.insert(p)? {
-                let v = v as usize;
+                let v = v.index();
                 if self.sign.len() <= v {
                     self.sign.resize(v + 1, 0);
                 }
@@ -100,13 +100,15 @@ impl Scaffold {
             if sign == 0 {
                 return true;
             }
-            if restricted.facets_at(v as VertexId) != 0 {
+            if restricted.facets_at(VertexId::from_index(v)) != 0 {
                 return false;
             }
-            tri.incident_cells(v as VertexId).iter().all(|&c| {
-                let f = vor.value_or_nan(c);
-                if sign < 0 { f < 0.0 } else { f > 0.0 }
-            })
+            tri.incident_cells(VertexId::from_index(v))
+                .iter()
+                .all(|&c| {
+                    let f = vor.value_or_nan(c);
+                    if sign < 0 { f < 0.0 } else { f > 0.0 }
+                })
         })
     }
 }

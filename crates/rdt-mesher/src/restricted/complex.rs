@@ -46,7 +46,7 @@ struct Slot {
 }
 
 /// The key of a free slot.
-const FREE: VertexId = VertexId::MAX;
+const FREE: VertexId = VertexId::INFINITE;
 /// No slot.
 const NONE: u32 = u32::MAX;
 
@@ -90,19 +90,19 @@ impl Restricted {
     /// Registered facets incident to vertex `v`.
     #[inline]
     pub fn facets_at(&self, v: VertexId) -> u32 {
-        self.vertex_facets.get(v as usize).copied().unwrap_or(0)
+        self.vertex_facets.get(v.index()).copied().unwrap_or(0)
     }
 
     /// The facets of cell `c` that may be registered (bit i: facet i).
     #[inline]
     pub fn mask(&self, c: CellId) -> u8 {
-        self.facet_mask.get(c as usize).copied().unwrap_or(0)
+        self.facet_mask.get(c.index()).copied().unwrap_or(0)
     }
 
     /// Cell `c` is new: none of its facets is registered.
     #[inline]
     pub fn reset_mask(&mut self, c: CellId) {
-        if let Some(m) = self.facet_mask.get_mut(c as usize) {
+        if let Some(m) = self.facet_mask.get_mut(c.index()) {
             *m = 0;
         }
     }
@@ -115,14 +115,14 @@ impl Restricted {
         rf.version = self.version;
         let f = rf.facet;
         let idx = self.insert(key, rf, m);
-        let need = f.cell.max(m.cell) as usize + 1;
+        let need = (f.cell.max(m.cell)).index() + 1;
         if self.facet_mask.len() < need {
             self.facet_mask.resize(need + need / 2, 0);
         }
-        self.facet_mask[f.cell as usize] |= 1 << f.index;
-        self.facet_mask[m.cell as usize] |= 1 << m.index;
+        self.facet_mask[f.cell.index()] |= 1 << f.index;
+        self.facet_mask[m.cell.index()] |= 1 << m.index;
         for v in key {
-            self.vertex_facets[v as usize] += 1;
+            self.vertex_facets[v.index()] += 1;
         }
         (idx, rf)
     }
@@ -131,7 +131,7 @@ impl Restricted {
     pub fn unregister(&mut self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<RFacet> {
         let rf = self.remove(c, i, key)?;
         for v in key {
-            self.vertex_facets[v as usize] -= 1;
+            self.vertex_facets[v.index()] -= 1;
         }
         Some(rf)
     }
@@ -174,19 +174,19 @@ impl Restricted {
             }
         };
         self.len += 1;
-        let need = 4 * (rf.facet.cell.max(m.cell) as usize + 1);
+        let need = 4 * (rf.facet.cell.max(m.cell).index() + 1);
         if self.of_facet.len() < need {
             self.of_facet.resize(need + need / 2, NONE);
         }
-        self.of_facet[4 * rf.facet.cell as usize + rf.facet.index as usize] = idx;
-        self.of_facet[4 * m.cell as usize + m.index as usize] = idx;
+        self.of_facet[4 * rf.facet.cell.index() + rf.facet.index as usize] = idx;
+        self.of_facet[4 * m.cell.index() + m.index as usize] = idx;
         idx
     }
 
     /// The live slot of facet `i` of cell `c` if its key is `key`.
     #[inline]
     fn find(&self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<u32> {
-        let idx = *self.of_facet.get(4 * c as usize + i as usize)?;
+        let idx = *self.of_facet.get(4 * c.index() + i as usize)?;
         let s = self.slots.get(idx as usize)?;
         (s.key == key).then_some(idx)
     }
@@ -239,10 +239,18 @@ pub(crate) fn sorted3(mut v: [VertexId; 3]) -> [VertexId; 3] {
 mod tests {
     use super::*;
 
+    fn cid(i: u32) -> CellId {
+        CellId::from_u32(i)
+    }
+
+    fn key(k: [u32; 3]) -> [VertexId; 3] {
+        k.map(VertexId::from_u32)
+    }
+
     fn rf(cell: CellId, index: u8, version: u32) -> RFacet {
         RFacet {
             facet: Facet { cell, index },
-            oriented: [0, 1, 2],
+            oriented: key([0, 1, 2]),
             center: DVec3::ZERO,
             radius: 1.0,
             bad: 0.5,
@@ -254,23 +262,36 @@ mod tests {
     #[test]
     fn stale_pointers_miss_and_versions_tell_fresh_entries() {
         let mut r = Restricted::default();
-        let m = Facet { cell: 7, index: 2 };
-        let a = r.insert([1, 2, 3], rf(3, 0, 10), m);
+        let m = Facet {
+            cell: cid(7),
+            index: 2,
+        };
+        let a = r.insert(key([1, 2, 3]), rf(cid(3), 0, 10), m);
         assert_eq!(r.len(), 1);
         assert!(r.get(a, 10).is_some());
         assert!(r.get(a, 9).is_none());
         // Removing through the mirror works; removing twice does not.
-        assert_eq!(r.remove(7, 2, [1, 2, 3]).map(|f| f.version), Some(10));
-        assert!(r.remove(3, 0, [1, 2, 3]).is_none());
+        assert_eq!(
+            r.remove(cid(7), 2, key([1, 2, 3])).map(|f| f.version),
+            Some(10)
+        );
+        assert!(r.remove(cid(3), 0, key([1, 2, 3])).is_none());
         assert!(r.get(a, 10).is_none());
         // The slot is reused by another facet: the old pointers of cells 3 and 7 (asked with
         // their own facet's key) miss.
-        let b = r.insert([4, 5, 6], rf(9, 1, 11), Facet { cell: 8, index: 0 });
+        let b = r.insert(
+            key([4, 5, 6]),
+            rf(cid(9), 1, 11),
+            Facet {
+                cell: cid(8),
+                index: 0,
+            },
+        );
         assert_eq!(a, b);
-        assert!(r.remove(3, 0, [1, 2, 3]).is_none());
-        assert!(r.remove(7, 2, [1, 2, 3]).is_none());
+        assert!(r.remove(cid(3), 0, key([1, 2, 3])).is_none());
+        assert!(r.remove(cid(7), 2, key([1, 2, 3])).is_none());
         assert_eq!(r.len(), 1);
-        assert!(r.remove(8, 0, [4, 5, 6]).is_some());
+        assert!(r.remove(cid(8), 0, key([4, 5, 6])).is_some());
         assert_eq!(r.len(), 0);
         assert_eq!(r.iter().count(), 0);
     }

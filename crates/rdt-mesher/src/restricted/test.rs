@@ -12,7 +12,7 @@ use crate::queue::QEntry;
 use crate::restricted::{RFacet, sorted3};
 use crate::schedule::Calls;
 use crate::state::Mesher;
-use delaunay3::{Facet, INFINITE_VERTEX, VertexId};
+use delaunay3::{Facet, VertexId};
 use glam::DVec3;
 use oracle::OracleError;
 use std::time::Instant;
@@ -115,7 +115,7 @@ impl Mesher<'_> {
             return None;
         }
         let verts = self.tri.facet_vertices(f);
-        if verts.contains(&INFINITE_VERTEX) {
+        if verts.contains(&VertexId::INFINITE) {
             return None;
         }
         let (p, fp, q, fq) = self.clipped_dual(f, m, verts)?;

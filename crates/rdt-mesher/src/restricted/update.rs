@@ -7,7 +7,7 @@ use crate::error::MeshError;
 use crate::schedule::Calls;
 use crate::state::Mesher;
 use crate::voronoi::{CellInfo, cell_info_of};
-use delaunay3::{CellId, Changes, Facet, INFINITE_VERTEX, Insertion};
+use delaunay3::{CellId, Changes, Facet, Insertion, VertexId};
 use glam::DVec3;
 use std::time::Instant;
 
@@ -83,7 +83,7 @@ impl Mesher<'_> {
                 if mask & (1 << i) == 0 {
                     continue;
                 }
-                let mut f = [0; 3];
+                let mut f = [VertexId::INFINITE; 3];
                 let mut k = 0;
                 for (j, &v) in cell.iter().enumerate() {
                     if j != i {
@@ -91,7 +91,7 @@ impl Mesher<'_> {
                         k += 1;
                     }
                 }
-                if !f.contains(&INFINITE_VERTEX)
+                if !f.contains(&VertexId::INFINITE)
                     && let Some(rf) = self.restricted.unregister(id, i as u8, sorted3(f))
                 {
                     // Its queue entry, if any, is stale now.
@@ -137,7 +137,7 @@ impl Mesher<'_> {
         }
         self.eval_cells(created)?;
         for &c in created {
-            let idx = c as usize;
+            let idx = c.index();
             if idx >= self.created_stamp.len() {
                 self.created_stamp.resize(idx + 1 + idx / 2, 0);
             }
@@ -159,8 +159,8 @@ impl Mesher<'_> {
             let fc = self.voronoi.get(c).f;
             for i in 0..4u8 {
                 let n = self.tri.neighbor(c, i as usize);
-                let n_created = (n as usize) < self.created_stamp.len()
-                    && self.created_stamp[n as usize] == self.round;
+                let n_created = n.index() < self.created_stamp.len()
+                    && self.created_stamp[n.index()] == self.round;
                 if n_created && n < c {
                     continue; // tested from n's side
                 }

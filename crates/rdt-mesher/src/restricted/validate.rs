@@ -70,7 +70,7 @@ impl Mesher<'_> {
         let mut unmasked = 0;
         for (_, k, rf) in self.restricted.iter() {
             for v in k {
-                count[v as usize] += 1;
+                count[v.index()] += 1;
             }
             let m = self.tri.mirror_facet(rf.facet);
             let bit = |f: Facet| self.restricted.mask(f.cell) & (1 << f.index) != 0;
@@ -82,7 +82,7 @@ impl Mesher<'_> {
             ));
         }
         let wrong = (0..count.len())
-            .filter(|&v| self.restricted.facets_at(v as VertexId) != count[v])
+            .filter(|&v| self.restricted.facets_at(VertexId::from_index(v)) != count[v])
             .count();
         if wrong > 0 {
             problems.push(format!("{wrong} vertices with a wrong facet count"));

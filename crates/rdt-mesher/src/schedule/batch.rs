@@ -195,7 +195,7 @@ impl Scheduler {
             }
             if z.cav
                 .touched_cells()
-                .any(|c| self.touched.get(c as usize).is_some_and(|&r| r == round))
+                .any(|c| self.touched.get(c.index()).is_some_and(|&r| r == round))
             {
                 m.queue.push(e); // its zone overlaps an earlier one: next batch
                 m.stats.batch_deferrals += 1;
@@ -210,7 +210,7 @@ impl Scheduler {
             }
             // Only destroyed cells invalidate later zones (see `insert_cavity`).
             for &c in z.cav.cells() {
-                let c = c as usize;
+                let c = c.index();
                 if c >= self.touched.len() {
                     self.touched.resize(c + 1 + c / 2, 0);
                 }
