@@ -1,6 +1,6 @@
-//! The conflict zone (Bowyer-Watson; paper section 2: a point's insertion destroys the cells
-//! whose circumball contains it): the conflict test and ONE search, used by every insertion
-//! path.
+//! The conflict zone (Bowyer-Watson, for the paper's "insert c into E and update Del(E)",
+//! section 6.1): the cells whose circumball contains the point, the conflict test and ONE
+//! search, used by every insertion path.
 //!
 //! The search grows the zone from the cell containing the point over neighbors in conflict
 //! and records the zone's boundary facets. It is generic over two choices that do not change

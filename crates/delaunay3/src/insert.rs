@@ -1,4 +1,4 @@
-//! Insertion (Bowyer-Watson, as in paper section 2's incremental construction of Del(E)):
+//! Insertion (Bowyer-Watson; the paper's "insert c into E and update Del(E)", section 6.1):
 //! the cavity of cells in conflict with the point is replaced by the star of the new vertex.
 //! Also the start: points are held until four are affinely independent, then the first
 //! tetrahedron is built and the held points are inserted.
