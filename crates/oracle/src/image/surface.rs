@@ -3,6 +3,7 @@
 use super::blocks::{self, Blocks};
 use super::topology::{self, Topology};
 use super::{ImageError, Stats, Volume, Voxel, distance, with_voxels};
+use crate::roots::ParamBracket;
 use crate::{BoundingSphere, Surface};
 use glam::{DAffine3, DMat3, DVec3};
 use std::sync::OnceLock;
@@ -517,7 +518,7 @@ impl ImageSurface {
     /// The piece of the segment `va + dv t` (voxel coordinates) where the block walk finds
     /// the first sign change from `t = 0` (sign of `fa`), with exact values at both ends;
     /// `None` if the walk is inconclusive.
-    fn locate(&self, va: DVec3, dv: DVec3, fa: f64) -> Option<Bracket> {
+    fn locate(&self, va: DVec3, dv: DVec3, fa: f64) -> Option<ParamBracket> {
         let blocks = self
             .blocks
             .get_or_init(|| Blocks::from_bits(self, &self.inside_bits_rows()));
@@ -540,7 +541,7 @@ impl ImageSurface {
             // The value at u0 only serves the first false-position step: unknown (NaN, so a
             // bisection step) unless the previous piece computed it.
             let f0 = if last.0 == u0 { last.1 } else { f64::NAN };
-            found = Some(Bracket {
+            found = Some(ParamBracket {
                 t0: u0,
                 f0,
                 t1: u1,
@@ -554,7 +555,7 @@ impl ImageSurface {
 
     /// Cell-wise root finding in the bracket `br` of the segment `va + dv t` (see
     /// [`Surface::crossing`]), down to the parameter tolerance `ttol`.
-    fn solve_cells(&self, va: DVec3, dv: DVec3, mut br: Bracket, ttol: f64) -> Bracket {
+    fn solve_cells(&self, va: DVec3, dv: DVec3, mut br: ParamBracket, ttol: f64) -> ParamBracket {
         let at = |t: f64| va + dv * t;
         let mut width_two_ago = f64::INFINITY;
         let mut width_one_ago = br.t1 - br.t0;
@@ -591,7 +592,7 @@ impl ImageSurface {
             let poly = |u: f64| trilinear(&c, at(u) - cell);
             let (g0, g1) = (poly(u0), poly(u1));
             if (g0 < 0.0) != (g1 < 0.0) {
-                let sub = Bracket {
+                let sub = ParamBracket {
                     t0: u0,
                     f0: g0,
                     t1: u1,
@@ -655,7 +656,7 @@ impl Surface for ImageSurface {
         } else {
             self.locate(va, dv, fa)
         };
-        let br = br.unwrap_or_else(|| Bracket::new(fa, fb));
+        let br = br.unwrap_or_else(|| ParamBracket::new(fa, fb));
         let br = self.solve_cells(va, dv, br, ttol);
         a + d * (0.5 * (br.t0 + br.t1))
     }
@@ -766,78 +767,6 @@ fn trilinear(c: &[f64; 8], t: DVec3) -> f64 {
     let y0 = x00 + t.y * (x10 - x00);
     let y1 = x01 + t.y * (x11 - x01);
     y0 + t.z * (y1 - y0)
-}
-
-/// A sign-change bracket `[t0, t1]` for the Illinois iteration.
-#[derive(Clone, Copy, Debug)]
-struct Bracket {
-    t0: f64,
-    f0: f64,
-    t1: f64,
-    f1: f64,
-    neg0: bool,
-}
-
-impl Bracket {
-    fn new(fa: f64, fb: f64) -> Bracket {
-        Bracket {
-            t0: 0.0,
-            f0: fa,
-            t1: 1.0,
-            f1: fb,
-            neg0: fa < 0.0,
-        }
-    }
-
-    /// Illinois (modified false position) until the bracket is shorter than `ttol`: each step
-    /// lands at least `ttol / 4` inside the bracket, and bisects when two steps did not halve
-    /// it. Stops early on NaN.
-    fn solve(mut self, f: impl Fn(f64) -> f64, ttol: f64) -> Bracket {
-        let mut last_side = 0i8;
-        let mut width_two_ago = f64::INFINITY;
-        let mut width_one_ago = self.t1 - self.t0;
-        for _ in 0..200 {
-            let w = self.t1 - self.t0;
-            if w <= ttol {
-                break;
-            }
-            let m = 0.25 * ttol;
-            let denom = self.f1 - self.f0;
-            let mut t = if w > 0.5 * width_two_ago || !(denom != 0.0 && denom.is_finite()) {
-                0.5 * (self.t0 + self.t1)
-            } else {
-                self.t0 - self.f0 * w / denom
-            };
-            if !(t > self.t0 + m) {
-                t = self.t0 + m;
-            }
-            if !(t < self.t1 - m) {
-                t = self.t1 - m;
-            }
-            let v = f(t);
-            if v.is_nan() {
-                break;
-            }
-            if (v < 0.0) == self.neg0 {
-                self.t0 = t;
-                self.f0 = v;
-                if last_side == -1 {
-                    self.f1 *= 0.5;
-                }
-                last_side = -1;
-            } else {
-                self.t1 = t;
-                self.f1 = v;
-                if last_side == 1 {
-                    self.f0 *= 0.5;
-                }
-                last_side = 1;
-            }
-            width_two_ago = width_one_ago;
-            width_one_ago = w;
-        }
-        self
-    }
 }
 
 #[cfg(test)]

@@ -958,26 +958,20 @@ impl Surface for PointSetSurface {
     /// bracket, and bisection when the bracket shrinks slowly; stops when the bracket, |f|
     /// or the Newton step is below the tolerance.
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
-        newton_bracketed(|x| self.value_grad(x), a, fa, b, fb, self.tolerance())
+        crate::roots::newton_bracketed(|x| self.value_grad(x), a, fa, b, fb, self.tolerance())
     }
 
     /// Intersection oracle: sign changes of the value sampled at [`Surface::crossing_step`],
     /// each refined by [`Surface::crossing`].
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
-        let len = (b - a).length();
-        if !len.is_finite() {
-            return;
-        }
-        let n = ((len / self.crossing_step()).ceil() as usize).clamp(1, 1 << 20);
-        let (mut p0, mut f0) = (a, self.value(a));
-        for i in 1..=n {
-            let p1 = a.lerp(b, i as f64 / n as f64);
-            let f1 = self.value(p1);
-            if (f0 < 0.0) != (f1 < 0.0) {
-                out.push(self.crossing(p0, f0, p1, f1));
-            }
-            (p0, f0) = (p1, f1);
-        }
+        crate::roots::sample_crossings(
+            |x| self.value(x),
+            |p0, f0, p1, f1| self.crossing(p0, f0, p1, f1),
+            a,
+            b,
+            self.crossing_step(),
+            out,
+        );
     }
 
     /// Half the median kernel radius: the IMLS surface does not oscillate at smaller scales,
@@ -998,142 +992,6 @@ impl Surface for PointSetSurface {
         let _ = &s.points;
         (x > 0.0).then_some(x)
     }
-}
-
-/// Root finding on `[a, b]` (`fa`, `fb` of opposite signs) for `f` returning the value and
-/// its gradient (NaN where unknown): a Newton step along the segment whenever the gradient
-/// is known and the step stays strictly inside the bracket, an Illinois step otherwise, and
-/// bisection every third step if the bracket did not halve. Returns a point within `tol` of
-/// a sign change: where `|f| < tol`, the Newton update of a point whose step is below `tol`
-/// / 2 (functions close to a distance), or the middle of a bracket shorter than `tol`.
-pub(crate) fn newton_bracketed(
-    f: impl Fn(DVec3) -> (f64, DVec3),
-    a: DVec3,
-    fa: f64,
-    b: DVec3,
-    fb: f64,
-    tol: f64,
-) -> DVec3 {
-    let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
-    let len0 = (b - a).length();
-    if !(len0 > 0.0 && len0.is_finite()) {
-        return a.lerp(b, 0.5);
-    }
-    // Unit direction and origin of the parameter `s` along the segment.
-    let (o, u) = (a, (b - a) / len0);
-    let mut side = 0i8;
-    let mut prev_len = len0;
-    let mut newton: Option<DVec3> = None;
-    for it in 0..200 {
-        let len = (b - a).length();
-        if len <= tol {
-            break;
-        }
-        let bisect = it % 3 == 2 && len > 0.5 * prev_len;
-        if it % 3 == 2 {
-            prev_len = len;
-        }
-        let m = match newton.take() {
-            Some(p) if !bisect => p,
-            _ => {
-                let t = if bisect { 0.5 } else { fa / (fa - fb) };
-                a.lerp(
-                    b,
-                    if t.is_finite() {
-                        t.clamp(0.0, 1.0)
-                    } else {
-                        0.5
-                    },
-                )
-            }
-        };
-        let (fm, g) = f(m);
-        if fm.is_nan() || fm.abs() < tol {
-            return m;
-        }
-        shrink_bracket(m, fm, (&mut a, &mut fa), (&mut b, &mut fb), &mut side);
-        let slope = g.dot(u);
-        if slope.is_finite() && slope != 0.0 {
-            let step = -fm / slope;
-            let p = m + u * step;
-            let (sa, sb, sp) = ((a - o).dot(u), (b - o).dot(u), (p - o).dot(u));
-            if sp > sa.min(sb) && sp < sa.max(sb) {
-                if step.abs() <= 0.5 * tol {
-                    return p;
-                }
-                newton = Some(p);
-            }
-        }
-    }
-    a.lerp(b, 0.5)
-}
-
-/// One Illinois step of a sign-change bracket [a, b]: `m` (value `fm`) replaces the end
-/// with the same sign, and the value kept at the other end is halved when the same end moved
-/// twice in a row (`side` remembers which end moved last: -1 for a, 1 for b).
-fn shrink_bracket(
-    m: DVec3,
-    fm: f64,
-    (a, fa): (&mut DVec3, &mut f64),
-    (b, fb): (&mut DVec3, &mut f64),
-    side: &mut i8,
-) {
-    if (fm < 0.0) == (*fa < 0.0) {
-        (*a, *fa) = (m, fm);
-        if *side == -1 {
-            *fb *= 0.5;
-        }
-        *side = -1;
-    } else {
-        (*b, *fb) = (m, fm);
-        if *side == 1 {
-            *fa *= 0.5;
-        }
-        *side = 1;
-    }
-}
-
-/// Illinois root finding on `[a, b]` (`fa`, `fb` of opposite signs), safeguarded by bisection
-/// steps when the bracket shrinks slowly. Returns a point within `tol` of a sign change (or
-/// where `|f| < tol`, for functions close to a distance).
-pub(crate) fn illinois(
-    f: impl Fn(DVec3) -> f64,
-    a: DVec3,
-    fa: f64,
-    b: DVec3,
-    fb: f64,
-    tol: f64,
-) -> DVec3 {
-    let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
-    let mut side = 0i8;
-    let mut prev_len = (b - a).length();
-    for it in 0..200 {
-        let len = (b - a).length();
-        if len <= tol {
-            break;
-        }
-        // Every third step, bisect if the last steps did not halve the bracket.
-        let t = if it % 3 == 2 && len > 0.5 * prev_len {
-            0.5
-        } else {
-            let t = fa / (fa - fb);
-            if t.is_finite() {
-                t.clamp(0.0, 1.0)
-            } else {
-                0.5
-            }
-        };
-        if it % 3 == 2 {
-            prev_len = len;
-        }
-        let m = a.lerp(b, t);
-        let fm = f(m);
-        if fm.is_nan() || fm.abs() < tol {
-            return m;
-        }
-        shrink_bracket(m, fm, (&mut a, &mut fa), (&mut b, &mut fb), &mut side);
-    }
-    a.lerp(b, 0.5)
 }
 
 #[cfg(test)]
@@ -1182,46 +1040,5 @@ mod tests {
         let (a, b) = (DVec3::ZERO, DVec3::new(2.0, 0.1, 0.3));
         let c = s.crossing(a, s.value(a), b, s.value(b));
         assert!(s.value(c).abs() < 1e-6, "{c}");
-    }
-
-    #[test]
-    fn newton_bracketed_converges_with_exact_wrong_and_missing_gradients() {
-        let (a, b) = (DVec3::new(-1.0, 0.2, 0.0), DVec3::new(2.0, 0.2, 0.0));
-        let calls = Cell::new(0);
-        // Distance to the unit sphere with its exact gradient: quadratic convergence.
-        let exact = |x: DVec3| {
-            calls.set(calls.get() + 1);
-            (x.length() - 1.0, x.normalize())
-        };
-        let x = newton_bracketed(exact, a, a.length() - 1.0, b, b.length() - 1.0, 1e-12);
-        assert!((x.length() - 1.0).abs() < 1e-12, "{x}");
-        assert!(calls.get() <= 8, "{} evaluations", calls.get());
-        // A wrong gradient (pointing the other way): the bracket and bisection still win.
-        let wrong = |x: DVec3| (x.length() - 1.0, -x.normalize());
-        let x = newton_bracketed(wrong, a, a.length() - 1.0, b, b.length() - 1.0, 1e-10);
-        assert!((x.length() - 1.0).abs() < 1e-9, "{x}");
-        // Sign only, no gradient.
-        let step = |x: DVec3| (if x.x < 0.3 { -1.0 } else { 1.0 }, DVec3::NAN);
-        let x = newton_bracketed(step, a, -1.0, b, 1.0, 1e-9);
-        assert!((x.x - 0.3).abs() < 1e-8, "{x}");
-        // A degenerate segment returns its point.
-        assert_eq!(newton_bracketed(exact, a, -1.0, a, 1.0, 1e-9), a);
-    }
-
-    #[test]
-    fn illinois_converges_on_smooth_and_sign_only_functions() {
-        let (a, b) = (DVec3::new(-1.0, 0.2, 0.0), DVec3::new(2.0, 0.2, 0.0));
-        let calls = Cell::new(0);
-        let smooth = |x: DVec3| {
-            calls.set(calls.get() + 1);
-            x.length() - 1.0
-        };
-        let x = illinois(smooth, a, smooth(a), b, smooth(b), 1e-12);
-        assert!((x.length() - 1.0).abs() < 1e-12);
-        assert!(calls.get() < 20, "{} evaluations", calls.get());
-        // A sign-only function: the bisection safeguard still closes the bracket.
-        let step = |x: DVec3| if x.x < 0.3 { -1.0 } else { 1.0 };
-        let x = illinois(step, a, -1.0, b, 1.0, 1e-9);
-        assert!((x.x - 0.3).abs() < 1e-8, "{x}");
     }
 }

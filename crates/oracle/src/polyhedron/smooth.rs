@@ -177,25 +177,19 @@ impl Surface for SmoothPolyhedron {
     }
     /// Illinois (safeguarded regula falsi) on [`SmoothPolyhedron`]'s value.
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
-        crate::pointset::illinois(|x| self.value(x), a, fa, b, fb, self.tolerance())
+        crate::roots::illinois(|x| self.value(x), a, fa, b, fb, self.tolerance())
     }
     /// Sign changes of the value sampled at [`Surface::crossing_step`], each refined by
     /// [`Surface::crossing`].
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
-        let len = (b - a).length();
-        if !len.is_finite() {
-            return;
-        }
-        let n = ((len / self.crossing_step()).ceil() as usize).clamp(1, 1 << 20);
-        let (mut p0, mut f0) = (a, self.value(a));
-        for i in 1..=n {
-            let p1 = a.lerp(b, i as f64 / n as f64);
-            let f1 = self.value(p1);
-            if (f0 < 0.0) != (f1 < 0.0) {
-                out.push(self.crossing(p0, f0, p1, f1));
-            }
-            (p0, f0) = (p1, f1);
-        }
+        crate::roots::sample_crossings(
+            |x| self.value(x),
+            |p0, f0, p1, f1| self.crossing(p0, f0, p1, f1),
+            a,
+            b,
+            self.crossing_step(),
+            out,
+        );
     }
     fn crossing_step(&self) -> f64 {
         self.imls.crossing_step()

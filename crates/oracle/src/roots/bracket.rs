@@ -1,0 +1,114 @@
+//! Sign-change brackets and the Illinois step (ours), in the vocabulary of [`super`].
+//!
+//! Invariant of both forms: the two ends' values are on opposite sides (`< 0` and `>= 0`), so a
+//! sign change stays between them; [`ParamBracket`] also keeps `t0 < t1`.
+
+use glam::DVec3;
+
+/// A bracket `[t0, t1]` in the parameter of a segment, with the values at its ends (maybe
+/// Illinois-halved, or NaN where unknown: a NaN end value makes the next step a bisection).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ParamBracket {
+    pub t0: f64,
+    pub f0: f64,
+    pub t1: f64,
+    pub f1: f64,
+    /// Side of the `t0` end (`f < 0`); the `t1` end is on the other side.
+    pub neg0: bool,
+}
+
+impl ParamBracket {
+    /// The whole segment `[0, 1]`, with end values `fa`, `fb`.
+    pub fn new(fa: f64, fb: f64) -> ParamBracket {
+        ParamBracket {
+            t0: 0.0,
+            f0: fa,
+            t1: 1.0,
+            f1: fb,
+            neg0: fa < 0.0,
+        }
+    }
+
+    /// The Illinois step: the probe `t` (value `v`) replaces the end on its side; if that end
+    /// also moved on the previous step (`last_side`: -1 for `t0`, 1 for `t1`, 0 for none), the
+    /// value kept at the other end is halved.
+    #[inline]
+    pub fn illinois_step(&mut self, t: f64, v: f64, last_side: &mut i8) {
+        if (v < 0.0) == self.neg0 {
+            self.t0 = t;
+            self.f0 = v;
+            if *last_side == -1 {
+                self.f1 *= 0.5;
+            }
+            *last_side = -1;
+        } else {
+            self.t1 = t;
+            self.f1 = v;
+            if *last_side == 1 {
+                self.f0 *= 0.5;
+            }
+            *last_side = 1;
+        }
+    }
+
+    /// Illinois on `f` (a function of the parameter) until the bracket is shorter than
+    /// `ttol`: each probe lands at least `ttol / 4` inside the bracket, and the safeguard
+    /// bisects when two steps did not halve it. Stops early on NaN.
+    pub fn solve(mut self, f: impl Fn(f64) -> f64, ttol: f64) -> ParamBracket {
+        let mut last_side = 0i8;
+        let mut width_two_ago = f64::INFINITY;
+        let mut width_one_ago = self.t1 - self.t0;
+        for _ in 0..200 {
+            let w = self.t1 - self.t0;
+            if w <= ttol {
+                break;
+            }
+            let m = 0.25 * ttol;
+            let denom = self.f1 - self.f0;
+            let mut t = if w > 0.5 * width_two_ago || !(denom != 0.0 && denom.is_finite()) {
+                0.5 * (self.t0 + self.t1)
+            } else {
+                self.t0 - self.f0 * w / denom
+            };
+            if !(t > self.t0 + m) {
+                t = self.t0 + m;
+            }
+            if !(t < self.t1 - m) {
+                t = self.t1 - m;
+            }
+            let v = f(t);
+            if v.is_nan() {
+                break;
+            }
+            self.illinois_step(t, v, &mut last_side);
+            width_two_ago = width_one_ago;
+            width_one_ago = w;
+        }
+        self
+    }
+}
+
+/// The Illinois step on a bracket `[a, b]` in space: `m` (value `fm`) replaces the end with
+/// the same sign as `fm`, and the value kept at the other end is halved when the same end
+/// moved twice in a row (`side` remembers which end moved last: -1 for a, 1 for b).
+pub(crate) fn shrink_bracket(
+    m: DVec3,
+    fm: f64,
+    (a, fa): (&mut DVec3, &mut f64),
+    (b, fb): (&mut DVec3, &mut f64),
+    side: &mut i8,
+) {
+    if (fm < 0.0) == (*fa < 0.0) {
+        (*a, *fa) = (m, fm);
+        if *side == -1 {
+            *fb *= 0.5;
+        }
+        *side = -1;
+    } else {
+        (*b, *fb) = (m, fm);
+        if *side == 1 {
+            *fa *= 0.5;
+        }
+        *side = 1;
+    }
+}

@@ -1,0 +1,77 @@
+//! Root finding for the bipolar and intersection oracles (section 6.4.2), shared by every
+//! backend, with the random-line seeds of P1 (section 6.4.3) and the projection `verify` uses.
+//!
+//! # Vocabulary (every root finder here speaks it)
+//! - **Side**: a value `f` is *inside* when `f < 0` and *outside* when `f >= 0` (zero
+//!   included), the bipolar convention of [`crate::Surface::crossing`].
+//! - **Bracket**: two ends `a`, `b` (or two parameters `t0 < t1` along a segment) whose values
+//!   are on opposite sides. Every step keeps this invariant: a probe replaces the end on its
+//!   side, so a sign change stays between the ends.
+//! - **Tolerance** `tol`: an absolute length in space; `ttol = tol / |b − a|` is the same in
+//!   parameter units.
+//! - **Illinois step**: after a probe replaces one end, the value kept at the other end is
+//!   halved if the same end moved on the previous step too ([`bracket`]).
+//! - **Safeguard**: a bisection step when the bracket did not shrink fast enough (each finder
+//!   states its rule), so the cost stays within a small factor of bisection.
+//! - **Termination**: the bracket is shorter than the tolerance (the answer is then its
+//!   midpoint, within `tol / 2` of a sign change), or the probes are adjacent floats, or
+//!   (distance-like functions only) `|f| < tol` at a probe or a Newton step is below
+//!   `tol / 2`, or an iteration cap.
+//!
+//! # The finders
+//! - [`bisect`] / [`try_bisect`]: bisection; the only one valid for sign-only functions.
+//! - [`try_find_root`]: Illinois in parameter units with probes kept `tol` inside the
+//!   bracket, bisection for sign-only values (implicit surfaces).
+//! - `illinois`: Illinois in space, bisection every third step if the bracket did not halve,
+//!   `|f| < tol` accepted (the smoothed polyhedron).
+//! - `newton_bracketed`: Newton steps kept inside the bracket, `illinois` otherwise (point
+//!   sets, whose IMLS value has an exact gradient).
+//! - `ParamBracket::solve`: Illinois on a function of the parameter with probes `ttol / 4`
+//!   inside the bracket (the image backend's per-cell trilinear polynomial).
+//!
+//! Each backend keeps its own finder: changing one would change the meshes (the iterates are
+//! part of the output).
+
+mod bisect;
+mod bracket;
+mod illinois;
+mod newton;
+mod project;
+mod scan;
+mod seeds;
+
+pub use bisect::{bisect, try_bisect};
+pub(crate) use bracket::ParamBracket;
+pub(crate) use illinois::illinois;
+pub use illinois::try_find_root;
+pub(crate) use newton::newton_bracketed;
+pub use project::{nearest_crossing_on_rays, project_newton, project_robust};
+pub(crate) use scan::sample_crossings;
+pub use scan::{all_crossings, try_all_crossings};
+pub use seeds::{SplitMix64, random_line_seeds};
+
+use crate::OracleError;
+use glam::DVec3;
+
+/// True if `v` is -1, 0 or 1: a value of a sign-only function, on which interpolation
+/// (secant, regula falsi, Newton) is meaningless and bisection must be used.
+#[inline]
+pub fn is_sign_value(v: f64) -> bool {
+    v == 0.0 || v == 1.0 || v == -1.0
+}
+
+/// The error for a NaN value at `p`.
+fn nan_at(p: DVec3) -> OracleError {
+    OracleError::NaN(p.x, p.y, p.z)
+}
+
+/// `Err` naming the first end whose value is NaN.
+fn check_ends(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Result<(), OracleError> {
+    if fa.is_nan() {
+        return Err(nan_at(a));
+    }
+    if fb.is_nan() {
+        return Err(nan_at(b));
+    }
+    Ok(())
+}

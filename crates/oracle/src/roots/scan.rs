@@ -1,0 +1,90 @@
+//! The intersection oracle by sampling (section 6.4.2's Θ(1/Δ) oracle): sample a segment,
+//! refine every sign change with a root finder.
+
+use super::{nan_at, try_find_root};
+use crate::OracleError;
+use glam::DVec3;
+
+/// All sign changes of `f` on `[a, b]` sampled at steps of at most `step`, each refined by
+/// bisection, pushed in order from `a`. If `f` returns NaN, pushes one point with NaN
+/// coordinates and stops (see [`try_all_crossings`]).
+pub fn all_crossings(
+    f: impl Fn(DVec3) -> f64,
+    a: DVec3,
+    b: DVec3,
+    step: f64,
+    tol: f64,
+    out: &mut Vec<DVec3>,
+) {
+    if try_all_crossings(f, a, b, step, tol, out).is_err() {
+        out.push(DVec3::NAN);
+    }
+}
+
+/// [`all_crossings`] reporting NaN as an error (crossings found before it stay in `out`). Each
+/// sign change is refined by [`try_find_root`] (bisection for sign-only values).
+pub fn try_all_crossings(
+    f: impl Fn(DVec3) -> f64,
+    a: DVec3,
+    b: DVec3,
+    step: f64,
+    tol: f64,
+    out: &mut Vec<DVec3>,
+) -> Result<(), OracleError> {
+    let len = (b - a).length();
+    let n = if step > 0.0 && (len / step).is_finite() {
+        ((len / step).ceil() as usize).clamp(1, 1 << 20)
+    } else {
+        1
+    };
+    let mut p0 = a;
+    let mut f0 = f(a);
+    if f0.is_nan() {
+        return Err(nan_at(a));
+    }
+    for i in 1..=n {
+        let p1 = if i == n {
+            b
+        } else {
+            a + (b - a) * (i as f64 / n as f64)
+        };
+        let f1 = f(p1);
+        if f1.is_nan() {
+            return Err(nan_at(p1));
+        }
+        if (f0 < 0.0) != (f1 < 0.0) {
+            out.push(try_find_root(&f, p0, f0, p1, f1, tol)?);
+        }
+        p0 = p1;
+        f0 = f1;
+    }
+    Ok(())
+}
+
+/// The sampling loop of the point-set and smoothed-polyhedron intersection oracles: `value`
+/// sampled at `n = ⌈|b − a| / step⌉` points `a.lerp(b, i / n)` (at most 2^20), and every sign
+/// change between consecutive samples refined by `refine` (their bipolar oracle), pushed in
+/// order from `a`. Nothing for a segment of non-finite length.
+pub(crate) fn sample_crossings(
+    value: impl Fn(DVec3) -> f64,
+    refine: impl Fn(DVec3, f64, DVec3, f64) -> DVec3,
+    a: DVec3,
+    b: DVec3,
+    step: f64,
+    out: &mut Vec<DVec3>,
+) {
+    let len = (b - a).length();
+    if !len.is_finite() {
+        return;
+    }
+    let n = ((len / step).ceil() as usize).clamp(1, 1 << 20);
+    let (mut p0, mut f0) = (a, value(a));
+    for i in 1..=n {
+        let p1 = a.lerp(b, i as f64 / n as f64);
+        let f1 = value(p1);
+        if (f0 < 0.0) != (f1 < 0.0) {
+            out.push(refine(p0, f0, p1, f1));
+        }
+        (p0, f0) = (p1, f1);
+    }
+}
