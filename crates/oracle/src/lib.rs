@@ -13,6 +13,7 @@ use glam::DVec3;
 pub mod catalog;
 pub mod expr;
 pub mod image;
+mod imls;
 pub mod implicit;
 pub mod pointset;
 pub mod polyhedron;

@@ -1,5 +1,5 @@
 //! A smoothed polyhedron oracle for remeshing: the IMLS surface
-//! ([`crate::pointset::PointSetSurface`]) of a dense, deterministic, area-uniform sample of the
+//! ([`PointSetSurface`], the shared `imls` module) of a dense, deterministic, area-uniform sample of the
 //! triangles with their exact face normals.
 //!
 //! When: restricted Delaunay refinement is proved for smooth surfaces; on a polyhedron every
@@ -17,7 +17,7 @@
 //! verification (`verify::check_against`) measures the distance to the input itself.
 
 use super::PolyhedronSurface;
-use crate::pointset::{PointSetError, PointSetParams, PointSetSurface};
+use crate::imls::{MIN_POINTS, PointSetError, PointSetParams, PointSetSurface};
 use crate::roots::SplitMix64;
 use crate::{BoundingSphere, Surface};
 use glam::DVec3;
@@ -78,7 +78,7 @@ impl SmoothPolyhedron {
         samples: usize,
         params: &PointSetParams,
     ) -> Result<Self, PointSetError> {
-        let (pts, nrm) = exact.area_samples(samples.max(crate::pointset::MIN_POINTS));
+        let (pts, nrm) = exact.area_samples(samples.max(MIN_POINTS));
         let imls = PointSetSurface::new(&pts, Some(&nrm), params)?;
         Ok(SmoothPolyhedron { exact, imls })
     }

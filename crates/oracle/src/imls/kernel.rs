@@ -1,0 +1,183 @@
+//! The IMLS value (section 6.6.3, Kolluri's IMLS; ours in the details): kernel sums, their
+//! gradient, the blend into the far field and the far-field sign.
+//!
+//! Invariant: [`PointSetSurface::value_grad`]'s value is bit-identical to
+//! [`Surface::value`](crate::Surface::value) (the sums are computed by the same operations,
+//! with or without their gradients).
+
+use super::PointSetSurface;
+use crate::Surface;
+use glam::DVec3;
+use kiddo::SquaredEuclidean;
+
+/// Kernel sums at a point (see [`PointSetSurface::sums_impl`]).
+#[derive(Clone, Copy, Default)]
+pub(super) struct Sums {
+    /// Σ φ n·(x − p).
+    pub num: f64,
+    /// Σ φ.
+    pub den: f64,
+    /// Σ φ n.
+    pub nsum: DVec3,
+    /// ∇ of `num` and `den` (when asked for).
+    pub dnum: DVec3,
+    pub dden: DVec3,
+}
+
+/// Total kernel weight below which the IMLS blends into the far field (`∓ max_radius`).
+pub(super) const MIN_WEIGHT: f64 = 1.0;
+
+/// Below [`MIN_WEIGHT`], the IMLS value signs the far field where the kernel weight is at
+/// least this (more than one point's tail; below it, the flood-filled far-field sign is
+/// used as where the weight is 0)...
+const FRINGE_WEIGHT: f64 = 0.003;
+
+/// ...the contributing normals agree to this ratio (`|Σ φ n| / Σ φ`)...
+const COHERENCE: f64 = 0.9;
+
+/// ...and the value is at least this multiple of the median kernel radius away from 0.
+const FRINGE_OFFSET: f64 = 0.25;
+
+/// The value where the kernel weight `den` is below [`MIN_WEIGHT`]: a smooth blend of the
+/// IMLS value `num / den` into the far field `far` (they have the same sign away from the
+/// surface).
+pub(super) fn blend(num: f64, den: f64, far: f64) -> f64 {
+    if den <= 0.0 {
+        return far;
+    }
+    let a = den / MIN_WEIGHT;
+    let a = a * a * (3.0 - 2.0 * a);
+    a * (num / den) + (1.0 - a) * far
+}
+
+impl PointSetSurface {
+    /// The IMLS value `Σ φ n·(x − p) / Σ φ` where the total kernel weight is at least the
+    /// blending threshold (near the points); `None` elsewhere.
+    pub(crate) fn near_value(&self, x: DVec3) -> Option<f64> {
+        let (num, den, _) = self.sums(x);
+        (den >= MIN_WEIGHT).then(|| num / den)
+    }
+
+    /// The value inside the bounding sphere, with the far field (`∓ max_radius`, given the
+    /// total kernel weight) from `far`.
+    pub(crate) fn value_with_far(&self, x: DVec3, far: impl FnOnce(f64) -> f64) -> f64 {
+        let (num, den, _) = self.sums(x);
+        if den >= MIN_WEIGHT {
+            return num / den;
+        }
+        blend(num, den, far(den))
+    }
+
+    /// The input point nearest to `x` and its squared distance.
+    pub(super) fn nearest(&self, x: DVec3) -> (usize, f64) {
+        let r = self
+            .tree
+            .query(&x.to_array())
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute();
+        (r.item as usize, r.distance)
+    }
+
+    /// IMLS sums at `x`: (Σ φ n·(x−p), Σ φ, Σ φ n).
+    pub(super) fn sums(&self, x: DVec3) -> (f64, f64, DVec3) {
+        let s = self.sums_impl::<false>(x);
+        (s.num, s.den, s.nsum)
+    }
+
+    /// The kernel sums at `x`, with their gradients if `GRAD` (otherwise left at zero). The
+    /// sums are computed by the same operations either way (bit-identical).
+    #[inline]
+    pub(super) fn sums_impl<const GRAD: bool>(&self, x: DVec3) -> Sums {
+        let mut s = Sums::default();
+        self.grid.for_each_near(x, self.max_radius, |it| {
+            let d = x - it.p;
+            let d2 = d.length_squared();
+            if d2 < it.r2 {
+                let u = 1.0 - d2 / it.r2;
+                let u2 = u * u;
+                let w = u2 * u2;
+                let nd = it.n.dot(d);
+                s.num += w * nd;
+                s.den += w;
+                s.nsum += w * it.n;
+                if GRAD {
+                    // ∇φ = 4u³ ∇u, ∇u = −2 (x − p) / R².
+                    let gw = d * (-8.0 * u2 * u / it.r2);
+                    s.dnum += gw * nd + w * it.n;
+                    s.dden += gw;
+                }
+            }
+        });
+        s
+    }
+
+    /// The value and its gradient at `x`; the gradient is NaN where the value is not the
+    /// plain IMLS quotient (low kernel weight, far field). The value equals
+    /// [`Surface::value`] exactly.
+    pub(super) fn value_grad(&self, x: DVec3) -> (f64, DVec3) {
+        let dc = (x - self.sphere.center).length();
+        if !x.is_finite() || dc >= self.sphere.radius {
+            return (self.value(x), DVec3::NAN);
+        }
+        let s = self.sums_impl::<true>(x);
+        if s.den >= MIN_WEIGHT {
+            let f = s.num / s.den;
+            return (f, (s.dnum - f * s.dden) / s.den);
+        }
+        (
+            blend(s.num, s.den, self.far_value(x, s.num, s.den, s.nsum)),
+            DVec3::NAN,
+        )
+    }
+
+    /// Far-field value: `∓ max_radius`, negative inside. `(num, den, nsum)` are the kernel
+    /// sums at `x`. Decided, in order, by:
+    /// - zero or negligible weight (below [`FRINGE_WEIGHT`]: farther than 0.87 `R_i` from
+    ///   every point): the flood-filled sign of the region no kernel reaches, at `x`'s
+    ///   cell or its clear neighbours ([`FarCache`]);
+    /// - low weight, where the contributing normals agree (`|Σ φ n| ≥ 0.9 Σ φ`) and the
+    ///   IMLS value is clearly off the surface (`|f| ≥` [`FRINGE_OFFSET`] × the median
+    ///   kernel radius): the sign of the IMLS value, which there agrees with the winding
+    ///   number and keeps the blend free of spurious zeros;
+    /// - otherwise the point-cloud winding number at `x` (above 1/2: inside).
+    pub(super) fn far_value(&self, x: DVec3, num: f64, den: f64, nsum: DVec3) -> f64 {
+        let r = self.max_radius;
+        if den < FRINGE_WEIGHT {
+            match self.far_cache.get(x) {
+                1 => return r,
+                -1 => return -r,
+                _ => {}
+            }
+        } else if nsum.length_squared() >= (COHERENCE * den).powi(2) {
+            let f = num / den;
+            if f.abs() >= FRINGE_OFFSET * self.stats.median_radius {
+                return if f < 0.0 { -r } else { r };
+            }
+        }
+        self.far_value_uncached(x, den)
+    }
+
+    /// The far field signed by the winding number alone (the coarse tree first where no kernel
+    /// reaches, kept when clear-cut).
+    pub(super) fn far_value_uncached(&self, x: DVec3, den: f64) -> f64 {
+        let coarse = match &self.gwn_coarse {
+            Some(c) if den == 0.0 => Some(c.winding_number(x)),
+            _ => None,
+        };
+        let w = match coarse {
+            Some(w) if !(0.1..=0.9).contains(&w) => w,
+            _ => self.gwn.winding_number(x),
+        };
+        if w > 0.5 {
+            -self.max_radius
+        } else {
+            self.max_radius
+        }
+    }
+
+    /// Generalized winding number of the oriented point cloud at `x` (≈ 1 inside, ≈ 0
+    /// outside; meaningful at distances above the spacing).
+    pub fn winding_number(&self, x: DVec3) -> f64 {
+        self.gwn.winding_number(x)
+    }
+}
