@@ -57,110 +57,9 @@ impl FarCache {
         }
         let lo = center - DVec3::splat(half);
         let inv = 1.0 / cell;
-        let ncell = n * n * n;
-        let words = ncell.div_ceil(64);
-        // Blocked cells: every cell whose box meets a support ball (a tiny relative margin
-        // covers rounding).
-        let blocked = points
-            .par_iter()
-            .zip(radius.par_iter())
-            .fold(
-                || vec![0u64; words],
-                |mut bits, (&p, &r)| {
-                    let r = r * (1.0 + 1e-9) + 1e-12 * half;
-                    let range = |axis: usize| {
-                        let a = ((p[axis] - r - lo[axis]) * inv).floor().max(0.0);
-                        let b = ((p[axis] + r - lo[axis]) * inv).floor().min((n - 1) as f64);
-                        (a as usize, b as usize)
-                    };
-                    let ((i0, i1), (j0, j1), (k0, k1)) = (range(0), range(1), range(2));
-                    if i0 > i1 || j0 > j1 || k0 > k1 {
-                        return bits;
-                    }
-                    // Squared distance from p to the slab of cell index c along `axis`.
-                    let gap = |axis: usize, c: usize| {
-                        let a = lo[axis] + c as f64 * cell;
-                        let d = (a - p[axis]).max(p[axis] - (a + cell)).max(0.0);
-                        d * d
-                    };
-                    for k in k0..=k1 {
-                        let dz = gap(2, k);
-                        for j in j0..=j1 {
-                            let dyz = dz + gap(1, j);
-                            if dyz >= r * r {
-                                continue;
-                            }
-                            for i in i0..=i1 {
-                                if dyz + gap(0, i) < r * r {
-                                    let c = (k * n + j) * n + i;
-                                    bits[c / 64] |= 1 << (c % 64);
-                                }
-                            }
-                        }
-                    }
-                    bits
-                },
-            )
-            .reduce(
-                || vec![0u64; words],
-                |mut a, b| {
-                    for (x, y) in a.iter_mut().zip(b) {
-                        *x |= y;
-                    }
-                    a
-                },
-            );
+        let blocked = blocked_cells(lo, inv, cell, n, half, points, radius);
         let is_blocked = |c: usize| blocked[c / 64] >> (c % 64) & 1 == 1;
-        // 6-connected components of the clear cells (breadth-first, in index order).
-        const NONE: u32 = u32::MAX;
-        let mut label = vec![NONE; ncell];
-        let mut samples: Vec<(u32, usize)> = Vec::new();
-        let mut queue: Vec<usize> = Vec::new();
-        let mut comps = 0u32;
-        for seed in 0..ncell {
-            if label[seed] != NONE || is_blocked(seed) {
-                continue;
-            }
-            queue.clear();
-            queue.push(seed);
-            label[seed] = comps;
-            let mut head = 0;
-            while head < queue.len() {
-                let c = queue[head];
-                head += 1;
-                let (i, j, k) = (c % n, (c / n) % n, c / (n * n));
-                let mut visit = |d: usize| {
-                    if label[d] == NONE && !is_blocked(d) {
-                        label[d] = comps;
-                        queue.push(d);
-                    }
-                };
-                if i > 0 {
-                    visit(c - 1);
-                }
-                if i + 1 < n {
-                    visit(c + 1);
-                }
-                if j > 0 {
-                    visit(c - n);
-                }
-                if j + 1 < n {
-                    visit(c + n);
-                }
-                if k > 0 {
-                    visit(c - n * n);
-                }
-                if k + 1 < n {
-                    visit(c + n * n);
-                }
-            }
-            let m = queue.len();
-            let take = SAMPLES.min(m);
-            for s in 0..take {
-                samples.push((comps, queue[s * m / take + (m / take) / 2]));
-            }
-            comps += 1;
-        }
+        let (label, samples, comps) = clear_components(n, is_blocked);
         let center_of = |c: usize| {
             let (i, j, k) = (c % n, (c / n) % n, c / (n * n));
             lo + cell * DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5)
@@ -232,6 +131,133 @@ impl FarCache {
         }
         out
     }
+}
+
+/// Cells of a clear-cell label array not in any clear component.
+const NONE: u32 = u32::MAX;
+
+/// The blocked cells of the `n³` grid with corner `lo` and cell size `cell` (`inv = 1 /
+/// cell`), as a bit set (x fastest): every cell whose box meets a support ball (a tiny relative
+/// margin covers rounding).
+fn blocked_cells(
+    lo: DVec3,
+    inv: f64,
+    cell: f64,
+    n: usize,
+    half: f64,
+    points: &[DVec3],
+    radius: &[f64],
+) -> Vec<u64> {
+    let words = (n * n * n).div_ceil(64);
+    points
+        .par_iter()
+        .zip(radius.par_iter())
+        .fold(
+            || vec![0u64; words],
+            |mut bits, (&p, &r)| {
+                let r = r * (1.0 + 1e-9) + 1e-12 * half;
+                let range = |axis: usize| {
+                    let a = ((p[axis] - r - lo[axis]) * inv).floor().max(0.0);
+                    let b = ((p[axis] + r - lo[axis]) * inv).floor().min((n - 1) as f64);
+                    (a as usize, b as usize)
+                };
+                let ((i0, i1), (j0, j1), (k0, k1)) = (range(0), range(1), range(2));
+                if i0 > i1 || j0 > j1 || k0 > k1 {
+                    return bits;
+                }
+                // Squared distance from p to the slab of cell index c along `axis`.
+                let gap = |axis: usize, c: usize| {
+                    let a = lo[axis] + c as f64 * cell;
+                    let d = (a - p[axis]).max(p[axis] - (a + cell)).max(0.0);
+                    d * d
+                };
+                for k in k0..=k1 {
+                    let dz = gap(2, k);
+                    for j in j0..=j1 {
+                        let dyz = dz + gap(1, j);
+                        if dyz >= r * r {
+                            continue;
+                        }
+                        for i in i0..=i1 {
+                            if dyz + gap(0, i) < r * r {
+                                let c = (k * n + j) * n + i;
+                                bits[c / 64] |= 1 << (c % 64);
+                            }
+                        }
+                    }
+                }
+                bits
+            },
+        )
+        .reduce(
+            || vec![0u64; words],
+            |mut a, b| {
+                for (x, y) in a.iter_mut().zip(b) {
+                    *x |= y;
+                }
+                a
+            },
+        )
+}
+
+/// The 6-connected components of the clear cells of the `n³` grid (breadth-first, in index
+/// order): the label of each cell ([`NONE`] if blocked), up to [`SAMPLES`] cells of each
+/// component spread in breadth-first order (with their component), and the component count.
+fn clear_components(
+    n: usize,
+    is_blocked: impl Fn(usize) -> bool,
+) -> (Vec<u32>, Vec<(u32, usize)>, u32) {
+    let ncell = n * n * n;
+    // 6-connected components of the clear cells (breadth-first, in index order).
+    let mut label = vec![NONE; ncell];
+    let mut samples: Vec<(u32, usize)> = Vec::new();
+    let mut queue: Vec<usize> = Vec::new();
+    let mut comps = 0u32;
+    for seed in 0..ncell {
+        if label[seed] != NONE || is_blocked(seed) {
+            continue;
+        }
+        queue.clear();
+        queue.push(seed);
+        label[seed] = comps;
+        let mut head = 0;
+        while head < queue.len() {
+            let c = queue[head];
+            head += 1;
+            let (i, j, k) = (c % n, (c / n) % n, c / (n * n));
+            let mut visit = |d: usize| {
+                if label[d] == NONE && !is_blocked(d) {
+                    label[d] = comps;
+                    queue.push(d);
+                }
+            };
+            if i > 0 {
+                visit(c - 1);
+            }
+            if i + 1 < n {
+                visit(c + 1);
+            }
+            if j > 0 {
+                visit(c - n);
+            }
+            if j + 1 < n {
+                visit(c + n);
+            }
+            if k > 0 {
+                visit(c - n * n);
+            }
+            if k + 1 < n {
+                visit(c + n * n);
+            }
+        }
+        let m = queue.len();
+        let take = SAMPLES.min(m);
+        for s in 0..take {
+            samples.push((comps, queue[s * m / take + (m / take) / 2]));
+        }
+        comps += 1;
+    }
+    (label, samples, comps)
 }
 
 #[cfg(test)]

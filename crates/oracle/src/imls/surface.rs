@@ -192,6 +192,7 @@ impl PointSetSurface {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::imls::PointSetParams;
 
     /// `value_grad` returns exactly `value`, and a gradient matching central differences
     /// near the surface (NaN in the blend zone and beyond).

@@ -144,53 +144,8 @@ impl PolyhedronSurface {
     /// tolerated and counted in [`PolyhedronSurface::stats`].
     pub fn new(mesh: &TriMesh) -> Result<Self, PolyhedronError> {
         let nv = mesh.vertices.len();
-        if nv == 0 {
-            return Err(PolyhedronError::NoVertices);
-        }
-        if mesh.triangles.is_empty() {
-            return Err(PolyhedronError::NoTriangles { vertices: nv });
-        }
-        for (i, v) in mesh.vertices.iter().enumerate() {
-            if !v.is_finite() {
-                return Err(PolyhedronError::NonFinite {
-                    index: i,
-                    x: v.x,
-                    y: v.y,
-                    z: v.z,
-                });
-            }
-            if let Some(c) = v.to_array().into_iter().find(|c| c.abs() > MAX_COORD) {
-                return Err(PolyhedronError::OutOfRange { index: i, value: c });
-            }
-        }
-        for (f, t) in mesh.triangles.iter().enumerate() {
-            if let Some(&bad) = t.iter().find(|&&i| i as usize >= nv) {
-                return Err(PolyhedronError::BadIndex {
-                    face: f,
-                    index: bad,
-                    vertices: nv,
-                });
-            }
-        }
-        // Weld exactly equal vertices: canonical = smallest index with those coordinates.
-        let mut order: Vec<u32> = (0..nv as u32).collect();
-        let key = |i: u32| mesh.vertices[i as usize].to_array();
-        order.sort_by(|&i, &j| {
-            let (a, b) = (key(i), key(j));
-            a[0].total_cmp(&b[0])
-                .then(a[1].total_cmp(&b[1]))
-                .then(a[2].total_cmp(&b[2]))
-                .then(i.cmp(&j))
-        });
-        let mut canon: Vec<u32> = (0..nv as u32).collect();
-        let mut duplicate_vertices = 0;
-        for w in 1..nv {
-            let (p, c) = (order[w - 1], order[w]);
-            if mesh.vertices[p as usize] == mesh.vertices[c as usize] {
-                canon[c as usize] = canon[p as usize];
-                duplicate_vertices += 1;
-            }
-        }
+        validate(mesh)?;
+        let (canon, duplicate_vertices) = weld(&mesh.vertices);
         let mut faces = Vec::with_capacity(mesh.triangles.len());
         let mut degenerate = 0;
         let mut referenced = vec![false; nv];
@@ -211,60 +166,9 @@ impl PolyhedronSurface {
                 triangles: mesh.triangles.len(),
             });
         }
-        // Components (union-find on welded vertices).
-        let mut uf: Vec<u32> = (0..nv as u32).collect();
-        fn find(uf: &mut [u32], mut x: u32) -> u32 {
-            while uf[x as usize] != x {
-                uf[x as usize] = uf[uf[x as usize] as usize];
-                x = uf[x as usize];
-            }
-            x
-        }
-        for (t, _) in &faces {
-            let r0 = find(&mut uf, t[0]);
-            for &v in &t[1..] {
-                let r = find(&mut uf, v);
-                if r != r0 {
-                    let (lo, hi) = (r.min(r0), r.max(r0));
-                    uf[hi as usize] = lo;
-                }
-            }
-        }
-        let mut comp_id = vec![u32::MAX; nv];
-        let mut ncomp = 0u32;
-        let face_comp: Vec<u32> = faces
-            .iter()
-            .map(|(t, _)| {
-                let r = find(&mut uf, t[0]) as usize;
-                if comp_id[r] == u32::MAX {
-                    comp_id[r] = ncomp;
-                    ncomp += 1;
-                }
-                comp_id[r]
-            })
-            .collect();
+        let (face_comp, ncomp) = face_components(nv, &faces);
         // Edge statistics (sorted, deterministic).
-        // (min, max, direction, face, local edge)
-        let mut edges: Vec<(u32, u32, bool, u32, u8)> = Vec::with_capacity(faces.len() * 3);
-        for (fi, (t, _)) in faces.iter().enumerate() {
-            for k in 0..3 {
-                let (u, v) = (t[k], t[(k + 1) % 3]);
-                edges.push((u.min(v), u.max(v), u < v, fi as u32, k as u8));
-            }
-        }
-        edges.sort_unstable();
-        let (mut boundary_edges, mut nonmanifold_edges, mut misoriented_edges) = (0, 0, 0);
-        for run in edges.chunk_by(|x, y| x.0 == y.0 && x.1 == y.1) {
-            match run.len() {
-                1 => boundary_edges += 1,
-                2 => {
-                    if run[0].2 == run[1].2 {
-                        misoriented_edges += 1
-                    }
-                }
-                _ => nonmanifold_edges += 1,
-            }
-        }
+        let (edges, boundary_edges, nonmanifold_edges, misoriented_edges) = edge_stats(&faces);
         let watertight = boundary_edges == 0 && nonmanifold_edges == 0 && misoriented_edges == 0;
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         let mut volume = 0.0;
@@ -469,6 +373,132 @@ impl PolyhedronSurface {
         };
         self.orientation * n.normalize_or_zero()
     }
+}
+
+/// The checks of [`PolyhedronSurface::new`]: vertices and triangles present, finite and
+/// moderate coordinates, indices in range.
+fn validate(mesh: &TriMesh) -> Result<(), PolyhedronError> {
+    let nv = mesh.vertices.len();
+    if nv == 0 {
+        return Err(PolyhedronError::NoVertices);
+    }
+    if mesh.triangles.is_empty() {
+        return Err(PolyhedronError::NoTriangles { vertices: nv });
+    }
+    for (i, v) in mesh.vertices.iter().enumerate() {
+        if !v.is_finite() {
+            return Err(PolyhedronError::NonFinite {
+                index: i,
+                x: v.x,
+                y: v.y,
+                z: v.z,
+            });
+        }
+        if let Some(c) = v.to_array().into_iter().find(|c| c.abs() > MAX_COORD) {
+            return Err(PolyhedronError::OutOfRange { index: i, value: c });
+        }
+    }
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        if let Some(&bad) = t.iter().find(|&&i| i as usize >= nv) {
+            return Err(PolyhedronError::BadIndex {
+                face: f,
+                index: bad,
+                vertices: nv,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Weld exactly equal vertices: the canonical index of each vertex (the smallest index with
+/// the same coordinates) and the number of duplicates.
+fn weld(vertices: &[DVec3]) -> (Vec<u32>, usize) {
+    // Weld exactly equal vertices: canonical = smallest index with those coordinates.
+    let nv = vertices.len();
+    let mut order: Vec<u32> = (0..nv as u32).collect();
+    let key = |i: u32| vertices[i as usize].to_array();
+    order.sort_by(|&i, &j| {
+        let (a, b) = (key(i), key(j));
+        a[0].total_cmp(&b[0])
+            .then(a[1].total_cmp(&b[1]))
+            .then(a[2].total_cmp(&b[2]))
+            .then(i.cmp(&j))
+    });
+    let mut canon: Vec<u32> = (0..nv as u32).collect();
+    let mut duplicate_vertices = 0;
+    for w in 1..nv {
+        let (p, c) = (order[w - 1], order[w]);
+        if vertices[p as usize] == vertices[c as usize] {
+            canon[c as usize] = canon[p as usize];
+            duplicate_vertices += 1;
+        }
+    }
+    (canon, duplicate_vertices)
+}
+
+/// Components of the faces (union-find on welded vertices): each face's component, numbered
+/// in face order, and the count.
+fn face_components(nv: usize, faces: &[([u32; 3], u32)]) -> (Vec<u32>, u32) {
+    let mut uf: Vec<u32> = (0..nv as u32).collect();
+    fn find(uf: &mut [u32], mut x: u32) -> u32 {
+        while uf[x as usize] != x {
+            uf[x as usize] = uf[uf[x as usize] as usize];
+            x = uf[x as usize];
+        }
+        x
+    }
+    for (t, _) in faces {
+        let r0 = find(&mut uf, t[0]);
+        for &v in &t[1..] {
+            let r = find(&mut uf, v);
+            if r != r0 {
+                let (lo, hi) = (r.min(r0), r.max(r0));
+                uf[hi as usize] = lo;
+            }
+        }
+    }
+    let mut comp_id = vec![u32::MAX; nv];
+    let mut ncomp = 0u32;
+    let face_comp: Vec<u32> = faces
+        .iter()
+        .map(|(t, _)| {
+            let r = find(&mut uf, t[0]) as usize;
+            if comp_id[r] == u32::MAX {
+                comp_id[r] = ncomp;
+                ncomp += 1;
+            }
+            comp_id[r]
+        })
+        .collect();
+    (face_comp, ncomp)
+}
+
+/// One entry per face edge, `(min, max, min→max along the face, face, local edge)`, sorted
+/// (deterministic), and the counts of boundary, non-manifold and misoriented edges.
+#[allow(clippy::type_complexity)]
+fn edge_stats(faces: &[([u32; 3], u32)]) -> (Vec<(u32, u32, bool, u32, u8)>, usize, usize, usize) {
+    // (min, max, direction, face, local edge)
+    let mut edges: Vec<(u32, u32, bool, u32, u8)> = Vec::with_capacity(faces.len() * 3);
+    for (fi, (t, _)) in faces.iter().enumerate() {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            edges.push((u.min(v), u.max(v), u < v, fi as u32, k as u8));
+        }
+    }
+    edges.sort_unstable();
+    let (mut boundary_edges, mut nonmanifold_edges, mut misoriented_edges) = (0, 0, 0);
+    for run in edges.chunk_by(|x, y| x.0 == y.0 && x.1 == y.1) {
+        match run.len() {
+            1 => boundary_edges += 1,
+            2 => {
+                if run[0].2 == run[1].2 {
+                    misoriented_edges += 1
+                }
+            }
+            _ => nonmanifold_edges += 1,
+        }
+    }
+    (edges, boundary_edges, nonmanifold_edges, misoriented_edges)
 }
 
 /// Angle-weighted pseudonormals (Bærentzen & Aanæs 2005) per triangle in leaf order:
