@@ -53,10 +53,12 @@ pub const CATALOG_JSON: &str = include_str!("../data/implicit_surfaces.json");
 /// One catalog surface.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CatalogEntry {
+    /// The catalog name (e.g. `torus`).
     pub name: &'static str,
     /// Expression in x, y, z (syntax of [`crate::expr`]); the solid is `f < 0`. `None` for a
     /// surface with a native implementation only (`trefoil`).
     pub expression: Option<String>,
+    /// A sphere holding the surface (the value is positive on it).
     pub bounding_sphere: BoundingSphere,
     /// False if the surface has singular points (mesh with a constant size bound).
     pub smooth: bool,
@@ -72,7 +74,12 @@ pub struct CatalogEntry {
 
 /// Errors of [`surface`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[allow(missing_docs)] // variant fields: named in the variant's docs and message
 pub enum CatalogError {
+    /// No catalog surface is called `name` (`known` lists the names).
+    /// An expression was given where a catalog name was expected, without a bounding sphere.
+    /// The surface `name` is native only (no expression to build it from).
+    /// Building the implicit surface `name` failed.
     #[error("unknown catalog surface '{name}'; known: {known}")]
     UnknownName { name: String, known: String },
     #[error(

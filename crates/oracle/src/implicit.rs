@@ -46,7 +46,16 @@ pub type GradientFn = dyn Fn(DVec3) -> DVec3 + Send + Sync;
 
 /// Errors detected when building an [`ImplicitSurface`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[allow(missing_docs)] // variant fields: named in the variant's docs and message
 pub enum ImplicitError {
+    /// The bounding sphere has a non-finite center or a radius not finite and positive.
+    /// The value is not positive at `point` of the bounding sphere.
+    /// The value is NaN at `point` in the bounding ball.
+    /// No sample of the seed grid is inside the solid.
+    /// A builder parameter `name` is not finite and positive.
+    /// A user seed point is not finite or outside the bounding sphere.
+    /// The expression does not parse.
+    /// A bounding sphere given as text is malformed.
     #[error(
         "invalid bounding sphere: center ({}, {}, {}) and radius {radius}; the center must be finite and the radius finite and > 0",
         center[0], center[1], center[2]

@@ -13,6 +13,7 @@
 //! them the image is the background): block `b` holds cells `b·BLOCK - 1 .. (b + 1)·BLOCK - 1`,
 //! i.e. voxel coordinates `v` with `floor((v + 1) / BLOCK) = b`.
 
+#[cfg(doc)]
 use super::ImageSurface;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -35,10 +36,10 @@ pub(crate) struct Blocks {
 }
 
 impl Blocks {
-    /// Classify every block from the node signs `bits` ([`ImageSurface::inside_bits_rows`]),
-    /// in parallel.
-    pub(crate) fn from_bits(s: &ImageSurface, bits: &[u64]) -> Blocks {
-        let [nx, ny, nz] = s.dims_isize().map(|v| v as usize);
+    /// Classify every block of a grid of `dims` nodes from the node signs `bits`
+    /// ([`ImageSurface::inside_bits_rows`]), in parallel.
+    pub(crate) fn from_bits(dims: [isize; 3], bits: &[u64]) -> Blocks {
+        let [nx, ny, nz] = dims.map(|v| v as usize);
         let nb = [
             (nx + 1).div_ceil(BLOCK),
             (ny + 1).div_ceil(BLOCK),
@@ -186,7 +187,7 @@ impl Blocks {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::image::{ImageOptions, Volume, Voxels};
+    use crate::image::{ImageOptions, ImageSurface, Volume, Voxels};
     use crate::roots::SplitMix64;
     use glam::DAffine3;
 
@@ -217,7 +218,7 @@ mod tests {
             },
         )
         .unwrap();
-        let blocks = Blocks::from_bits(&s, &s.inside_bits_rows());
+        let blocks = Blocks::from_bits(s.dims_isize(), &s.inside_bits_rows());
         assert!(blocks.flags.contains(&IN) && blocks.flags.contains(&OUT));
         assert!(blocks.flags.contains(&MIXED));
         let hi = DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);

@@ -53,12 +53,17 @@
 
 mod blocks;
 mod distance;
+// Documented on helper M's branch (NIfTI reader hardening); allowed until it merges.
+#[allow(missing_docs)]
 mod error;
+#[allow(missing_docs)]
 mod nifti_io;
+mod oracle;
 mod stack;
 mod surface;
 pub mod synthetic;
 mod topology;
+#[allow(missing_docs)]
 mod volume;
 
 pub use error::ImageError;

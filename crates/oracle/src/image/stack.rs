@@ -8,8 +8,11 @@ use std::path::{Path, PathBuf};
 /// Layout of a headerless raw volume (x fastest, then y, then z).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RawOptions {
+    /// Voxels along x, y, z.
     pub dims: [usize; 3],
+    /// Voxel type.
     pub dtype: Dtype,
+    /// Whether multi-byte voxels are big-endian.
     pub big_endian: bool,
     /// Bytes to skip at the start of the file (a header).
     pub offset: u64,

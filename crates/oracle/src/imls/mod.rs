@@ -54,7 +54,15 @@ pub const MIN_POINTS: usize = 10;
 
 /// Errors building a [`PointSetSurface`].
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
+#[allow(missing_docs)] // variant fields: named in the variant's docs and message
 pub enum PointSetError {
+    /// Fewer points than [`MIN_POINTS`].
+    /// Point `index` has a non-finite coordinate.
+    /// Point `index` has a coordinate beyond 1e60.
+    /// The normals are not one per point.
+    /// Normal `index` is not a finite non-zero vector.
+    /// The points are (nearly) coplanar or collinear.
+    /// A parameter of [`PointSetParams`] is out of range.
     #[error(
         "the point set has {0} points; at least {MIN_POINTS} are needed to fit a surface (give \
          a denser sample)"
@@ -122,6 +130,7 @@ impl Default for PointSetParams {
 /// What [`PointSetSurface::new`] computed.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointSetStats {
+    /// Input points.
     pub points: usize,
     /// Whether the normals were estimated (no input normals).
     pub estimated_normals: bool,

@@ -42,7 +42,14 @@ const MAX_COORD: f64 = 1e60;
 
 /// Errors building a [`PolyhedronSurface`].
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
+#[allow(missing_docs)] // variant fields: named in the variant's docs and message
 pub enum PolyhedronError {
+    /// The mesh has no vertices.
+    /// The mesh has `vertices` vertices but no triangles.
+    /// Vertex `index` has a non-finite coordinate.
+    /// Vertex `index` has a coordinate beyond the exact predicates' range.
+    /// Triangle `face` references a vertex `index` out of range.
+    /// Every triangle is degenerate.
     #[error("the mesh is empty (no vertices); give a triangle mesh with at least one face")]
     NoVertices,
     #[error(
@@ -83,7 +90,9 @@ pub enum PolyhedronError {
 /// What [`PolyhedronSurface::new`] found in (and tolerated about) its input.
 #[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct PolyhedronStats {
+    /// Input vertices.
     pub vertices: usize,
+    /// Input triangles.
     pub triangles: usize,
     /// Vertices with exactly the same coordinates as an earlier vertex (welded for topology).
     pub duplicate_vertices: usize,

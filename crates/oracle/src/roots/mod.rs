@@ -1,5 +1,6 @@
 //! Root finding for the bipolar and intersection oracles (section 6.4.2), shared by every
-//! backend, with the random-line seeds of P1 (section 6.4.3) and the projection `verify` uses.
+//! backend. (It also re-exports the surface-generic helpers behind [`Surface`]'s provided
+//! methods, random-line seeds and projection, and the [`SplitMix64`] generator.)
 //!
 //! # Vocabulary (every root finder here speaks it)
 //! - **Side**: a value `f` is *inside* when `f < 0` and *outside* when `f >= 0` (zero
@@ -32,25 +33,28 @@
 //! Each backend keeps its own finder: changing one would change the meshes (the iterates are
 //! part of the output).
 
-mod bisect;
+pub(crate) mod bisect;
 mod bracket;
 mod illinois;
 mod newton;
-mod project;
-mod scan;
-mod seeds;
+pub(crate) mod rng;
+pub(crate) mod scan;
 
+pub use crate::surface::{
+    nearest_crossing_on_rays, project_newton, project_robust, random_line_seeds,
+};
 pub use bisect::{bisect, try_bisect};
 pub(crate) use bracket::ParamBracket;
 pub(crate) use illinois::illinois;
 pub use illinois::try_find_root;
 pub(crate) use newton::newton_bracketed;
-pub use project::{nearest_crossing_on_rays, project_newton, project_robust};
+pub use rng::SplitMix64;
 pub(crate) use scan::sample_crossings;
 pub use scan::{all_crossings, try_all_crossings};
-pub use seeds::{SplitMix64, random_line_seeds};
 
 use crate::OracleError;
+#[cfg(doc)]
+use crate::Surface;
 use glam::DVec3;
 
 /// True if `v` is -1, 0 or 1: a value of a sign-only function, on which interpolation

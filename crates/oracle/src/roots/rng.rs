@@ -1,6 +1,5 @@
-//! P1 by random lines (section 6.4.3's last remark) and the deterministic generator they use.
+//! A deterministic random generator (ours) for seeds, sampling and tests.
 
-use crate::Surface;
 use glam::DVec3;
 
 /// Deterministic SplitMix64 generator: small, seedable, enough for seeds and BRIO rounds.
@@ -34,18 +33,4 @@ impl SplitMix64 {
             }
         }
     }
-}
-
-/// P1 by random lines (section 6.4.3's last remark): shoot `lines` random chords of the
-/// bounding sphere and keep every crossing found by the intersection oracle.
-pub fn random_line_seeds<S: Surface + ?Sized>(s: &S, lines: usize, seed: u64) -> Vec<DVec3> {
-    let bs = s.bounding_sphere();
-    let mut rng = SplitMix64(seed ^ 0x5EED_5EED);
-    let mut out = Vec::new();
-    for _ in 0..lines {
-        let a = bs.center + rng.unit_vector() * bs.radius;
-        let b = bs.center + rng.unit_vector() * bs.radius;
-        s.crossings(a, b, &mut out);
-    }
-    out
 }

@@ -1,0 +1,106 @@
+//! P1 for images: components of the trilinear level set from the voxel grid, and seed points.
+//!
+//! Grid nodes (voxel centres) are *inside* when their value is `< 0`. The grid is padded by
+//! one layer of background nodes (outside), all joined into one *exterior* node.
+//!
+//! **Connectivity.** Two nodes of the same sign are joined when they are 6-neighbours (the grid
+//! edge between them is linear, so it never leaves their side), or when they are the diagonal
+//! of an ambiguous face and the bilinear saddle of that face is on their side (the asymptotic
+//! decider: the inside pair is joined if the saddle value is `< 0`, the outside pair otherwise).
+//! These are exact connections of the trilinear interpolant's inside and outside regions, so
+//! every component of the node sets lies in one true region. The only connection not detected
+//! is an interior tunnel through a cell (a body-diagonal pair joined through the cell's
+//! interior), so the counts are exact except in that rare case, where they are too high.
+//!
+//! **Surface components.** The regions of R³ \ S form a tree (each closed surface separates
+//! space in two), so #surface components = #inside regions + #outside regions - 1.
+//!
+//! **Seeds.** Every surface component crosses a grid edge (the trilinear interpolant is
+//! harmonic, so a component inside one cell would break the maximum principle; a component
+//! meeting only face interiors would give a closed curve inside a face, same argument). For
+//! every pair (inside component, outside component) joined by a sign-changing edge we keep the
+//! first such edge in scan order; its crossing (exact: the interpolant is linear along an
+//! edge) lies on the unique surface component separating the two regions, so every surface
+//! component gets a seed. Up to 4096 other crossings are kept at a regular stride for extra
+//! seeds.
+//!
+//! **Seed tetrahedra.** A component is meshed only once one of its facets is restricted,
+//! i.e. a Voronoi vertex of the sample lies in the region it encloses. For the smallest
+//! components the seed is replaced by four points of the component (crossings of its extreme
+//! grid edges, and of rays from its deepest node) whose circumcentre lies in that region:
+//! the tetrahedron's four facets are restricted from the first insertion. On the nilearn
+//! fixture at iso 3 (10 components, 7 of them 1 to 13 voxels), the mesher missed 1 to 4
+//! components with a single seed each (seeds 0-7), none with the tetrahedra. The scan of node signs runs in parallel (rayon); union-find and the collection are
+//! sequential in index order, so the result does not depend on the thread count.
+
+mod dsu;
+mod pairs;
+#[cfg(test)]
+mod reference;
+mod scan;
+mod seeds;
+mod tets;
+
+#[cfg(test)]
+pub(crate) use reference::compute_reference;
+pub(crate) use scan::compute;
+pub use seeds::Topology;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::image::{ImageOptions, Volume, Voxels};
+    use crate::roots::SplitMix64;
+    use glam::DAffine3;
+
+    fn check(dims: [usize; 3], data: Vec<f32>, iso: f64) -> usize {
+        let vol = Volume::new(dims, Voxels::F32(data), DAffine3::IDENTITY).unwrap();
+        let Ok(s) = ImageSurface::new(
+            vol,
+            &ImageOptions {
+                iso: Some(iso),
+                ..Default::default()
+            },
+        ) else {
+            return 0;
+        };
+        let (a, b) = (compute(&s, &s.inside_bits_rows()), compute_reference(&s));
+        assert_eq!(
+            (a.inside_components, a.outside_components, a.crossing_edges),
+            (b.inside_components, b.outside_components, b.crossing_edges),
+            "dims {dims:?}"
+        );
+        assert_eq!(a.component_seeds.len(), b.component_seeds.len());
+        for p in a.component_seeds.iter().chain(&a.extra_seeds) {
+            assert!(crate::Surface::value(&s, *p).abs() < 1e-9);
+        }
+        a.surface_components
+    }
+
+    #[test]
+    fn run_based_matches_node_based() {
+        let mut rng = SplitMix64(77);
+        let mut many = 0;
+        for case in 0..300 {
+            let dims = [
+                1 + (rng.next_u64() % 70) as usize,
+                1 + (rng.next_u64() % 6) as usize,
+                1 + (rng.next_u64() % 6) as usize,
+            ];
+            let n = dims[0] * dims[1] * dims[2];
+            // Sparse or dense random binary-ish data with random values (ambiguous faces).
+            let density = [0.1, 0.3, 0.5, 0.8][case % 4];
+            let data: Vec<f32> = (0..n)
+                .map(|_| {
+                    if rng.next_f64() < density {
+                        0.5 + rng.next_f64() as f32
+                    } else {
+                        rng.next_f64() as f32 * 0.5
+                    }
+                })
+                .collect();
+            many += (check(dims, data, 0.5) > 3) as usize;
+        }
+        assert!(many > 100, "too few cases with several components: {many}");
+    }
+}
