@@ -36,6 +36,7 @@
 #![warn(missing_docs)]
 
 pub mod catalog;
+mod error;
 pub mod expr;
 pub mod image;
 mod imls;
@@ -46,9 +47,10 @@ pub mod roots;
 mod sphere;
 mod surface;
 
+pub use error::OracleError;
 pub use image::ImageSurface;
 pub use implicit::ImplicitSurface;
 pub use pointset::PointSetSurface;
 pub use polyhedron::{PolyhedronSurface, SmoothPolyhedron};
 pub use sphere::BoundingSphere;
-pub use surface::{OracleError, Surface};
+pub use surface::Surface;

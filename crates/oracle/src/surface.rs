@@ -1,5 +1,5 @@
 //! The oracle interface (sections 6.4.2 and 6.6): the [`Surface`] trait through which the
-//! mesher, the seeding and `verify` reach a surface, its query-time error, and the
+//! mesher, the seeding and `verify` reach a surface, and the
 //! surface-generic algorithms behind the trait's provided methods: P1 by random lines
 //! (section 6.4.3's last remark) and the projection `verify` uses. (They live in this file
 //! because the trait's defaults call them and they call the trait.)
@@ -9,14 +9,6 @@ use crate::roots::bisect::bisect;
 use crate::roots::rng::SplitMix64;
 use crate::roots::scan::all_crossings;
 use glam::DVec3;
-
-/// Errors raised by oracles at query time.
-#[derive(Debug, thiserror::Error, Clone, PartialEq)]
-pub enum OracleError {
-    /// The value at the point `(x, y, z)` is NaN.
-    #[error("the surface function returned NaN at ({0}, {1}, {2}); fix the function or its domain")]
-    NaN(f64, f64, f64),
-}
 
 /// A surface known through an oracle. Implementations are `Send + Sync` so that bulk
 /// evaluations (seeding, verification) can run in parallel.
@@ -55,7 +47,7 @@ pub trait Surface: Send + Sync {
 
     /// Signed value: negative inside the solid, positive outside, zero on S.
     /// Only the sign is required to be meaningful (sign-only functions must work).
-    /// May return NaN; callers turn NaN into [`OracleError::NaN`].
+    /// May return NaN; callers turn NaN into [`OracleError::NaN`](crate::OracleError::NaN).
     fn value(&self, p: DVec3) -> f64;
 
     // ----- Oracles (section 6.4.2) -----

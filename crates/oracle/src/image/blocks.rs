@@ -13,8 +13,6 @@
 //! them the image is the background): block `b` holds cells `b·BLOCK - 1 .. (b + 1)·BLOCK - 1`,
 //! i.e. voxel coordinates `v` with `floor((v + 1) / BLOCK) = b`.
 
-#[cfg(doc)]
-use super::ImageSurface;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -37,7 +35,7 @@ pub(crate) struct Blocks {
 
 impl Blocks {
     /// Classify every block of a grid of `dims` nodes from the node signs `bits`
-    /// ([`ImageSurface::inside_bits_rows`]), in parallel.
+    /// ([`ImageSurface::inside_bits_rows`](super::ImageSurface::inside_bits_rows)), in parallel.
     pub(crate) fn from_bits(dims: [isize; 3], bits: &[u64]) -> Blocks {
         let [nx, ny, nz] = dims.map(|v| v as usize);
         let nb = [

@@ -16,7 +16,7 @@
 //! [`Surface::project`] is the exact closest point on the *input* triangles, so that
 //! verification (`verify::check_against`) measures the distance to the input itself.
 
-use super::PolyhedronSurface;
+use super::exact::PolyhedronSurface;
 use crate::imls::{MIN_POINTS, PointSetError, PointSetParams, PointSetSurface};
 use crate::roots::SplitMix64;
 use crate::{BoundingSphere, Surface};

@@ -1,8 +1,7 @@
 //! Bisection (ours): the safe root finder of the bipolar oracle (section 6.4.2), exact for
 //! sign-only functions.
 
-use super::check_ends;
-use super::nan_at;
+use super::bracket::{check_ends, nan_at};
 use crate::OracleError;
 use glam::DVec3;
 

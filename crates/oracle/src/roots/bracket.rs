@@ -1,8 +1,10 @@
-//! Sign-change brackets and the Illinois step (ours), in the vocabulary of [`super`].
+//! Sign-change brackets and the Illinois step (ours), in the vocabulary of [`super`], with
+//! the checks every finder makes on its ends.
 //!
 //! Invariant of both forms: the two ends' values are on opposite sides (`< 0` and `>= 0`), so a
 //! sign change stays between them; [`ParamBracket`] also keeps `t0 < t1`.
 
+use crate::OracleError;
 use glam::DVec3;
 
 /// A bracket `[t0, t1]` in the parameter of a segment, with the values at its ends (maybe
@@ -111,4 +113,27 @@ pub(crate) fn shrink_bracket(
         }
         *side = 1;
     }
+}
+
+/// True if `v` is -1, 0 or 1: a value of a sign-only function, on which interpolation
+/// (secant, regula falsi, Newton) is meaningless and bisection must be used.
+#[inline]
+pub fn is_sign_value(v: f64) -> bool {
+    v == 0.0 || v == 1.0 || v == -1.0
+}
+
+/// The error for a NaN value at `p`.
+pub(crate) fn nan_at(p: DVec3) -> OracleError {
+    OracleError::NaN(p.x, p.y, p.z)
+}
+
+/// `Err` naming the first end whose value is NaN.
+pub(crate) fn check_ends(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Result<(), OracleError> {
+    if fa.is_nan() {
+        return Err(nan_at(a));
+    }
+    if fb.is_nan() {
+        return Err(nan_at(b));
+    }
+    Ok(())
 }

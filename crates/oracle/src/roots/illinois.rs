@@ -1,7 +1,7 @@
 //! Illinois (modified regula falsi) root finders (ours), in the vocabulary of [`super`].
 
-use super::bracket::{ParamBracket, shrink_bracket};
-use super::{check_ends, is_sign_value, nan_at, try_bisect};
+use super::bisect::try_bisect;
+use super::bracket::{ParamBracket, check_ends, is_sign_value, nan_at, shrink_bracket};
 use crate::OracleError;
 use glam::DVec3;
 

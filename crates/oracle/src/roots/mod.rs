@@ -45,6 +45,7 @@ pub use crate::surface::{
 };
 pub use bisect::{bisect, try_bisect};
 pub(crate) use bracket::ParamBracket;
+pub use bracket::is_sign_value;
 pub(crate) use illinois::illinois;
 pub use illinois::try_find_root;
 pub(crate) use newton::newton_bracketed;
@@ -52,30 +53,5 @@ pub use rng::SplitMix64;
 pub(crate) use scan::sample_crossings;
 pub use scan::{all_crossings, try_all_crossings};
 
-use crate::OracleError;
 #[cfg(doc)]
 use crate::Surface;
-use glam::DVec3;
-
-/// True if `v` is -1, 0 or 1: a value of a sign-only function, on which interpolation
-/// (secant, regula falsi, Newton) is meaningless and bisection must be used.
-#[inline]
-pub fn is_sign_value(v: f64) -> bool {
-    v == 0.0 || v == 1.0 || v == -1.0
-}
-
-/// The error for a NaN value at `p`.
-fn nan_at(p: DVec3) -> OracleError {
-    OracleError::NaN(p.x, p.y, p.z)
-}
-
-/// `Err` naming the first end whose value is NaN.
-fn check_ends(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Result<(), OracleError> {
-    if fa.is_nan() {
-        return Err(nan_at(a));
-    }
-    if fb.is_nan() {
-        return Err(nan_at(b));
-    }
-    Ok(())
-}

@@ -1,7 +1,8 @@
 //! The intersection oracle by sampling (section 6.4.2's Θ(1/Δ) oracle): sample a segment,
 //! refine every sign change with a root finder.
 
-use super::{nan_at, try_find_root};
+use super::bracket::nan_at;
+use super::illinois::try_find_root;
 use crate::OracleError;
 use glam::DVec3;
 

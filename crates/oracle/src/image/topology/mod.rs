@@ -49,7 +49,7 @@ pub use seeds::Topology;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::image::{ImageOptions, Volume, Voxels};
+    use crate::image::{ImageOptions, ImageSurface, Volume, Voxels};
     use crate::roots::SplitMix64;
     use glam::DAffine3;
 
