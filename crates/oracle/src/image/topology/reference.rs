@@ -12,6 +12,7 @@ fn bit(bits: &[u64], i: usize) -> bool {
 }
 
 /// Node-by-node reference implementation (tests cross-check the run-based one against it).
+#[cfg(test)] // the whole file is test-only; this marks the function for the structure scan
 pub(crate) fn compute_reference(s: &ImageSurface) -> Topology {
     let [nx, ny, nz] = s.dims_isize().map(|v| v as usize);
     let n = nx * ny * nz;
