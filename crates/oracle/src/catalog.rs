@@ -1,4 +1,4 @@
-//! Reference implicit surfaces, by name.
+//! Reference implicit surfaces by name (ours; the paper's examples of section 6.6.1 among them).
 //!
 //! The eight reference surfaces of the project catalog (`data/implicit_surfaces.json`, a copy of
 //! the shared catalog: `sphere`, `ellipsoid`, `torus`, `double_torus`, `tanglecube`, `chair`,

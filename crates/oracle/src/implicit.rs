@@ -1,5 +1,6 @@
-//! Implicit surfaces: the zero set of a function `f` (solid where `f < 0`) inside a bounding
-//! sphere, given as a Rust closure or an expression string (compiled once, see [`crate::expr`]).
+//! Implicit surfaces (section 6.6.1): the zero set of a function `f` (solid where `f < 0`)
+//! inside a bounding sphere, given as a Rust closure or an expression string (compiled once,
+//! see [`crate::expr`]).
 //!
 //! Construction checks the input and fails with an [`ImplicitError`] when:
 //! - the bounding sphere has a non-finite center or a radius that is not finite and positive;

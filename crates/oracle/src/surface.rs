@@ -66,7 +66,8 @@ pub trait Surface: Send + Sync {
 
     /// Intersection oracle: push every point of `[a, b]` on S into `out` (sorted from `a`).
     /// Default: sample the segment at steps of at most [`Surface::crossing_step`] and refine
-    /// every sign change ([`roots::all_crossings`](crate::roots::all_crossings)), so crossings closer than the step may be
+    /// every sign change ([`roots::all_crossings`](crate::roots::all_crossings)), so crossings
+    /// closer than the step may be
     /// missed, as the paper's Θ(1/Δ) oracle.
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
         all_crossings(

@@ -1,4 +1,4 @@
-//! Expressions in `x`, `y`, `z`: a parser with column-accurate errors and a compiler to a flat
+//! Expressions in `x`, `y`, `z` (ours, for section 6.6.1's implicit surfaces): a parser with column-accurate errors and a compiler to a flat
 //! SSA register program, evaluated without re-parsing.
 //!
 //! Grammar (usual precedence, `^` right-associative and binding tighter than unary minus, so

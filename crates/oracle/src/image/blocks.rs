@@ -1,4 +1,4 @@
-//! Sign summary of the voxel grid by blocks of `BLOCK³` cells, for the bipolar crossing.
+//! Sign summary of the voxel grid by blocks of `BLOCK³` cells (ours), for the bipolar crossing.
 //!
 //! A cell whose 8 corners have the same sign (`value < 0` or not) has that sign everywhere:
 //! the trilinear interpolant is a convex combination of the corners. A block of cells is

@@ -1,4 +1,4 @@
-//! P2 for images: an estimate of d_M^inf (the smallest distance from S to its medial axis).
+//! P2 for images (section 6.6.2): an estimate of d_M^inf (the smallest distance from S to its medial axis).
 //!
 //! Method. `min_{x ∈ S} d(x, M) = min_{m ∈ M} d(m, S)`, the smallest medial-ball radius, so we
 //! look for medial points in the distance map:

@@ -1,4 +1,4 @@
-//! Image stacks (a folder of 2D slices, a multi-page TIFF) and raw volumes.
+//! Image stacks (ours: a folder of 2D slices, a multi-page TIFF) and raw volumes.
 
 use super::{Dtype, ImageError, Volume, Voxels, read_nifti};
 use glam::{DAffine3, DMat3, DVec3};

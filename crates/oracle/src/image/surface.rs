@@ -1,4 +1,5 @@
-//! The voxel-image oracle: trilinear interpolation of (intensity - iso), in world space.
+//! The voxel-image surface (section 6.6.2): trilinear interpolation of (intensity - iso), in
+//! world space.
 
 use super::blocks::Blocks;
 use super::topology::Topology;

@@ -1,4 +1,4 @@
-//! Volumes sampled from implicit functions (test and bench fixtures).
+//! Volumes sampled from implicit functions (ours: test and bench fixtures).
 
 use super::{Volume, Voxels};
 use glam::{DAffine3, DMat3, DVec3};

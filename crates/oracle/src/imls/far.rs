@@ -1,4 +1,4 @@
-//! Far-field sign cache: the sign of the point-set surface where no kernel reaches, from a
+//! Far-field sign cache (ours): the sign of the point-set surface where no kernel reaches, from a
 //! flood fill instead of one winding number per query.
 //!
 //! A grid of cells of about half the largest kernel radius covers the bounding sphere's box.

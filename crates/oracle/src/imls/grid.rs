@@ -1,4 +1,4 @@
-//! Uniform grid over the points for the fixed-radius kernel sums (cache-friendly, no
+//! Uniform grid (ours) over the points for the fixed-radius kernel sums (cache-friendly, no
 //! allocation per query): cells of side ≥ the largest support radius, points stored
 //! contiguously in cell order with their normal and squared support radius.
 

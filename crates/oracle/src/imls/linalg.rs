@@ -1,4 +1,4 @@
-//! Symmetric 3×3 eigen decomposition (cyclic Jacobi), enough for PCA of neighbourhoods.
+//! Symmetric 3×3 eigen decomposition (ours, cyclic Jacobi), enough for PCA of neighbourhoods.
 
 use glam::{DMat3, DVec3};
 

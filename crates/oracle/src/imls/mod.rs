@@ -5,7 +5,8 @@
 //! Files: this one builds the surface (validation, kNN, spacing, kernel radii, normals, the
 //! winding-number trees, the far-field cache); `kernel` evaluates the value and its
 //! gradient; `normals` estimates and orients normals; `far` flood-fills the far-field signs;
-//! `lfs` estimates d_M (shrinking balls); `surface` implements the oracles ([`Surface`](crate::Surface)).
+//! `lfs` estimates d_M (shrinking balls); `surface` implements the oracles
+//! ([`Surface`](crate::Surface)).
 //!
 //! - Normals: given, or estimated by PCA on the `k` nearest neighbours and oriented
 //!   consistently by propagation along a minimum spanning tree of the kNN graph (Hoppe et al.
@@ -22,7 +23,8 @@
 //!   concave regions. On and outside the bounding sphere it is positive by construction.
 //! - P1: a few well-spread input points (and the top and bottom of each component, where the
 //!   tangent plane is horizontal, as in the paper) projected onto the MLS surface.
-//! - P2 ([`Surface::dm_inf_hint`](crate::Surface::dm_inf_hint), [`PointSetSurface::estimate_local_feature_size`]): a
+//! - P2 ([`Surface::dm_inf_hint`](crate::Surface::dm_inf_hint),
+//!   [`PointSetSurface::estimate_local_feature_size`]): a
 //!   kNN-based proxy of the distance to the medial axis, the radius of the inner and outer
 //!   *shrinking balls* (Ma, Bae & Choi 2012), which converge to the Voronoi poles' medial balls
 //!   of section 6.6.3; neighbours closer than the kernel radius are ignored so that noise does

@@ -1,6 +1,6 @@
-//! A smoothed polyhedron oracle for remeshing: the IMLS surface
-//! ([`PointSetSurface`], the shared `imls` module) of a dense, deterministic, area-uniform sample of the
-//! triangles with their exact face normals.
+//! A smoothed polyhedron oracle for remeshing (ours, after section 6.6.4): the IMLS surface
+//! ([`PointSetSurface`], the shared `imls` module) of a dense, deterministic, area-uniform
+//! sample of the triangles with their exact face normals.
 //!
 //! When: restricted Delaunay refinement is proved for smooth surfaces; on a polyhedron every
 //! edge is a crease. The exact polyhedron oracle is the default of `cargo xtask mesh` and

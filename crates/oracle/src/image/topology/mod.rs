@@ -1,4 +1,4 @@
-//! P1 for images: components of the trilinear level set from the voxel grid, and seed points.
+//! P1 for images (section 6.6.2): components of the trilinear level set from the voxel grid, and seed points.
 //!
 //! Grid nodes (voxel centres) are *inside* when their value is `< 0`. The grid is padded by
 //! one layer of background nodes (outside), all joined into one *exterior* node.

@@ -1,4 +1,4 @@
-//! The (inside region, outside region) pairs met by the voxel scan, each with its first and
+//! The (inside region, outside region) pairs met by the voxel scan (ours, P1 of section 6.6.2), each with its first and
 //! extreme crossing edges, and the [`Topology`] they give.
 
 use super::seeds::Topology;

@@ -1,4 +1,4 @@
-//! A node-by-node reference implementation of the voxel scan (tests only): the run-based
+//! A node-by-node reference implementation of the voxel scan (ours, tests only): the run-based
 //! [`super::compute`] is cross-checked against it.
 
 use super::dsu::Dsu;

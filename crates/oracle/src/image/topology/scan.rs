@@ -1,4 +1,4 @@
-//! The run-based voxel scan (P1 for images): union-find on runs of equal sign along the grid
+//! The run-based voxel scan (P1 for images, section 6.6.2): union-find on runs of equal sign along the grid
 //! rows, with the asymptotic decider on ambiguous faces; see [`super`].
 //!
 //! Invariant: everything is sequential in index order (rows, then words, then bits), so the

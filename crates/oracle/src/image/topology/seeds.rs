@@ -1,4 +1,4 @@
-//! The result of the voxel scan (P1 for images): component counts and on-surface seeds.
+//! The result of the voxel scan (P1 for images, section 6.6.2): component counts and on-surface seeds.
 
 use crate::roots::SplitMix64;
 use glam::DVec3;
