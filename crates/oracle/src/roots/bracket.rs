@@ -56,6 +56,8 @@ impl ParamBracket {
     /// Illinois on `f` (a function of the parameter) until the bracket is shorter than
     /// `ttol`: each probe lands at least `ttol / 4` inside the bracket, and the safeguard
     /// bisects when two steps did not halve it. Stops early on NaN.
+    // `!(x > y)` is used on purpose: it is true for NaN, which must take the safe branch.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     pub fn solve(mut self, f: impl Fn(f64) -> f64, ttol: f64) -> ParamBracket {
         let mut last_side = 0i8;
         let mut width_two_ago = f64::INFINITY;
