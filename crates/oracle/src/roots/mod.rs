@@ -11,7 +11,7 @@
 //! - **Tolerance** `tol`: an absolute length in space; `ttol = tol / |b − a|` is the same in
 //!   parameter units.
 //! - **Illinois step**: after a probe replaces one end, the value kept at the other end is
-//!   halved if the same end moved on the previous step too ([`bracket`]).
+//!   halved if the same end moved on the previous step too (the `bracket` file).
 //! - **Safeguard**: a bisection step when the bracket did not shrink fast enough (each finder
 //!   states its rule), so the cost stays within a small factor of bisection.
 //! - **Termination**: the bracket is shorter than the tolerance (the answer is then its
