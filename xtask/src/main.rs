@@ -22,14 +22,11 @@ macro_rules! out {
     }};
 }
 
-mod bench;
-mod bench_image;
-mod delaunay_cmd;
-mod mesh_cmd;
-mod paper_table;
-mod regress;
-mod surface_spec;
-mod verify_cmd;
+mod cli;
+mod suites;
+
+use cli::{delaunay, mesh, verify};
+use suites::{bench, paper_table, regress};
 
 #[derive(Parser)]
 #[command(
@@ -48,12 +45,12 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     /// Mesh a surface (default: the catalog torus) and write the mesh and a report.
-    Mesh(mesh_cmd::MeshArgs),
+    Mesh(mesh::MeshArgs),
     /// Verify a triangle mesh (topology, self-intersections, quality; against a surface:
     /// Hausdorff, normals, loose-epsilon certificate).
-    Verify(verify_cmd::VerifyArgs),
+    Verify(verify::VerifyArgs),
     /// 3D Delaunay triangulation of a point file or of random points.
-    Delaunay(delaunay_cmd::DelaunayArgs),
+    Delaunay(delaunay::DelaunayArgs),
     /// Timing tables (medians, ratios against baselines measured in the same run).
     Bench(bench::BenchArgs),
     /// Regression suite over the catalog: guarantees and golden counts.
@@ -78,32 +75,36 @@ fn main() {
             std::process::exit(2);
         }
     }
+    // Ok(true): the command ran and its verdict failed (`mesh`; `--strict` exits with 3).
     let r = match &cli.cmd {
-        Cmd::Mesh(a) => mesh_cmd::run(a),
-        Cmd::Delaunay(a) => delaunay_cmd::run(a),
-        Cmd::Verify(a) => verify_cmd::run(a),
-        Cmd::Bench(a) => bench::run(a),
-        Cmd::Regress(a) => regress::run(a),
-        Cmd::PaperTable(a) => paper_table::run(a),
+        Cmd::Mesh(a) => mesh::run(a).map(|v| !v.passed()),
+        Cmd::Delaunay(a) => delaunay::run(a).map(|()| false),
+        Cmd::Verify(a) => verify::run(a).map(|()| false),
+        Cmd::Bench(a) => bench::run(a).map(|()| false),
+        Cmd::Regress(a) => regress::run(a).map(|()| false),
+        Cmd::PaperTable(a) => paper_table::run(a).map(|()| false),
     };
-    if let Err(e) = r {
-        // One readable line, non-zero exit.
-        let mut msg = format!("{e}");
-        let mut src = e.source();
-        while let Some(s) = src {
-            let t = s.to_string();
-            if !msg.contains(&t) {
-                msg.push_str(": ");
-                msg.push_str(&t);
+    let verdict_failed = match r {
+        Ok(failed) => failed,
+        Err(e) => {
+            // One readable line, non-zero exit.
+            let mut msg = format!("{e}");
+            let mut src = e.source();
+            while let Some(s) = src {
+                let t = s.to_string();
+                if !msg.contains(&t) {
+                    msg.push_str(": ");
+                    msg.push_str(&t);
+                }
+                src = s.source();
             }
-            src = s.source();
+            eprintln!("error: {msg}");
+            std::process::exit(1);
         }
-        eprintln!("error: {msg}");
-        std::process::exit(1);
-    }
+    };
     if let Cmd::Mesh(a) = &cli.cmd
         && a.strict
-        && mesh_cmd::VERDICT_FAILED.load(std::sync::atomic::Ordering::Relaxed)
+        && verdict_failed
     {
         eprintln!("error: --strict: the verification failed or a criterion is unmet (see above)");
         std::process::exit(3);

@@ -54,6 +54,7 @@ mod mesher;
 mod options;
 mod output;
 mod queue;
+pub mod pipeline;
 mod restricted;
 mod schedule;
 // The sizing module is being reworked (issue 13, another branch); its docs follow there.

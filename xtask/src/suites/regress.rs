@@ -23,7 +23,7 @@ use anyhow::{Context, Result, bail};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use oracle::{BoundingSphere, Surface, implicit::ImplicitSurface};
-use rdt_mesher::{Criteria, MeshOptions, OracleKind, Sizing};
+use rdt_mesher::{Criteria, MeshOptions, OracleKind};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -62,8 +62,6 @@ pub struct RegressArgs {
 struct SurfaceCase {
     name: &'static str,
     sizes: [(&'static str, f64); 2],
-    /// Verify checks that may fail without a guarantee being broken, with the reason.
-    expected_fail: &'static [(&'static str, &'static str, &'static str)],
 }
 
 /// (name, ~2k sigma, ~50k sigma).
@@ -71,47 +69,38 @@ const SURFACES: &[SurfaceCase] = &[
     SurfaceCase {
         name: "sphere",
         sizes: [("2k", 0.065), ("50k", 0.013)],
-        expected_fail: &[],
     },
     SurfaceCase {
         name: "ellipsoid",
         sizes: [("2k", 0.042), ("50k", 0.0084)],
-        expected_fail: &[],
     },
     SurfaceCase {
         name: "torus",
         sizes: [("2k", 0.063), ("50k", 0.0126)],
-        expected_fail: &[],
     },
     SurfaceCase {
         name: "double_torus",
         sizes: [("2k", 0.043), ("50k", 0.0087)],
-        expected_fail: &[],
     },
     SurfaceCase {
         name: "tanglecube",
         sizes: [("2k", 0.18), ("50k", 0.036)],
-        expected_fail: &[],
     },
     SurfaceCase {
         name: "chair",
         sizes: [("2k", 0.29), ("50k", 0.058)],
-        expected_fail: &[],
     },
     SurfaceCase {
         name: "blobs",
         sizes: [("2k", 0.039), ("50k", 0.0078)],
-        expected_fail: &[],
     },
     SurfaceCase {
         name: "heart",
         sizes: [("2k", 0.062), ("12k", 0.025)],
-        expected_fail: &[],
     },
     SurfaceCase {
         name: "two_spheres",
         sizes: [("2k", 0.092), ("50k", 0.0184)],
-        expected_fail: &[],
     },
 ];
 
@@ -170,7 +159,6 @@ pub struct Row {
     pub manifold_ok: bool,
     pub verify_ok: bool,
     pub verify_failures: Vec<String>,
-    pub expected_failures: Vec<String>,
     pub golden: String,
     pub golden_ok: bool,
     /// Every reason this row fails (empty: the row passes).
@@ -184,13 +172,6 @@ struct Job {
     oracle: OracleKind,
 }
 
-fn oracle_name(o: OracleKind) -> &'static str {
-    match o {
-        OracleKind::Bipolar => "bipolar",
-        OracleKind::Intersection => "intersection",
-    }
-}
-
 fn golden_dir(a: &RegressArgs) -> PathBuf {
     a.golden_dir.clone().unwrap_or_else(|| {
         Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -202,15 +183,11 @@ fn golden_dir(a: &RegressArgs) -> PathBuf {
 
 fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
     let case = format!("{}-{}", j.surface.name, j.size);
-    let oname = oracle_name(j.oracle);
+    let oname = j.oracle.name();
     let (surface, genus_expected, _smooth) = open(j.surface.name)?;
     let surface = surface.as_ref();
     let opts = MeshOptions {
-        criteria: Criteria {
-            size: Some(Sizing::Constant(j.sigma)),
-            min_angle_deg: 30.0,
-            max_distance: None,
-        },
+        criteria: Criteria::uniform(j.sigma),
         oracle: j.oracle,
         manifold: true,
         seed: 0,
@@ -229,7 +206,7 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         .map(|b| b.radius / j.sigma)
         .fold(0.0, f64::max);
     let dm = surface.dm_inf_hint();
-    let balls = crate::mesh_cmd::verify_balls(&res.balls);
+    let balls = rdt_mesher::pipeline::verify_balls(&res.balls);
     let vopts = verify::Options {
         samples_per_edge: 2,
         surface_balls: Some(balls),
@@ -291,20 +268,7 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
             failures.push(format!("verify check {name} did not pass"));
         }
     }
-    let mut verify_failures = Vec::new();
-    let mut expected_failures = Vec::new();
-    for f in rep.failures() {
-        let expected = j
-            .surface
-            .expected_fail
-            .iter()
-            .any(|(size, check, _)| (size.is_empty() || *size == j.size) && *check == f);
-        if expected {
-            expected_failures.push(f.to_string());
-        } else {
-            verify_failures.push(f.to_string());
-        }
-    }
+    let verify_failures: Vec<String> = rep.failures().iter().map(|f| f.to_string()).collect();
     let verify_ok = verify_failures.is_empty();
     if !verify_ok {
         failures.push(format!("verify FAIL: {}", verify_failures.join(", ")));
@@ -371,7 +335,6 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         manifold_ok,
         verify_ok,
         verify_failures,
-        expected_failures,
         golden,
         golden_ok,
         failures,
@@ -433,7 +396,7 @@ pub fn run(a: &RegressArgs) -> Result<()> {
             if a.quick && i > 0 {
                 continue;
             }
-            for oracle in [OracleKind::Bipolar, OracleKind::Intersection] {
+            for oracle in OracleKind::ALL {
                 let name = format!("{}-{size}", s.name);
                 if a.filter
                     .as_ref()
@@ -467,12 +430,7 @@ pub fn run(a: &RegressArgs) -> Result<()> {
     let t0 = std::time::Instant::now();
     let mut rows = Vec::new();
     for j in &jobs {
-        bar.set_message(format!(
-            "{}-{} {}",
-            j.surface.name,
-            j.size,
-            oracle_name(j.oracle)
-        ));
+        bar.set_message(format!("{}-{} {}", j.surface.name, j.size, j.oracle.name()));
         let row = run_case(j, a, &gdir)?;
         bar.inc(1);
         rows.push(row);
@@ -510,11 +468,7 @@ pub fn run(a: &RegressArgs) -> Result<()> {
         "verify"
     );
     for r in &rows {
-        let verify = match (r.verify_ok, r.expected_failures.is_empty()) {
-            (true, true) => "PASS",
-            (true, false) => "PASS*",
-            (false, _) => "FAIL",
-        };
+        let verify = if r.verify_ok { "PASS" } else { "FAIL" };
         outln!(
             "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7.2} {:>7.2} {:>9.4} {:>9} {:>8.2e} {:>7} {:>5} {:>8} {:>7}  {}{}",
             r.case,
@@ -534,23 +488,6 @@ pub fn run(a: &RegressArgs) -> Result<()> {
             if r.golden_ok { "ok " } else { "NO " },
             r.golden
         );
-    }
-    let mut notes: Vec<String> = Vec::new();
-    for s in SURFACES {
-        for (size, check, why) in s.expected_fail {
-            if rows.iter().any(|r| {
-                r.case.starts_with(s.name) && r.expected_failures.iter().any(|f| f == check)
-            }) {
-                let sz = if size.is_empty() { "all sizes" } else { size };
-                notes.push(format!(
-                    "* {} ({sz}): {check} fails as expected: {why}",
-                    s.name
-                ));
-            }
-        }
-    }
-    for n in &notes {
-        outln!("{n}");
     }
     let failed: Vec<&Row> = rows.iter().filter(|r| !r.failures.is_empty()).collect();
     for r in &failed {

@@ -1,6 +1,6 @@
 //! `cargo xtask verify mesh.ply [--against SURFACE] [--epsilon E] [--dm auto|poles|D] [--report r.json]`.
 
-use crate::surface_spec::{self, SurfaceOptions};
+use crate::cli::input::{self, SurfaceOptions};
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
@@ -71,8 +71,8 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
     };
     let report = match &a.against {
         Some(spec) => {
-            let opened = surface_spec::open(spec, a.bounding_sphere.as_deref(), &a.surface)?;
-            verify::check_against(&mesh, opened.surface.as_ref(), &opts)
+            let opened = input::open(spec, a.bounding_sphere.as_deref(), &a.surface)?;
+            verify::check_against(&mesh, opened.surface(), &opts)
         }
         None => verify::check(&mesh, &opts),
     };

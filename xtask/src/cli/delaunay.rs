@@ -13,6 +13,7 @@ use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 use std::time::Instant;
 
+use crate::cli::points::parse_xyz;
 use anyhow::{Context, Result, bail};
 use delaunay3::{DVec3, Triangulation};
 
@@ -97,39 +98,6 @@ pub fn random_points(n: usize, seed: u64, dist: Distribution) -> Vec<DVec3> {
             all
         }
     }
-}
-
-/// Parses an `.xyz` text: one `x y z` per line; errors name the file and line.
-pub fn parse_xyz(text: &str, name: &str) -> Result<Vec<DVec3>> {
-    let mut pts = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let line = line.split('#').next().unwrap_or("").trim();
-        if line.is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = line.split_whitespace().collect();
-        if fields.len() != 3 {
-            bail!(
-                "{name}:{}: expected 3 numbers `x y z`, found {} fields in {line:?}",
-                i + 1,
-                fields.len()
-            );
-        }
-        let mut c = [0.0; 3];
-        for (k, f) in fields.iter().enumerate() {
-            c[k] = f.parse::<f64>().map_err(|e| {
-                anyhow::anyhow!(
-                    "{name}:{}: field {} {f:?} is not a number: {e}",
-                    i + 1,
-                    k + 1
-                )
-            })?;
-        }
-        let p = DVec3::from_array(c);
-        delaunay3::validate_point(p).map_err(|e| anyhow::anyhow!("{name}:{}: {e}", i + 1))?;
-        pts.push(p);
-    }
-    Ok(pts)
 }
 
 pub fn run(args: &DelaunayArgs) -> Result<()> {
@@ -218,21 +186,6 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn parse_errors_name_the_line() {
-        let e = parse_xyz("0 0 0\n# c\n\n1 2\n", "f.xyz").unwrap_err();
-        assert!(e.to_string().contains("f.xyz:4"), "{e}");
-        let e = parse_xyz("0 0 0\n1 x 2\n", "f.xyz").unwrap_err();
-        assert!(e.to_string().contains("f.xyz:2: field 2"), "{e}");
-        let e = parse_xyz("0 0 0\n1 inf 2\n", "f.xyz").unwrap_err();
-        assert!(e.to_string().contains("f.xyz:2: point"), "{e}");
-        let p = parse_xyz("1 2 3 # a point\n\n4 5 6\n", "f").unwrap();
-        assert_eq!(
-            p,
-            vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(4.0, 5.0, 6.0)]
-        );
-    }
 
     #[test]
     fn random_distributions() {

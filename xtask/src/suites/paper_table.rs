@@ -321,7 +321,7 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
 }
 
 fn certify(s: &dyn Surface, first: &MeshResult, second: &MeshResult, eps: f64) -> String {
-    let balls = crate::mesh_cmd::verify_balls(&second.balls);
+    let balls = rdt_mesher::pipeline::verify_balls(&second.balls);
     let vo = verify::Options {
         self_intersections: false,
         samples_per_edge: 1,

@@ -20,10 +20,12 @@
 //! 0.004 / 0.037 s, scan 0.003 / 0.016 s, d_M^inf 0.06 / 0.38 s (not needed with a size;
 //! `mesh` computes it on first use only).
 
-use crate::bench::{BenchArgs, CgalBaseline, Row, cgal_criteria_args, median};
+use super::cgal::{CgalBaseline, cgal_criteria_args};
+use super::common::{BenchArgs, Row, median};
 use anyhow::{Context, Result};
 use oracle::image::{ImageOptions, ImageSurface, NiftiWriteOptions, synthetic};
-use rdt_mesher::{Criteria, MeshOptions, Sizing};
+use rdt_mesher::MeshOptions;
+use rdt_mesher::pipeline::cgal_criteria;
 use std::time::Instant;
 
 pub fn bench_image(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
@@ -49,11 +51,7 @@ pub fn bench_image(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             ..Default::default()
         };
         let opts = MeshOptions {
-            criteria: Criteria {
-                size: Some(Sizing::Constant(r)),
-                min_angle_deg: 30.0,
-                max_distance: Some(r),
-            },
+            criteria: cgal_criteria(r),
             ..Default::default()
         };
         let mut cgal = CgalBaseline::new(

@@ -1,0 +1,469 @@
+//! Opening a surface by spec (ours): catalog names and expressions (`implicit:...`), images
+//! (section 6.6.2's voxel oracle), triangle meshes and point sets, with what the pipeline
+//! needs to know about each (its d_M^inf, a suggested size, seed points, notes).
+//!
+//! Invariant: an [`Input`] always holds a surface; its d_M^inf is either fixed at opening or,
+//! for images, the surface's own `dm_inf_hint()`, computed on first use only.
+
+use super::error::PipelineError;
+use glam::DVec3;
+use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
+use oracle::{BoundingSphere, Surface};
+use std::path::Path;
+
+/// Sharp-edge threshold of a mesh input: the two face normals of an edge differ by more than
+/// this (degrees), i.e. the dihedral angle is below 180 degrees minus it.
+///
+/// ```
+/// assert_eq!(rdt_mesher::pipeline::SHARP_DEG, 30.0);
+/// ```
+pub const SHARP_DEG: f64 = 30.0;
+
+/// How to read a `.ply` (which may hold a mesh or a point set).
+///
+/// ```
+/// use rdt_mesher::pipeline::{InputOptions, ReadAs};
+/// let o = InputOptions { read_as: Some(ReadAs::Points), ..Default::default() };
+/// assert_eq!(o.read_as, Some(ReadAs::Points));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReadAs {
+    /// A triangle mesh (the polyhedron oracle).
+    Mesh,
+    /// A point set (the point-set oracle), faces ignored.
+    Points,
+}
+
+/// Options of [`Input::open`] for the kinds of input that need them.
+///
+/// ```
+/// use rdt_mesher::pipeline::InputOptions;
+/// use oracle::image::ImageOptions;
+/// // An image meshed at iso value 300 (inside: above it).
+/// let o = InputOptions { image: ImageOptions { iso: Some(300.0), ..Default::default() },
+///                        ..Default::default() };
+/// assert_eq!(o.image.iso, Some(300.0));
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct InputOptions {
+    /// Bounding sphere of an expression (`implicit:"EXPR"`), or another one for a catalog name.
+    pub bounding_sphere: Option<BoundingSphere>,
+    /// Images: the iso value or label and the side of the foreground.
+    pub image: ImageOptions,
+    /// Images: voxel spacing of stacks and raw volumes, the layout of a raw volume.
+    pub load: LoadOptions,
+    /// How to read a `.ply` (default: a point set when it has no faces).
+    pub read_as: Option<ReadAs>,
+    /// Mesh input: mesh a smooth IMLS approximation of the polyhedron (rounds sharp edges by
+    /// about one kernel radius) instead of the exact triangles (the default).
+    pub smooth_polyhedron: bool,
+}
+
+/// Which backend an [`Input`] uses.
+///
+/// ```
+/// use rdt_mesher::pipeline::{Input, InputKind};
+/// let t = Input::open("implicit:torus", &Default::default()).unwrap();
+/// assert_eq!(t.kind, InputKind::Implicit);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputKind {
+    /// A catalog surface or an expression.
+    Implicit,
+    /// A voxel image.
+    Image,
+    /// A triangle mesh (exact or smoothed).
+    Polyhedron,
+    /// A point set.
+    PointSet,
+    /// A surface given by the caller ([`Input::new`], [`Input::borrowed`]).
+    Custom,
+}
+
+enum Held<'s> {
+    Owned(Box<dyn Surface + 's>),
+    Borrowed(&'s dyn Surface),
+}
+
+/// Where an input's d_M^inf comes from.
+#[derive(Clone, Copy, Debug)]
+enum DmInf {
+    Known(Option<f64>),
+    /// The surface's `dm_inf_hint()`, asked on each use (images compute it once, on first use:
+    /// it costs about 1 s at 256^3 and a given size does not need it).
+    FromSurface,
+}
+
+/// A surface and what the pipeline knows about it: what [`run`](super::run) meshes.
+///
+/// ```
+/// use rdt_mesher::pipeline::Input;
+/// let dir = env!("CARGO_MANIFEST_DIR");
+/// let cube = Input::open(&format!("{dir}/../../fixtures/meshes/cube.off"), &Default::default())
+///     .unwrap();
+/// assert_eq!(cube.name, "cube");
+/// assert!(cube.default_size.is_some()); // bbox diagonal / 50
+/// assert_eq!(cube.sharp_edges.len(), 12);
+/// ```
+pub struct Input<'s> {
+    surface: Held<'s>,
+    dm_inf: DmInf,
+    /// Short name, for default output paths and messages (catalog name, file stem).
+    pub name: String,
+    /// The backend.
+    pub kind: InputKind,
+    /// The size used when none is requested (meshes and point sets; otherwise 0.09 d_M^inf).
+    pub default_size: Option<f64>,
+    /// Catalog genus, if known.
+    pub genus: Option<u32>,
+    /// Catalog component count, or the components found by an image's voxel scan.
+    pub components: Option<u32>,
+    /// Control points E'_i for the mesher (`None`: the surface's seed points).
+    pub control_points: Option<Vec<DVec3>>,
+    /// The mesher's `max_control_points` (64 by default; images: room for a seed tetrahedron
+    /// on every small component).
+    pub max_control_points: usize,
+    /// What was found when opening (printed by the CLI as `note:` lines).
+    pub notes: Vec<String>,
+    /// Mesh input: its sharp edges (normals more than [`SHARP_DEG`] apart).
+    pub sharp_edges: Vec<(DVec3, DVec3)>,
+}
+
+impl<'s> Input<'s> {
+    fn with(surface: Held<'s>, name: String, kind: InputKind, dm_inf: DmInf) -> Self {
+        Input {
+            surface,
+            dm_inf,
+            name,
+            kind,
+            default_size: None,
+            genus: None,
+            components: None,
+            control_points: None,
+            max_control_points: crate::MeshOptions::default().max_control_points,
+            notes: Vec::new(),
+            sharp_edges: Vec::new(),
+        }
+    }
+
+    /// A surface of the caller's (d_M^inf: its `dm_inf_hint()`).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::Input;
+    /// let s = oracle::catalog::surface("sphere").unwrap();
+    /// let input = Input::new(s);
+    /// assert_eq!(input.dm_inf(), Some(1.0));
+    /// ```
+    pub fn new(surface: impl Surface + 's) -> Self {
+        Self::with(
+            Held::Owned(Box::new(surface)),
+            "surface".into(),
+            InputKind::Custom,
+            DmInf::FromSurface,
+        )
+    }
+
+    /// A borrowed surface of the caller's (for a `&dyn Surface`).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::Input;
+    /// use oracle::Surface;
+    /// let s = oracle::catalog::surface("torus").unwrap();
+    /// let r: &dyn Surface = &s;
+    /// assert_eq!(Input::borrowed(r).dm_inf(), Some(0.3));
+    /// ```
+    pub fn borrowed(surface: &'s dyn Surface) -> Self {
+        Self::with(
+            Held::Borrowed(surface),
+            "surface".into(),
+            InputKind::Custom,
+            DmInf::FromSurface,
+        )
+    }
+
+    /// The surface.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::Input;
+    /// let s = Input::open("implicit:sphere", &Default::default()).unwrap();
+    /// assert!(s.surface().value(glam::DVec3::ZERO) < 0.0);
+    /// ```
+    pub fn surface(&self) -> &dyn Surface {
+        match &self.surface {
+            Held::Owned(b) => b.as_ref(),
+            Held::Borrowed(r) => *r,
+        }
+    }
+
+    /// Known or estimated d_M^inf (images: the distance-transform estimate, computed now if
+    /// it was not yet). `None` for meshes and surfaces that know none.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::Input;
+    /// let t = Input::open("implicit:torus", &Default::default()).unwrap();
+    /// assert_eq!(t.dm_inf(), Some(0.3));
+    /// ```
+    pub fn dm_inf(&self) -> Option<f64> {
+        match self.dm_inf {
+            DmInf::Known(d) => d,
+            DmInf::FromSurface => self.surface().dm_inf_hint(),
+        }
+    }
+}
+
+impl Input<'static> {
+    /// Open a surface by spec, with the CLI's defaults: `implicit:NAME` (catalog),
+    /// `implicit:EXPR` (with `opts.bounding_sphere`), an image (`.nii`, `.nii.gz`, `.tif`,
+    /// `.tiff`, `.raw`, a folder of slices, or any file with `opts.load.raw`), a mesh (`.ply`
+    /// `.off` `.obj` `.stl`) or a point set (`.xyz`, a `.ply` without faces).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{Input, InputKind, InputOptions};
+    /// use oracle::image::ImageOptions;
+    /// let dir = env!("CARGO_MANIFEST_DIR");
+    /// let opts = InputOptions {
+    ///     image: ImageOptions { iso: Some(300.0), ..Default::default() },
+    ///     ..Default::default()
+    /// };
+    /// let img = Input::open(&format!("{dir}/../../fixtures/images/phantom_i16_32.nii.gz"), &opts)
+    ///     .unwrap();
+    /// assert_eq!((img.kind, img.name.as_str()), (InputKind::Image, "phantom_i16_32"));
+    /// assert!(img.components.unwrap() >= 1);
+    /// ```
+    pub fn open(spec: &str, opts: &InputOptions) -> Result<Self, PipelineError> {
+        if let Some(rest) = spec.strip_prefix("implicit:") {
+            return open_implicit(rest, opts.bounding_sphere);
+        }
+        let path = Path::new(spec);
+        if !path.exists() {
+            return Err(PipelineError::NoSuchInput {
+                spec: spec.to_string(),
+                names: oracle::catalog::names(),
+            });
+        }
+        let lower = spec.to_lowercase();
+        if is_image_spec(spec, opts.load.raw.is_some()) {
+            return open_image(spec, opts);
+        }
+        let as_points = match opts.read_as {
+            Some(ReadAs::Points) => true,
+            Some(ReadAs::Mesh) => false,
+            None => lower.ends_with(".xyz") || (lower.ends_with(".ply") && ply_has_no_faces(path)),
+        };
+        if as_points {
+            open_point_set(spec, lower.ends_with(".xyz"))
+        } else {
+            open_mesh(spec, opts.smooth_polyhedron)
+        }
+    }
+}
+
+/// Whether [`Input::open`] reads the (existing) file or folder `spec` as an image: a folder,
+/// an image extension (`.nii`, `.nii.gz`, `.tif`, `.tiff`, `.raw`), or `raw` (a raw-volume
+/// layout is given).
+///
+/// ```
+/// use rdt_mesher::pipeline::is_image_spec;
+/// assert!(is_image_spec("brain.nii.gz", false));
+/// assert!(!is_image_spec("bunny.ply", false));
+/// assert!(is_image_spec("volume.bin", true));
+/// ```
+pub fn is_image_spec(spec: &str, raw: bool) -> bool {
+    let lower = spec.to_lowercase();
+    Path::new(spec).is_dir()
+        || [".nii", ".nii.gz", ".tif", ".tiff", ".raw"]
+            .iter()
+            .any(|e| lower.ends_with(e))
+        || raw
+}
+
+fn open_implicit(rest: &str, bs: Option<BoundingSphere>) -> Result<Input<'static>, PipelineError> {
+    let entry = oracle::catalog::entry(rest.trim());
+    if entry.is_none() && bs.is_none() {
+        return Err(PipelineError::UnknownName {
+            name: rest.to_string(),
+            names: oracle::catalog::names(),
+        });
+    }
+    let s = oracle::catalog::resolve(rest, bs).map_err(PipelineError::read)?;
+    let name = entry
+        .as_ref()
+        .map(|e| e.name.to_string())
+        .unwrap_or_else(|| "implicit".into());
+    let dm = s.dm_inf_hint();
+    let mut input = Input::with(
+        Held::Owned(Box::new(s)),
+        name,
+        InputKind::Implicit,
+        DmInf::Known(dm),
+    );
+    input.genus = entry.as_ref().and_then(|e| e.genus);
+    input.components = entry.as_ref().and_then(|e| e.components);
+    Ok(input)
+}
+
+fn open_image(spec: &str, opts: &InputOptions) -> Result<Input<'static>, PipelineError> {
+    let path = Path::new(spec);
+    let img = ImageSurface::open(path, &opts.load, &opts.image)
+        .map_err(|e| PipelineError::backend(format!("opening image {spec}"), e))?;
+    let comps = img.component_count();
+    // Room among the control points for a seed tetrahedron on every small component.
+    let img = img.with_seed_budget(None);
+    let budget = img.seed_budget();
+    let note = format!(
+        "image: {} surface component(s) found by the voxel scan (iso {}); {budget} seed points",
+        comps,
+        img.iso()
+    );
+    let mut input = Input::with(
+        Held::Owned(Box::new(img)),
+        stem(path),
+        InputKind::Image,
+        DmInf::FromSurface,
+    );
+    input.components = Some(comps as u32);
+    input.max_control_points = budget;
+    input.notes.push(note);
+    Ok(input)
+}
+
+fn open_point_set(spec: &str, xyz: bool) -> Result<Input<'static>, PipelineError> {
+    let path = Path::new(spec);
+    let cloud = if xyz {
+        oracle::pointset::read_xyz(path).map_err(PipelineError::read)?
+    } else {
+        let c = meshio::read_point_cloud(path).map_err(PipelineError::read)?;
+        oracle::pointset::PointCloud {
+            points: c.points,
+            normals: c.normals,
+        }
+    };
+    let had_normals = cloud.normals.is_some();
+    let ps = oracle::pointset::PointSetSurface::from_cloud(&cloud, &Default::default())
+        .map_err(|e| PipelineError::backend(format!("point set {spec}"), e))?;
+    let size = ps.suggested_size();
+    let dm = ps.dm_inf_hint();
+    let mut input = Input::with(
+        Held::Owned(Box::new(ps)),
+        stem(path),
+        InputKind::PointSet,
+        DmInf::Known(dm),
+    );
+    input.default_size = Some(size);
+    input.notes.push(format!(
+        "point set: {} points, normals {}; suggested size {size:.5}",
+        cloud.points.len(),
+        if had_normals {
+            "given"
+        } else {
+            "estimated (PCA + propagation)"
+        }
+    ));
+    Ok(input)
+}
+
+fn open_mesh(spec: &str, smooth: bool) -> Result<Input<'static>, PipelineError> {
+    let path = Path::new(spec);
+    let mesh = meshio::read(path).map_err(PipelineError::read)?;
+    let poly = oracle::polyhedron::PolyhedronSurface::new(&mesh)
+        .map_err(|e| PipelineError::backend(format!("mesh {spec}"), e))?;
+    let size = poly.suggested_size();
+    let sharp_edges = poly.sharp_edges(SHARP_DEG);
+    let mut notes = vec![format!(
+        "polyhedron: {} vertices, {} triangles ({:?}); {} sharp edges (normals > {SHARP_DEG} deg apart); suggested size {size:.5} (bbox diagonal / 50)",
+        mesh.vertices.len(),
+        mesh.triangles.len(),
+        poly.stats(),
+        sharp_edges.len(),
+    )];
+    let surface: Box<dyn Surface> = if !smooth {
+        notes.push("polyhedron: meshing the exact triangles (--smooth-polyhedron meshes a smooth approximation)".into());
+        Box::new(poly)
+    } else {
+        let n = oracle::polyhedron::DEFAULT_SAMPLES;
+        let s = oracle::polyhedron::SmoothPolyhedron::new(poly, n)
+            .map_err(|e| PipelineError::backend(format!("mesh {spec}: smoothing"), e))?;
+        notes.push(format!(
+            "polyhedron: meshing its IMLS approximation from {n} area-uniform samples (kernel radius {:.2e}); verification measures the distance to the input triangles",
+            s.imls().stats().median_radius
+        ));
+        Box::new(s)
+    };
+    // A mesh's d_M^inf is not used (0 at its sharp edges): sizes come from its bbox.
+    let mut input = Input::with(
+        Held::Owned(surface),
+        stem(path),
+        InputKind::Polyhedron,
+        DmInf::Known(None),
+    );
+    input.default_size = Some(size);
+    input.notes = notes;
+    input.sharp_edges = sharp_edges;
+    Ok(input)
+}
+
+/// The file stem of a path without `.gz` and one extension (`brain.nii.gz` -> `brain`), or
+/// `surface`: the default output name of an input.
+///
+/// ```
+/// use std::path::Path;
+/// assert_eq!(rdt_mesher::pipeline::stem(Path::new("a/brain.nii.gz")), "brain");
+/// assert_eq!(rdt_mesher::pipeline::stem(Path::new("bunny.ply")), "bunny");
+/// ```
+pub fn stem(p: &Path) -> String {
+    let s = p
+        .file_name()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "surface".into());
+    s.trim_end_matches(".gz")
+        .rsplit_once('.')
+        .map(|(a, _)| a.to_string())
+        .unwrap_or(s)
+}
+
+/// Labels present in a label image, without the background label 0 (one mesh per label:
+/// open each with `InputOptions::image.label`).
+///
+/// ```
+/// use rdt_mesher::pipeline::image_labels;
+/// let dir = env!("CARGO_MANIFEST_DIR");
+/// let p = format!("{dir}/../../fixtures/images/phantom_i16_32.nii.gz");
+/// // The phantom holds intensities, not labels: an error that says so.
+/// assert!(image_labels(&p, &Default::default()).is_err());
+/// ```
+pub fn image_labels(spec: &str, load: &LoadOptions) -> Result<Vec<i64>, PipelineError> {
+    let vol = oracle::image::load_volume(Path::new(spec), load)
+        .map_err(|e| PipelineError::backend(format!("opening image {spec}"), e))?;
+    let labels = vol
+        .labels()
+        .map_err(|source| PipelineError::NotALabelImage {
+            spec: spec.to_string(),
+            source,
+        })?;
+    Ok(labels
+        .into_iter()
+        .map(|(l, _)| l)
+        .filter(|&l| l != 0)
+        .collect())
+}
+
+fn ply_has_no_faces(path: &Path) -> bool {
+    // Read the header only.
+    let Ok(f) = std::fs::File::open(path) else {
+        return false;
+    };
+    use std::io::{BufRead, BufReader};
+    let mut faces = None;
+    for line in BufReader::new(f).split(b'\n').take(200) {
+        let Ok(line) = line else { break };
+        let l = String::from_utf8_lossy(&line);
+        let l = l.trim();
+        if let Some(rest) = l.strip_prefix("element face") {
+            faces = rest.trim().parse::<u64>().ok();
+        }
+        if l == "end_header" {
+            break;
+        }
+    }
+    faces.unwrap_or(0) == 0
+}

@@ -1,0 +1,309 @@
+//! What a pipeline run returns (ours): the mesh with its surface Delaunay balls (section 6.1),
+//! the statistics, the two-pass details (section 6.5), the `verify` report and the verdict.
+//!
+//! Invariant: `verdict` is [`Verdict::Pass`] iff the report (when verification ran) passed
+//! and no pass stopped on a budget (single pass: and no criterion is unmet).
+
+use crate::{MeshResult, Stats, SurfaceBall};
+use glam::DVec3;
+use meshio::TriMesh;
+use std::fmt;
+
+/// Which meshing pass of a run.
+///
+/// ```
+/// use rdt_mesher::pipeline::Stage;
+/// assert_eq!(Stage::Second.to_string(), "second pass");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The one pass of a constant-size run.
+    Single,
+    /// The uniform first pass of the two-pass mode.
+    First,
+    /// The adaptive second pass of the two-pass mode (the output).
+    Second,
+}
+
+impl fmt::Display for Stage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Stage::Single => "pass",
+            Stage::First => "first pass",
+            Stage::Second => "second pass",
+        })
+    }
+}
+
+/// One reason a run did not pass.
+///
+/// ```
+/// use rdt_mesher::pipeline::{Failure, Stage};
+/// let f = Failure::Stopped(Stage::First); // its reason: outcome.stats_of(Stage::First).stopped_by
+/// assert_ne!(f, Failure::Unmet(Stage::First));
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub enum Failure {
+    /// The verification failed these checks.
+    Verification(Vec<String>),
+    /// A budget stopped this pass (see its `Stats::stopped_by` and `unmet`).
+    Stopped(Stage),
+    /// The pass completed with criteria unmet (see its `Stats::unmet`).
+    Unmet(Stage),
+}
+
+/// The verdict of a run: what `cargo xtask mesh --strict` exits on (status 3 on a failure).
+///
+/// ```
+/// use rdt_mesher::pipeline::{run, Input, Request, SizeRequest, Verdict};
+/// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+/// let out = run(&input, &Request { size: SizeRequest::Size(0.3), ..Default::default() })
+///     .unwrap();
+/// assert_eq!(out.verdict, Verdict::Pass);
+/// assert!(out.verdict.passed());
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub enum Verdict {
+    /// Verified (or not asked to verify), every criterion met, no budget hit.
+    Pass,
+    /// The reasons, in the order the CLI reports them.
+    Fail(Vec<Failure>),
+}
+
+impl Verdict {
+    /// `Pass`.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{Failure, Stage, Verdict};
+    /// assert!(!Verdict::Fail(vec![Failure::Unmet(Stage::Single)]).passed());
+    /// ```
+    pub fn passed(&self) -> bool {
+        matches!(self, Verdict::Pass)
+    }
+
+    fn from(failures: Vec<Failure>) -> Verdict {
+        if failures.is_empty() {
+            Verdict::Pass
+        } else {
+            Verdict::Fail(failures)
+        }
+    }
+}
+
+/// Details of a two-pass run (section 6.5).
+///
+/// ```
+/// use rdt_mesher::pipeline::{run, Input, Request, SizeRequest};
+/// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+/// let req = Request { size: SizeRequest::Epsilon { epsilon: 0.4, dm_inf: None },
+///                     verify: false, ..Default::default() };
+/// let tp = run(&input, &req).unwrap().two_pass.unwrap();
+/// assert!((tp.sigma0 - 0.4).abs() < 1e-12); // eps * d_M^inf, d_M^inf = 1
+/// assert!(tp.first_pass_uniform());
+/// ```
+#[derive(Clone, Debug)]
+pub struct TwoPassOutcome {
+    /// The requested epsilon.
+    pub epsilon: f64,
+    /// The d_M^inf used.
+    pub dm_inf: f64,
+    /// The first pass's constant size, epsilon * d_M^inf.
+    pub sigma0: f64,
+    /// The second pass's factor eps' (0.9 epsilon).
+    pub eps_prime: f64,
+    /// Lower bound of the second pass's size field.
+    pub floor: f64,
+    /// Medial points of the d_M estimate (after thinning).
+    pub medial_points: usize,
+    /// The first pass's estimate of d_M^inf.
+    pub dm_inf_estimate: f64,
+    /// The first pass.
+    pub first: MeshResult,
+}
+
+impl TwoPassOutcome {
+    /// The first pass's own d_M estimate confirms d_M^inf (its minimum is at least 0.9
+    /// d_M^inf); otherwise the first pass was not a uniform epsilon-sample (give a smaller
+    /// d_M^inf) and the second pass follows the estimate.
+    ///
+    /// ```
+    /// # use rdt_mesher::pipeline::{run, Input, Request, SizeRequest};
+    /// # let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+    /// # let req = Request { size: SizeRequest::Epsilon { epsilon: 0.4, dm_inf: None },
+    /// #                     verify: false, ..Default::default() };
+    /// let tp = run(&input, &req).unwrap().two_pass.unwrap();
+    /// assert!(tp.first_pass_uniform());
+    /// ```
+    pub fn first_pass_uniform(&self) -> bool {
+        !(self.dm_inf_estimate < 0.9 * self.dm_inf)
+    }
+}
+
+/// Sharp edges of a mesh input and how far the output is from them.
+///
+/// ```
+/// use rdt_mesher::pipeline::{run, Input, Request, SizeRequest};
+/// let dir = env!("CARGO_MANIFEST_DIR");
+/// let cube = Input::open(&format!("{dir}/../../fixtures/meshes/cube.off"), &Default::default())
+///     .unwrap();
+/// let out = run(&cube, &Request { verify: false, ..Default::default() }).unwrap();
+/// let s = out.sharp_edges.unwrap();
+/// assert_eq!(s.input_edges, 12);
+/// assert!(s.to_string().starts_with("sharp edges: 12 input edges"));
+/// ```
+#[derive(Clone, Debug)]
+pub struct SharpEdges {
+    /// Sharp edges of the input.
+    pub input_edges: usize,
+    /// Largest distance from them to the output, or why it was not measured.
+    pub deviation: Result<f64, String>,
+    /// Diagonal of the bounding box of the edges and the output.
+    pub bbox_diagonal: f64,
+}
+
+impl SharpEdges {
+    pub(crate) fn measure(edges: &[(DVec3, DVec3)], mesh: &TriMesh, sigma: f64) -> SharpEdges {
+        let dev = oracle::polyhedron::PolyhedronSurface::new(mesh)
+            .map(|out| oracle::polyhedron::sharp_edge_deviation(edges, &out, sigma / 4.0))
+            .map_err(|e| e.to_string());
+        let (lo, hi) = edges.iter().fold(
+            (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |(lo, hi), &(a, b)| (lo.min(a).min(b), hi.max(a).max(b)),
+        );
+        let diag = mesh
+            .vertices
+            .iter()
+            .fold((lo, hi), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        SharpEdges {
+            input_edges: edges.len(),
+            deviation: dev,
+            bbox_diagonal: (diag.1 - diag.0).length(),
+        }
+    }
+}
+
+impl fmt::Display for SharpEdges {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.deviation {
+            Ok(d) => write!(
+                f,
+                "sharp edges: {} input edges (normals > {} deg apart), largest distance to the output {d:.3e} ({:.3}% of the output's bbox diagonal)",
+                self.input_edges,
+                super::SHARP_DEG,
+                100.0 * d / self.bbox_diagonal
+            ),
+            Err(e) => write!(f, "sharp edges: deviation not measured ({e})"),
+        }
+    }
+}
+
+/// The result of [`run`](super::run).
+///
+/// ```
+/// use rdt_mesher::pipeline::{run, Input, Request, SizeRequest};
+/// let input = Input::open("implicit:torus", &Default::default()).unwrap();
+/// let out = run(&input, &Request { size: SizeRequest::Size(0.2), ..Default::default() })
+///     .unwrap();
+/// assert_eq!(out.balls.len(), out.mesh.triangles.len()); // one ball per facet
+/// assert_eq!(out.stats.vertices, out.mesh.vertices.len());
+/// assert!(out.report.as_ref().unwrap().passed());
+/// ```
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The output: oriented triangles of Del_S(E).
+    pub mesh: TriMesh,
+    /// `balls[i]` is the surface Delaunay ball of `mesh.triangles[i]`.
+    pub balls: Vec<SurfaceBall>,
+    /// The sample E (the mesher's points on S).
+    pub sample: Vec<DVec3>,
+    /// The (last) pass's statistics.
+    pub stats: Stats,
+    /// The constant size used (`None` in two-pass mode).
+    pub sigma: Option<f64>,
+    /// Two-pass mode: its details and first pass.
+    pub two_pass: Option<TwoPassOutcome>,
+    /// The input's notes and the size chosen.
+    pub notes: Vec<String>,
+    /// Mesh input with sharp edges (single pass): the output's distance to them.
+    pub sharp_edges: Option<SharpEdges>,
+    /// The verification report, when requested.
+    pub report: Option<verify::Report>,
+    /// Pass or the reasons of failure.
+    pub verdict: Verdict,
+}
+
+impl Outcome {
+    pub(crate) fn new(result: MeshResult) -> Outcome {
+        Outcome {
+            mesh: result.mesh,
+            balls: result.balls,
+            sample: result.sample,
+            stats: result.stats,
+            sigma: None,
+            two_pass: None,
+            notes: Vec::new(),
+            sharp_edges: None,
+            report: None,
+            verdict: Verdict::Pass,
+        }
+    }
+
+    /// The statistics of one pass (`Single` and `Second` are the output's).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{run, Input, Request, SizeRequest, Stage};
+    /// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+    /// let out = run(&input, &Request { size: SizeRequest::Size(0.3), verify: false,
+    ///                                  ..Default::default() }).unwrap();
+    /// assert!(out.stats_of(Stage::Single).stopped_by.is_none());
+    /// ```
+    pub fn stats_of(&self, stage: Stage) -> &Stats {
+        match (stage, &self.two_pass) {
+            (Stage::First, Some(tp)) => &tp.first.stats,
+            _ => &self.stats,
+        }
+    }
+
+    /// Sets the verdict from the report and the stats (the rule of the module's invariant).
+    pub(crate) fn decide(&mut self) {
+        let mut failures = Vec::new();
+        if let Some(r) = &self.report
+            && !r.passed()
+        {
+            failures.push(Failure::Verification(
+                r.failures().iter().map(|f| f.to_string()).collect(),
+            ));
+        }
+        match &self.two_pass {
+            None => {
+                if self.stats.stopped_by.is_some() {
+                    failures.push(Failure::Stopped(Stage::Single));
+                } else if !self.stats.unmet.is_empty() {
+                    failures.push(Failure::Unmet(Stage::Single));
+                }
+            }
+            Some(tp) => {
+                for (stage, st) in [
+                    (Stage::First, &tp.first.stats),
+                    (Stage::Second, &self.stats),
+                ] {
+                    if st.stopped_by.is_some() {
+                        failures.push(Failure::Stopped(stage));
+                    }
+                }
+            }
+        }
+        self.verdict = Verdict::from(failures);
+    }
+}
+
+/// The mesher's surface Delaunay balls in `verify`'s form (one per output triangle).
+///
+/// ```
+/// use rdt_mesher::{SurfaceBall, pipeline::verify_balls};
+/// let b = verify_balls(&[SurfaceBall { center: glam::DVec3::ZERO, radius: 0.1 }]);
+/// assert_eq!(b.len(), 1);
+/// ```
+pub fn verify_balls(balls: &[SurfaceBall]) -> Vec<verify::SurfaceBall> {
+    verify::SurfaceBall::per_facet(balls.iter().map(|b| (b.center, b.radius)))
+}

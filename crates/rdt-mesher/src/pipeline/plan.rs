@@ -1,0 +1,319 @@
+//! The pipeline's policy (ours): the default size bound (sigma = 0.09 d_M^inf, else R / 20),
+//! the two-pass orchestration of section 6.5, the mesher's options, the verification options
+//! and the verdict.
+//!
+//! Invariant: a [`Plan`] holds a validated size choice (a positive finite constant sigma, or
+//! epsilon in (0, 1) with a positive finite d_M^inf); its mesher options are the ones the
+//! run uses.
+
+use super::error::PipelineError;
+use super::input::Input;
+use super::outcome::{Outcome, SharpEdges, TwoPassOutcome};
+use super::request::{Request, SizeRequest};
+use crate::{Criteria, MeshOptions, Progress, Sizing};
+
+/// What a run reports while it works (see [`run_with_progress`](super::run_with_progress)).
+///
+/// ```
+/// use rdt_mesher::pipeline::{run_with_progress, Event, Input, Request, SizeRequest};
+/// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+/// let mut verifying = false;
+/// let req = Request { size: SizeRequest::Size(0.3), ..Default::default() };
+/// run_with_progress(&input, &req, &mut |e| verifying |= matches!(e, Event::Verifying))
+///     .unwrap();
+/// assert!(verifying);
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub enum Event {
+    /// The mesher's progress (every few hundred insertions).
+    Meshing(Progress),
+    /// Meshing is done; the verification runs.
+    Verifying,
+}
+
+/// How sigma was chosen.
+#[derive(Clone, Copy, Debug)]
+enum Mode {
+    Constant(f64),
+    TwoPass { epsilon: f64, dm_inf: f64 },
+}
+
+/// A validated request on an input, before meshing: the size chosen, the notes saying why,
+/// and the mesher's options. [`plan`] makes one, [`Plan::execute`] runs it.
+///
+/// ```
+/// use rdt_mesher::pipeline::{plan, Input, Request};
+/// let input = Input::open("implicit:torus", &Default::default()).unwrap();
+/// let req = Request::default();
+/// let p = plan(&input, &req).unwrap();
+/// assert!((p.sigma().unwrap() - 0.09 * 0.3).abs() < 1e-12); // 0.09 d_M^inf
+/// assert!(p.notes()[0].contains("0.09 * d_M^inf"));
+/// ```
+pub struct Plan<'p, 's> {
+    input: &'p Input<'s>,
+    request: &'p Request,
+    mode: Mode,
+    options: MeshOptions,
+    notes: Vec<String>,
+}
+
+/// Validate `request` on `input` and choose the size bound.
+///
+/// ```
+/// use rdt_mesher::pipeline::{plan, Input, PipelineError, Request, SizeRequest};
+/// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+/// let bad = Request { size: SizeRequest::Size(-1.0), ..Default::default() };
+/// assert!(matches!(plan(&input, &bad), Err(PipelineError::InvalidSize(_))));
+/// ```
+pub fn plan<'p, 's>(
+    input: &'p Input<'s>,
+    request: &'p Request,
+) -> Result<Plan<'p, 's>, PipelineError> {
+    let mut notes = input.notes.clone();
+    let mode = match request.size {
+        SizeRequest::Size(s) => {
+            if !(s > 0.0 && s.is_finite()) {
+                return Err(PipelineError::InvalidSize(s));
+            }
+            Mode::Constant(s)
+        }
+        SizeRequest::Epsilon { epsilon, dm_inf } => {
+            if !(epsilon > 0.0 && epsilon < 1.0) {
+                return Err(PipelineError::InvalidEpsilon(epsilon));
+            }
+            let dm = match (dm_inf, input.dm_inf()) {
+                (Some(d), _) if d > 0.0 && d.is_finite() => d,
+                (Some(d), _) => return Err(PipelineError::InvalidDmInf(d)),
+                (None, Some(d)) => d,
+                (None, None) => {
+                    return Err(PipelineError::NoDmInf {
+                        input: input.name.clone(),
+                    });
+                }
+            };
+            Mode::TwoPass {
+                epsilon,
+                dm_inf: dm,
+            }
+        }
+        SizeRequest::Auto => {
+            let (sigma, note) = default_size(input);
+            notes.push(note);
+            Mode::Constant(sigma)
+        }
+    };
+    let options = MeshOptions {
+        criteria: Criteria {
+            size: match mode {
+                Mode::Constant(s) => Some(Sizing::Constant(s)),
+                Mode::TwoPass { .. } => None,
+            },
+            min_angle_deg: request.min_angle_deg,
+            max_distance: request.max_distance,
+        },
+        oracle: request.oracle,
+        manifold: request.manifold,
+        scaffold: request.scaffold,
+        seed: request.seed,
+        max_vertices: request.max_vertices,
+        time_limit: request.time_limit,
+        initial_points: request.initial_points.clone(),
+        control_points: input.control_points.clone(),
+        initialization: request.initialization,
+        max_control_points: input.max_control_points,
+        ..MeshOptions::default()
+    };
+    Ok(Plan {
+        input,
+        request,
+        mode,
+        options,
+        notes,
+    })
+}
+
+/// The size of [`SizeRequest::Auto`] and the note saying which rule chose it.
+fn default_size(input: &Input<'_>) -> (f64, String) {
+    match (input.dm_inf(), input.default_size) {
+        (_, Some(d)) => (
+            d,
+            format!("no --size: using the input's suggested size {d:.5}"),
+        ),
+        (Some(dm), None) => (
+            0.09 * dm,
+            format!("no --size: using sigma = 0.09 * d_M^inf = {:.5}", 0.09 * dm),
+        ),
+        (None, None) => {
+            let r = input.surface().bounding_sphere().radius / 20.0;
+            (
+                r,
+                format!("no --size: using sigma = bounding radius / 20 = {r:.5}"),
+            )
+        }
+    }
+}
+
+impl Plan<'_, '_> {
+    /// The constant size bound (`None` in two-pass mode).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{plan, Input, Request, SizeRequest};
+    /// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+    /// let req = Request { size: SizeRequest::Size(0.2), ..Default::default() };
+    /// assert_eq!(plan(&input, &req).unwrap().sigma(), Some(0.2));
+    /// ```
+    pub fn sigma(&self) -> Option<f64> {
+        match self.mode {
+            Mode::Constant(s) => Some(s),
+            Mode::TwoPass { .. } => None,
+        }
+    }
+
+    /// Two-pass mode: (epsilon, d_M^inf used).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{plan, Input, Request, SizeRequest};
+    /// let input = Input::open("implicit:torus", &Default::default()).unwrap();
+    /// let req = Request { size: SizeRequest::Epsilon { epsilon: 0.2, dm_inf: None },
+    ///                     ..Default::default() };
+    /// assert_eq!(plan(&input, &req).unwrap().two_pass(), Some((0.2, 0.3)));
+    /// ```
+    pub fn two_pass(&self) -> Option<(f64, f64)> {
+        match self.mode {
+            Mode::Constant(_) => None,
+            Mode::TwoPass { epsilon, dm_inf } => Some((epsilon, dm_inf)),
+        }
+    }
+
+    /// The input's notes, then (constant size not requested) the rule that chose sigma.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{plan, Input, Request};
+    /// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+    /// let req = Request::default();
+    /// assert_eq!(plan(&input, &req).unwrap().notes().len(), 1);
+    /// ```
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    /// The mesher's options (two-pass mode: without a size; each pass sets its own).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{plan, Input, Request};
+    /// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+    /// let req = Request::default();
+    /// assert_eq!(plan(&input, &req).unwrap().mesh_options().max_control_points, 64);
+    /// ```
+    pub fn mesh_options(&self) -> &MeshOptions {
+        &self.options
+    }
+
+    /// Mesh, measure, verify (when requested) and decide the verdict.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{plan, Input, Request, SizeRequest};
+    /// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+    /// let req = Request { size: SizeRequest::Size(0.3), ..Default::default() };
+    /// let out = plan(&input, &req).unwrap().execute(&mut |_| {}).unwrap();
+    /// assert!(out.verdict.passed());
+    /// ```
+    pub fn execute(
+        self,
+        progress: &mut (dyn FnMut(Event) + Send),
+    ) -> Result<Outcome, PipelineError> {
+        let mut out = match self.mode {
+            Mode::Constant(sigma) => self.single_pass(sigma, progress)?,
+            Mode::TwoPass { epsilon, dm_inf } => self.two_passes(epsilon, dm_inf, progress)?,
+        };
+        out.decide();
+        Ok(out)
+    }
+
+    fn single_pass(
+        self,
+        sigma: f64,
+        progress: &mut (dyn FnMut(Event) + Send),
+    ) -> Result<Outcome, PipelineError> {
+        let surface = self.input.surface();
+        let result =
+            crate::mesh_with_progress(surface, &self.options, &mut |p| progress(Event::Meshing(p)))
+                .map_err(|source| PipelineError::Mesh {
+                    input: self.input.name.clone(),
+                    two_pass: false,
+                    source,
+                })?;
+        let mut out = Outcome::new(result);
+        out.sigma = Some(sigma);
+        out.notes = self.notes;
+        if !self.input.sharp_edges.is_empty() {
+            let s = SharpEdges::measure(&self.input.sharp_edges, &out.mesh, sigma);
+            out.notes.push(s.to_string());
+            out.sharp_edges = Some(s);
+        }
+        if self.request.verify {
+            progress(Event::Verifying);
+            let angle = self.request.min_angle_deg;
+            let vopts = verify::Options {
+                samples_per_edge: 2,
+                surface_balls: Some(super::verify_balls(&out.balls)),
+                epsilon: self
+                    .request
+                    .certify_epsilon
+                    .or(self.input.dm_inf().map(|d| sigma / d)),
+                min_angle_deg: (angle > 0.0).then_some(angle - 1e-9),
+                component_seeds: self.input.control_points.clone(),
+                seed: self.request.seed,
+                ..Default::default()
+            };
+            out.report = Some(verify::check_against(&out.mesh, surface, &vopts));
+        }
+        Ok(out)
+    }
+
+    fn two_passes(
+        self,
+        epsilon: f64,
+        dm_inf: f64,
+        progress: &mut (dyn FnMut(Event) + Send),
+    ) -> Result<Outcome, PipelineError> {
+        let surface = self.input.surface();
+        let tp = crate::sizing::two_pass(surface, epsilon, dm_inf, &self.options, &mut |p| {
+            progress(Event::Meshing(p))
+        })
+        .map_err(|source| PipelineError::Mesh {
+            input: self.input.name.clone(),
+            two_pass: true,
+            source,
+        })?;
+        let mut out = Outcome::new(tp.second);
+        out.notes = self.notes;
+        if self.request.verify {
+            progress(Event::Verifying);
+            let angle = self.request.min_angle_deg;
+            let vopts = verify::Options {
+                samples_per_edge: 2,
+                surface_balls: Some(super::verify_balls(&out.balls)),
+                epsilon: Some(self.request.certify_epsilon.unwrap_or(epsilon)),
+                dm: verify::DmSource::Poles,
+                surface_samples: Some(tp.first.mesh.vertices.clone()),
+                min_angle_deg: (angle > 0.0).then_some(angle - 1e-9),
+                component_seeds: self.input.control_points.clone(),
+                seed: self.request.seed,
+                ..Default::default()
+            };
+            out.report = Some(verify::check_against(&out.mesh, surface, &vopts));
+        }
+        out.two_pass = Some(TwoPassOutcome {
+            epsilon,
+            dm_inf,
+            sigma0: tp.sigma0,
+            eps_prime: tp.eps_prime,
+            floor: tp.floor,
+            medial_points: tp.medial.len(),
+            dm_inf_estimate: tp.dm_inf_estimate,
+            first: tp.first,
+        });
+        Ok(out)
+    }
+}

@@ -1,0 +1,187 @@
+//! The input flags of `mesh` and `verify` (ours): parsed into `rdt_mesher::pipeline`'s
+//! `InputOptions`, and the library's errors said with the flags' names.
+
+use anyhow::{Context, Result, bail};
+use clap::ValueEnum;
+use glam::DVec3;
+use oracle::BoundingSphere;
+use oracle::image::{Dtype, ImageOptions, LoadOptions, RawOptions};
+use rdt_mesher::pipeline::{self, Input, InputOptions, PipelineError, ReadAs};
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum AsKind {
+    Mesh,
+    Points,
+}
+
+/// Options for image, mesh and point-set inputs.
+#[derive(clap::Args, Debug, Default, Clone)]
+pub struct SurfaceOptions {
+    /// Image iso value (default: halfway for binary images; required otherwise).
+    #[arg(long, allow_negative_numbers = true)]
+    pub iso: Option<f64>,
+    /// Image: mesh the boundary of this label.
+    #[arg(long)]
+    pub label: Option<i64>,
+    /// Image: the inside is where the intensity is below the iso value (default: above).
+    #[arg(long)]
+    pub dark_foreground: bool,
+    /// Image stacks and raw volumes: voxel spacing `sx,sy,sz` in world units.
+    #[arg(long)]
+    pub spacing: Option<String>,
+    /// Raw volume: dimensions `nx,ny,nz`.
+    #[arg(long)]
+    pub dims: Option<String>,
+    /// Raw volume: voxel type (u8, i8, u16, i16, u32, i32, f32, f64).
+    #[arg(long)]
+    pub dtype: Option<String>,
+    /// Raw volume: big-endian voxels.
+    #[arg(long)]
+    pub big_endian: bool,
+    /// Read a .ply as a triangle mesh or as a point set (default: by its faces).
+    #[arg(long = "as", value_enum)]
+    pub as_kind: Option<AsKind>,
+    /// Mesh input: mesh a smooth IMLS approximation of the polyhedron (rounds sharp edges by
+    /// about one kernel radius) instead of the exact triangles (the default).
+    #[arg(long)]
+    pub smooth_polyhedron: bool,
+}
+
+/// Comma-separated numbers (`--bounding-sphere`).
+pub fn parse_vec3(s: &str, what: &str) -> Result<Vec<f64>> {
+    s.split(',')
+        .map(|t| {
+            t.trim().parse::<f64>().with_context(|| {
+                format!("{what}: '{t}' is not a number (expected comma-separated numbers)")
+            })
+        })
+        .collect()
+}
+
+fn triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3]> {
+    let v: Vec<T> = s
+        .split(',')
+        .map(|t| {
+            t.trim().parse::<T>().map_err(|_| {
+                anyhow::anyhow!(
+                    "{what}: '{t}' is not valid (expected three comma-separated values, e.g. 1,1,2)"
+                )
+            })
+        })
+        .collect::<Result<_>>()?;
+    let n = v.len();
+    v.try_into()
+        .map_err(|_| anyhow::anyhow!("{what}: expected three comma-separated values, got {n}"))
+}
+
+/// Voxel spacing and raw-volume options of an image input.
+pub fn image_load_options(o: &SurfaceOptions) -> Result<LoadOptions> {
+    let spacing = o
+        .spacing
+        .as_deref()
+        .map(|s| triple::<f64>(s, "--spacing"))
+        .transpose()?;
+    let raw = match (&o.dims, &o.dtype) {
+        (Some(d), Some(t)) => Some(RawOptions {
+            dims: triple::<usize>(d, "--dims")?,
+            dtype: t
+                .parse::<Dtype>()
+                .map_err(|e| anyhow::anyhow!("--dtype {t}: {e}"))?,
+            big_endian: o.big_endian,
+            offset: 0,
+        }),
+        (None, None) => None,
+        _ => bail!("a raw volume needs both --dims nx,ny,nz and --dtype TYPE"),
+    };
+    Ok(LoadOptions { spacing, raw })
+}
+
+fn bounding_sphere(s: Option<&str>) -> Result<Option<BoundingSphere>> {
+    let Some(s) = s else { return Ok(None) };
+    let v = parse_vec3(s, "--bounding-sphere")?;
+    if v.len() != 4 {
+        bail!(
+            "--bounding-sphere expects cx,cy,cz,r (4 numbers), got {}",
+            v.len()
+        );
+    }
+    Ok(Some(BoundingSphere {
+        center: DVec3::new(v[0], v[1], v[2]),
+        radius: v[3],
+    }))
+}
+
+/// The library's input options from the flags. The image flags are read (and their errors
+/// reported) only for an input that is an image, as before.
+fn input_options(spec: &str, bs: Option<&str>, o: &SurfaceOptions) -> Result<InputOptions> {
+    let bounding_sphere = bounding_sphere(bs)?;
+    let image_input = !spec.starts_with("implicit:")
+        && Path::new(spec).exists()
+        && pipeline::is_image_spec(spec, o.dims.is_some());
+    let load = if image_input {
+        image_load_options(o)?
+    } else {
+        LoadOptions::default()
+    };
+    Ok(InputOptions {
+        bounding_sphere,
+        image: ImageOptions {
+            iso: o.iso,
+            label: o.label,
+            dark_foreground: o.dark_foreground,
+            background: None,
+        },
+        load,
+        read_as: o.as_kind.map(|k| match k {
+            AsKind::Mesh => ReadAs::Mesh,
+            AsKind::Points => ReadAs::Points,
+        }),
+        smooth_polyhedron: o.smooth_polyhedron,
+    })
+}
+
+/// Open `spec` with the library's defaults; errors name the flags.
+pub fn open(spec: &str, bs: Option<&str>, o: &SurfaceOptions) -> Result<Input<'static>> {
+    let opts = input_options(spec, bs, o)?;
+    Input::open(spec, &opts).map_err(|e| cli_error(e, spec))
+}
+
+/// Labels present in an image (`--labels all`), without the background label 0.
+pub fn image_labels(spec: &str, o: &SurfaceOptions) -> Result<Vec<i64>> {
+    pipeline::image_labels(spec, &image_load_options(o)?).map_err(|e| cli_error(e, spec))
+}
+
+/// A pipeline error in the CLI's words (flag names instead of library names); `spec` is the
+/// input as given on the command line.
+pub fn cli_error(e: PipelineError, spec: &str) -> anyhow::Error {
+    match e {
+        PipelineError::UnknownName { name, names } => anyhow::anyhow!(
+            "implicit:\"{name}\" is not a catalog name ({}); an expression needs --bounding-sphere cx,cy,cz,r",
+            names.join(", ")
+        ),
+        PipelineError::NotALabelImage { spec, source } => {
+            anyhow::Error::new(source).context(format!("--labels all: {spec} is not a label image"))
+        }
+        PipelineError::InvalidSize(s) => anyhow::anyhow!(
+            "--size {s}: the size bound must be a positive number, e.g. --size 0.05"
+        ),
+        PipelineError::InvalidEpsilon(e) => {
+            anyhow::anyhow!("--epsilon {e}: epsilon must be in (0, 1), e.g. --epsilon 0.09")
+        }
+        PipelineError::InvalidDmInf(d) => {
+            anyhow::anyhow!("--dm-inf {d}: must be a positive number")
+        }
+        PipelineError::NoDmInf { .. } => anyhow::anyhow!(
+            "--epsilon needs d_M^inf, which {spec} does not provide: pass --dm-inf VALUE \
+             (`cargo xtask paper-table` prints estimates) or use --size"
+        ),
+        PipelineError::Mesh {
+            two_pass, source, ..
+        } => anyhow::Error::new(source).context(format!(
+            "meshing {spec}{}",
+            if two_pass { " (two passes)" } else { "" }
+        )),
+        e => anyhow::Error::new(e),
+    }
+}

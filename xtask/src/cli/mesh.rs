@@ -1,0 +1,401 @@
+//! `cargo xtask mesh`: mesh a surface, write the mesh, print a summary, write a JSON report.
+//! The policy (default size, two passes, verification, verdict) is `rdt_mesher::pipeline`'s.
+
+use crate::cli::input::{self, SurfaceOptions, cli_error};
+use anyhow::{Context, Result, bail};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use indicatif::{ProgressBar, ProgressStyle};
+use rdt_mesher::pipeline::{self, Event, Failure, Input, Outcome, Request, SizeRequest, Verdict};
+use rdt_mesher::{Initialization, OracleKind};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// A clap parser of a library enum spelled by its `name()`s (the library's one spelling).
+fn names<T: std::str::FromStr + Clone + Send + Sync + 'static>(
+    names: [&'static str; 2],
+) -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(names).map(|s| {
+        s.parse::<T>()
+            .unwrap_or_else(|_| unreachable!("a possible value parses"))
+    })
+}
+
+#[derive(clap::Args, Debug, Clone)]
+#[command(allow_negative_numbers = true)]
+pub struct MeshArgs {
+    /// Surface to mesh: `implicit:NAME` (catalog), `implicit:"EXPR"` (with --bounding-sphere),
+    /// an image (.nii, .nii.gz, a folder of slices, .raw), a mesh (.ply .off .obj .stl) or a
+    /// point set (.xyz, .ply without faces). Default: implicit:torus.
+    pub input: Option<String>,
+    /// Size bound sigma (constant), in the surface's units.
+    #[arg(long, conflicts_with = "epsilon")]
+    pub size: Option<f64>,
+    /// Target epsilon: two-pass sizing (section 6.5): a uniform pass at sigma_0 = epsilon *
+    /// d_M^inf, then an adaptive pass at sigma = 0.9 epsilon d_M (lambda-medial axis estimate).
+    #[arg(long)]
+    pub epsilon: Option<f64>,
+    /// d_M^inf for --epsilon (default: the catalog's or the backend's value).
+    #[arg(long)]
+    pub dm_inf: Option<f64>,
+    /// Initial sample: control points (6.4.3) or persistent facets (6.2).
+    #[arg(long, default_value = "control-points", value_parser = names::<Initialization>(Initialization::ALL.map(Initialization::name)))]
+    pub initialization: Initialization,
+    /// Facet angle bound in degrees (0 = off).
+    #[arg(long, default_value_t = 30.0)]
+    pub angle: f64,
+    /// Distance bound between a facet's circumcenter and its ball center (CGAL's distance_bound).
+    #[arg(long)]
+    pub distance: Option<f64>,
+    /// Oracle: bipolar (sign change + one point) or intersection (all points).
+    #[arg(long, default_value = "bipolar", value_parser = names::<OracleKind>(OracleKind::ALL.map(OracleKind::name)))]
+    pub oracle: OracleKind,
+    /// Do not enforce a manifold output (section 6.6.1's patch is on by default).
+    #[arg(long)]
+    pub no_manifold: bool,
+    /// Do not insert scaffold points inside the solid (an acceleration that leaves the
+    /// output's guarantees unchanged; see docs/GUIDE.md).
+    #[arg(long)]
+    pub no_scaffold: bool,
+    /// Seed for every random choice.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Stop at this many sample points (the mesh so far is written, unmet criteria reported).
+    #[arg(long)]
+    pub max_vertices: Option<usize>,
+    /// Stop after this many seconds (likewise).
+    #[arg(long)]
+    pub time_limit: Option<f64>,
+    /// Output mesh (.ply, .off, .obj, .stl). Default: out/NAME.ply.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Write a JSON report here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Bounding sphere `cx,cy,cz,r` for an expression.
+    #[arg(long)]
+    pub bounding_sphere: Option<String>,
+    /// Start from this sample E_0 (`x y z` per line), section 6.4.1.
+    #[arg(long)]
+    pub initial_points: Option<PathBuf>,
+    /// Skip the verification of the output (default: topology, self-intersections,
+    /// quality, Hausdorff against the surface, loose-epsilon certificate).
+    #[arg(long)]
+    pub no_verify: bool,
+    /// Exit with status 3 (after writing the mesh and the report) when the verification
+    /// fails or a criterion is unmet: for scripts and regression suites.
+    #[arg(long)]
+    pub strict: bool,
+    /// Requested epsilon for the certificate (default: sigma / d_M^inf when known).
+    #[arg(long)]
+    pub certify_epsilon: Option<f64>,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub surface: SurfaceOptions,
+    /// Image: `all` meshes every label present except 0, one file per label
+    /// (`NAME_label<L>.ply`, or -o's stem with `_label<L>`).
+    #[arg(long, conflicts_with = "label")]
+    pub labels: Option<String>,
+}
+
+/// `--labels all`: one run (and one output file) per label of the image.
+fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
+    let spec = a.input.clone().unwrap_or_default();
+    if which != "all" {
+        bail!("--labels {which}: only `--labels all` is supported; use --label L for one label");
+    }
+    let labels = input::image_labels(&spec, &a.surface)?;
+    if labels.is_empty() {
+        bail!("--labels all: {spec} has no label other than the background 0: nothing to mesh");
+    }
+    eprintln!("note: {} label(s) to mesh: {labels:?}", labels.len());
+    let mut failures = Vec::new();
+    for l in labels {
+        let mut b = a.clone();
+        b.labels = None;
+        b.surface.label = Some(l);
+        let out = a.output.clone().unwrap_or_else(|| {
+            PathBuf::from(format!("out/{}.ply", pipeline::stem(Path::new(&spec))))
+        });
+        let ext = out
+            .extension()
+            .map_or("ply".into(), |e| e.to_string_lossy().to_string());
+        let stem = out
+            .file_stem()
+            .map_or("mesh".into(), |e| e.to_string_lossy().to_string());
+        b.output = Some(out.with_file_name(format!("{stem}_label{l}.{ext}")));
+        b.report = a
+            .report
+            .as_ref()
+            .map(|r| r.with_extension(format!("label{l}.json")));
+        if let Verdict::Fail(f) = run(&b).with_context(|| format!("label {l}"))? {
+            failures.extend(f);
+        }
+    }
+    Ok(if failures.is_empty() {
+        Verdict::Pass
+    } else {
+        Verdict::Fail(failures)
+    })
+}
+
+/// The library's request from the flags.
+fn request(a: &MeshArgs) -> Result<Request> {
+    Ok(Request {
+        size: match (a.size, a.epsilon) {
+            (Some(s), _) => SizeRequest::Size(s),
+            (None, Some(e)) => SizeRequest::Epsilon {
+                epsilon: e,
+                dm_inf: a.dm_inf,
+            },
+            (None, None) => SizeRequest::Auto,
+        },
+        min_angle_deg: a.angle,
+        max_distance: a.distance,
+        oracle: a.oracle,
+        manifold: !a.no_manifold,
+        scaffold: !a.no_scaffold,
+        initialization: a.initialization,
+        seed: a.seed,
+        max_vertices: a.max_vertices,
+        time_limit: a.time_limit.map(Duration::from_secs_f64),
+        initial_points: match &a.initial_points {
+            Some(p) => crate::cli::points::read_xyz(p)?,
+            None => Vec::new(),
+        },
+        verify: !a.no_verify,
+        certify_epsilon: a.certify_epsilon,
+    })
+}
+
+/// Mesh, write, print; the verdict decides `--strict`'s exit status (see `main`).
+pub fn run(a: &MeshArgs) -> Result<Verdict> {
+    if let Some(which) = &a.labels {
+        return run_labels(a, which);
+    }
+    let spec = a
+        .input
+        .clone()
+        .unwrap_or_else(|| "implicit:torus".to_string());
+    let opened = input::open(&spec, a.bounding_sphere.as_deref(), &a.surface)?;
+    let req = request(a)?;
+    let plan = pipeline::plan(&opened, &req).map_err(|e| cli_error(e, &spec))?;
+    for n in plan.notes() {
+        eprintln!("note: {n}");
+    }
+    let bar = if a.quiet || plan.two_pass().is_some() {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new_spinner();
+        b.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").unwrap());
+        b.enable_steady_tick(Duration::from_millis(200));
+        b
+    };
+    let out = plan
+        .execute(&mut |e| match e {
+            Event::Meshing(p) => bar.set_message(format!(
+                "{} points, {} restricted facets, queue {}",
+                p.sample_points, p.restricted_facets, p.queue
+            )),
+            Event::Verifying => bar.set_message("verifying"),
+        })
+        .map_err(|e| cli_error(e, &spec))?;
+    bar.finish_and_clear();
+    let out_path = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/{}.ply", opened.name)));
+    if out.two_pass.is_some() {
+        print_two_pass(&spec, &out);
+    }
+    write_mesh(&out_path, &out)?;
+    if out.two_pass.is_some() {
+        print_two_pass_verdict(&out, &out_path);
+        write_two_pass_report(a, &spec, &out_path, &out)?;
+    } else {
+        print_single(&spec, &opened, &out, &out_path);
+        write_report(a, &spec, &out_path, &out)?;
+    }
+    Ok(out.verdict)
+}
+
+fn write_mesh(out_path: &Path, out: &Outcome) -> Result<()> {
+    if let Some(dir) = out_path.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    meshio::write(out_path, &out.mesh).with_context(|| format!("writing {}", out_path.display()))
+}
+
+/// The lines of a constant-size run.
+fn print_single(spec: &str, opened: &Input<'_>, out: &Outcome, out_path: &Path) {
+    if let Some(s) = &out.sharp_edges {
+        outln!("{s}");
+    }
+    let st = &out.stats;
+    let topo = out.report.as_ref().and_then(|c| c.topology.as_ref());
+    let manifold = topo.map(|t| {
+        t.boundary_edges_total == 0
+            && t.non_manifold_edges_total == 0
+            && t.non_manifold_vertices_total == 0
+            && t.inconsistent_edges_total == 0
+    });
+    let genus: Vec<String> = topo
+        .map(|t| {
+            t.components
+                .iter()
+                .map(|c| c.genus.map_or("?".into(), |g| g.to_string()))
+                .collect()
+        })
+        .unwrap_or_default();
+    outln!(
+        "{spec}: {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, oracle {:.3} s); min angle {:.2} deg; max r/sigma {:.3}; {}; genus [{}]; wrote {}",
+        st.vertices,
+        st.facets,
+        st.time_total_s,
+        st.time_delaunay_s,
+        st.time_oracle_s,
+        st.min_angle_deg,
+        st.max_r_over_sigma.unwrap_or(f64::NAN),
+        match manifold {
+            Some(true) => "closed manifold",
+            Some(false) => "NOT a closed manifold",
+            None => "not verified",
+        },
+        genus.join(", "),
+        out_path.display()
+    );
+    if let (Some(scan), Some(t)) = (opened.components, topo)
+        && t.components.len() < scan as usize
+    {
+        outln!(
+            "warning: the mesh has {} of the {scan} surface components found by the voxel scan; components smaller than the size bound may be missed (try a smaller --size)",
+            t.components.len()
+        );
+    }
+    if let Some(c) = &out.report {
+        if !c.passed() {
+            outln!("verify: FAIL: {}", c.failures().join(", "));
+        } else {
+            outln!("verify: PASS ({} checks)", c.checks.len());
+        }
+    }
+    if let Some(s) = &st.stopped_by {
+        outln!("stopped by {s}; unmet: {}", unmet(st));
+    } else if !st.unmet.is_empty() {
+        outln!("unmet: {}", unmet(st));
+    }
+}
+
+/// The unmet criteria of a pass, as the CLI prints them.
+fn unmet(st: &rdt_mesher::Stats) -> String {
+    st.unmet
+        .iter()
+        .map(|u| u.to_string())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+fn write_report(a: &MeshArgs, spec: &str, out_path: &Path, out: &Outcome) -> Result<()> {
+    let Some(r) = &a.report else { return Ok(()) };
+    let report = serde_json::json!({
+        "input": spec,
+        "output": out_path,
+        "sigma": out.sigma,
+        "angle": a.angle,
+        "distance": a.distance,
+        "oracle": a.oracle.name(),
+        "manifold": !a.no_manifold,
+        "scaffold": !a.no_scaffold,
+        "initialization": a.initialization.name(),
+        "seed": a.seed,
+        "notes": out.notes,
+        "stats": out.stats,
+        "verify": out.report,
+    });
+    std::fs::write(r, serde_json::to_string_pretty(&report)?)
+        .with_context(|| format!("cannot write report {}", r.display()))
+}
+
+/// The summary of a two-pass run (`--epsilon`), before the mesh is written.
+fn print_two_pass(spec: &str, out: &Outcome) {
+    let tp = out.two_pass.as_ref().expect("a two-pass outcome");
+    let (s1, s2) = (&tp.first.stats, &out.stats);
+    let (e, dm) = (tp.epsilon, tp.dm_inf);
+    outln!(
+        "{spec}: first pass (sigma_0 = {e} * {dm} = {:.5}): {} vertices in {:.3} s; second pass \
+         (sigma = max({:.5}, {:.4} d_M)): {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, \
+         oracle {:.3} s); ratio {:.2}; {} medial vertices",
+        tp.sigma0,
+        s1.vertices,
+        s1.time_total_s,
+        tp.floor,
+        tp.eps_prime,
+        s2.vertices,
+        s2.facets,
+        s2.time_total_s,
+        s2.time_delaunay_s,
+        s2.time_oracle_s,
+        s1.vertices as f64 / s2.vertices.max(1) as f64,
+        tp.medial_points
+    );
+    if !tp.first_pass_uniform() {
+        outln!(
+            "note: the first pass's d_M estimate has minimum {:.4} < d_M^inf = {dm}: the first \
+             pass is not a uniform {e}-sample (pass a smaller --dm-inf); the second pass \
+             follows the estimate",
+            tp.dm_inf_estimate
+        );
+    }
+}
+
+/// The verification and budget lines of a two-pass run, after the mesh is written.
+fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
+    if let Some(c) = &out.report {
+        if let Some(l) = c.check("loose-epsilon") {
+            outln!(
+                "loose-epsilon (d_M by Voronoi poles of the first pass): {}",
+                l.detail
+            );
+        }
+        if c.passed() {
+            outln!(
+                "verify: PASS ({} checks); wrote {}",
+                c.checks.len(),
+                out_path.display()
+            );
+        } else {
+            outln!("verify: FAIL: {}", c.failures().join(", "));
+        }
+    }
+    if let Verdict::Fail(failures) = &out.verdict {
+        for f in failures {
+            if let Failure::Stopped(stage) = f {
+                let st = out.stats_of(*stage);
+                let name = if *stage == pipeline::Stage::First {
+                    "first"
+                } else {
+                    "second"
+                };
+                if let Some(s) = &st.stopped_by {
+                    outln!("{name} pass stopped by {s}; unmet: {}", unmet(st));
+                }
+            }
+        }
+    }
+}
+
+fn write_two_pass_report(a: &MeshArgs, spec: &str, out_path: &Path, out: &Outcome) -> Result<()> {
+    let Some(r) = &a.report else { return Ok(()) };
+    let tp = out.two_pass.as_ref().expect("a two-pass outcome");
+    let report = serde_json::json!({
+        "input": spec, "output": out_path, "epsilon": tp.epsilon, "dm_inf": tp.dm_inf,
+        "initialization": a.initialization.name(),
+        "sigma0": tp.sigma0, "eps_prime": tp.eps_prime,
+        "first": tp.first.stats, "second": out.stats, "verify": out.report,
+    });
+    std::fs::write(r, serde_json::to_string_pretty(&report)?)
+        .with_context(|| format!("cannot write report {}", r.display()))
+}

@@ -1,0 +1,8 @@
+//! The commands that drive one library call each (ours): parse the flags, call the library,
+//! print. `input` and `points` read what the flags name.
+
+pub mod delaunay;
+pub mod input;
+pub mod mesh;
+pub mod points;
+pub mod verify;
