@@ -200,109 +200,9 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
         let s = catalog::surface(name).with_context(|| format!("paper-table: surface {name}"))?;
         let p = paper(name);
         let row = if let Some((sigma, manifold)) = singular(name) {
-            eprintln!("{name}: one pass per oracle at constant sigma {sigma}");
-            let mut second = Vec::new();
-            for (kind, label) in [
-                (OracleKind::Intersection, "intersection"),
-                (OracleKind::Bipolar, "bipolar"),
-            ] {
-                let o = MeshOptions {
-                    criteria: Criteria::uniform(sigma),
-                    oracle: kind,
-                    manifold,
-                    ..base.clone()
-                };
-                let r = rdt_mesher::mesh(&s, &o).with_context(|| format!("meshing {name}"))?;
-                second.push(Pass::of(label, &r.stats));
-            }
-            Row {
-                surface: name.clone(),
-                mode: format!(
-                    "one pass, sigma = {sigma}{}",
-                    if manifold {
-                        ", manifold patch"
-                    } else {
-                        ", no manifold patch"
-                    }
-                ),
-                dm_inf: None,
-                dm_inf_source: "singular (d_M^inf = 0)".into(),
-                sigma0: sigma,
-                first: None,
-                second,
-                certificate: None,
-                paper_first_size: None,
-                paper_second_size: p.map_or([0, 0], |p| [p.1[0].6, p.1[1].6]),
-            }
+            singular_row(name, &s, sigma, manifold, &base, p)?
         } else {
-            let (dm, src, eps) = match s.dm_inf_hint() {
-                Some(d) => (d, "catalog".to_string(), EPS),
-                None => {
-                    eprintln!(
-                        "{name}: estimating d_M^inf (lambda-medial axis + Voronoi poles, section 6.5)"
-                    );
-                    let e = sizing::estimate_dm_inf(&s, &base)?;
-                    // First-pass size ~ n (sigma_e / sigma_0)^2: raise eps if 0.09 would not
-                    // fit in half the budget.
-                    let sigma_min =
-                        e.sigma * (e.vertices as f64 / (0.5 * a.max_vertices as f64)).sqrt();
-                    let eps = EPS.max(sigma_min / e.value).min(0.9);
-                    (
-                        e.value,
-                        format!(
-                            "estimated: min of the d_M estimate (lambda-medial axis + poles) over a sample of {} points at sigma {:.4}{}",
-                            e.vertices,
-                            e.sigma,
-                            if e.converged {
-                                ""
-                            } else {
-                                " (budget hit: upper estimate)"
-                            }
-                        ),
-                        eps,
-                    )
-                }
-            };
-            let sigma0 = eps * dm;
-            eprintln!(
-                "{name}: d_M^inf {dm:.4} ({src}); eps {eps:.3}, first pass at sigma_0 = {sigma0:.5}"
-            );
-            let o1 = MeshOptions {
-                criteria: Criteria {
-                    size: Some(Sizing::Constant(sigma0)),
-                    ..Criteria::default()
-                },
-                ..base.clone()
-            };
-            let first: MeshResult = rdt_mesher::mesh(&s, &o1)?;
-            let mut second = Vec::new();
-            let mut certificate = None;
-            for (kind, label) in [
-                (OracleKind::Intersection, "intersection"),
-                (OracleKind::Bipolar, "bipolar"),
-            ] {
-                let o = MeshOptions {
-                    oracle: kind,
-                    ..base.clone()
-                };
-                let r = sizing::second_pass(&s, &first, eps, sigma0, &o, &mut |_| {})?.result;
-                second.push(Pass::of(label, &r.stats));
-                if kind == OracleKind::Bipolar && !a.no_verify {
-                    certificate = Some(certify(&s, &first, &r, eps));
-                }
-            }
-            Row {
-                surface: name.clone(),
-                mode: format!("two passes, eps = {eps:.3}"),
-                dm_inf: Some(dm),
-                dm_inf_source: src,
-                sigma0,
-                first: Some(Pass::of("bipolar", &first.stats)),
-                second,
-                certificate,
-                paper_first_size: p.and_then(|p| p.0.map(|f| f.1)),
-                paper_second_size: p.map_or([0, 0], |p| [p.1[0].6, p.1[1].6]),
-            }
+            two_pass_row(name, &s, &base, p, a)?
         };
         eprintln!("{}", md_line(&row));
         rows.push(row);
@@ -318,6 +218,126 @@ pub fn run(a: &PaperTableArgs) -> Result<()> {
     std::fs::write(&mp, md).with_context(|| format!("cannot write {}", mp.display()))?;
     eprintln!("wrote {} and {}", jp.display(), mp.display());
     Ok(())
+}
+
+/// A singular surface: one pass per oracle at the paper's constant sigma.
+fn singular_row(
+    name: &String,
+    s: &dyn Surface,
+    sigma: f64,
+    manifold: bool,
+    base: &MeshOptions,
+    p: Option<PaperRow>,
+) -> Result<Row> {
+    eprintln!("{name}: one pass per oracle at constant sigma {sigma}");
+    let mut second = Vec::new();
+    for (kind, label) in [
+        (OracleKind::Intersection, "intersection"),
+        (OracleKind::Bipolar, "bipolar"),
+    ] {
+        let o = MeshOptions {
+            criteria: Criteria::uniform(sigma),
+            oracle: kind,
+            manifold,
+            ..base.clone()
+        };
+        let r = rdt_mesher::mesh(&s, &o).with_context(|| format!("meshing {name}"))?;
+        second.push(Pass::of(label, &r.stats));
+    }
+    Ok(Row {
+        surface: name.clone(),
+        mode: format!(
+            "one pass, sigma = {sigma}{}",
+            if manifold {
+                ", manifold patch"
+            } else {
+                ", no manifold patch"
+            }
+        ),
+        dm_inf: None,
+        dm_inf_source: "singular (d_M^inf = 0)".into(),
+        sigma0: sigma,
+        first: None,
+        second,
+        certificate: None,
+        paper_first_size: None,
+        paper_second_size: p.map_or([0, 0], |p| [p.1[0].6, p.1[1].6]),
+    })
+}
+
+/// A smooth surface: the two passes of section 6.5 (the second with each oracle).
+fn two_pass_row(
+    name: &String,
+    s: &dyn Surface,
+    base: &MeshOptions,
+    p: Option<PaperRow>,
+    a: &PaperTableArgs,
+) -> Result<Row> {
+    let (dm, src, eps) = match s.dm_inf_hint() {
+        Some(d) => (d, "catalog".to_string(), EPS),
+        None => {
+            eprintln!(
+                "{name}: estimating d_M^inf (lambda-medial axis + Voronoi poles, section 6.5)"
+            );
+            let e = sizing::estimate_dm_inf(&s, &base)?;
+            // First-pass size ~ n (sigma_e / sigma_0)^2: raise eps if 0.09 would not
+            // fit in half the budget.
+            let sigma_min = e.sigma * (e.vertices as f64 / (0.5 * a.max_vertices as f64)).sqrt();
+            let eps = EPS.max(sigma_min / e.value).min(0.9);
+            (
+                e.value,
+                format!(
+                    "estimated: min of the d_M estimate (lambda-medial axis + poles) over a sample of {} points at sigma {:.4}{}",
+                    e.vertices,
+                    e.sigma,
+                    if e.converged {
+                        ""
+                    } else {
+                        " (budget hit: upper estimate)"
+                    }
+                ),
+                eps,
+            )
+        }
+    };
+    let sigma0 = eps * dm;
+    eprintln!("{name}: d_M^inf {dm:.4} ({src}); eps {eps:.3}, first pass at sigma_0 = {sigma0:.5}");
+    let o1 = MeshOptions {
+        criteria: Criteria {
+            size: Some(Sizing::Constant(sigma0)),
+            ..Criteria::default()
+        },
+        ..base.clone()
+    };
+    let first: MeshResult = rdt_mesher::mesh(&s, &o1)?;
+    let mut second = Vec::new();
+    let mut certificate = None;
+    for (kind, label) in [
+        (OracleKind::Intersection, "intersection"),
+        (OracleKind::Bipolar, "bipolar"),
+    ] {
+        let o = MeshOptions {
+            oracle: kind,
+            ..base.clone()
+        };
+        let r = sizing::second_pass(&s, &first, eps, sigma0, &o, &mut |_| {})?.result;
+        second.push(Pass::of(label, &r.stats));
+        if kind == OracleKind::Bipolar && !a.no_verify {
+            certificate = Some(certify(&s, &first, &r, eps));
+        }
+    }
+    Ok(Row {
+        surface: name.clone(),
+        mode: format!("two passes, eps = {eps:.3}"),
+        dm_inf: Some(dm),
+        dm_inf_source: src,
+        sigma0,
+        first: Some(Pass::of("bipolar", &first.stats)),
+        second,
+        certificate,
+        paper_first_size: p.and_then(|p| p.0.map(|f| f.1)),
+        paper_second_size: p.map_or([0, 0], |p| [p.1[0].6, p.1[1].6]),
+    })
 }
 
 fn certify(s: &dyn Surface, first: &MeshResult, second: &MeshResult, eps: f64) -> String {

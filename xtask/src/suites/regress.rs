@@ -23,7 +23,7 @@ use anyhow::{Context, Result, bail};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use oracle::{BoundingSphere, Surface, implicit::ImplicitSurface};
-use rdt_mesher::{Criteria, MeshOptions, OracleKind};
+use rdt_mesher::{Criteria, MeshOptions, MeshResult, OracleKind};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -181,6 +181,63 @@ fn golden_dir(a: &RegressArgs) -> PathBuf {
     })
 }
 
+/// The guarantees of the paper that a case breaks (the genus is checked by the caller), and
+/// the verify checks that must have passed (a SKIP would hide a guarantee).
+fn guarantee_failures(
+    res: &MeshResult,
+    rep: &verify::Report,
+    max_r: f64,
+    dm_known: bool,
+) -> Vec<String> {
+    let st = &res.stats;
+    let mut failures = Vec::new();
+    if !rep
+        .topology
+        .as_ref()
+        .is_some_and(|t| t.is_closed_oriented_manifold())
+    {
+        failures.push("not a closed oriented manifold".to_string());
+    }
+    if res.mesh.triangles.is_empty() || st.min_angle_deg < 30.0 {
+        failures.push(format!("min angle {:.3} < 30", st.min_angle_deg));
+    }
+    if max_r > 1.0 + 1e-9 {
+        failures.push(format!("max r/sigma {max_r:.4} > 1"));
+    }
+    if st.control_points_missing > 0 {
+        failures.push(format!(
+            "{} control points are not vertices",
+            st.control_points_missing
+        ));
+    }
+    if let Some(s) = &st.stopped_by {
+        failures.push(format!("stopped by {s}"));
+    }
+    if !st.unmet.is_empty() {
+        let unmet: Vec<String> = st.unmet.iter().map(|u| u.to_string()).collect();
+        failures.push(format!("unmet: {}", unmet.join("; ")));
+    }
+    let mut required = vec![
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "self-intersections",
+        "angles",
+        "hausdorff",
+        "components-sampled",
+    ];
+    if dm_known {
+        required.push("loose-epsilon");
+    }
+    for name in required {
+        if rep.status(name) != Some(verify::Status::Pass) {
+            failures.push(format!("verify check {name} did not pass"));
+        }
+    }
+    failures
+}
+
 fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
     let case = format!("{}-{}", j.surface.name, j.size);
     let oname = j.oracle.name();
@@ -217,7 +274,6 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         ..Default::default()
     };
     let rep = verify::check_against(&res.mesh, surface, &vopts);
-    let mut failures = Vec::new();
     let topo = rep.topology.as_ref();
     let manifold_ok = topo.is_some_and(|t| t.is_closed_oriented_manifold());
     let mut genus: Vec<i64> = topo
@@ -225,48 +281,12 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         .unwrap_or_default();
     genus.sort_unstable();
     let genus_ok = genus == genus_expected;
-    if !manifold_ok {
-        failures.push("not a closed oriented manifold".to_string());
-    }
+    let mut failures = guarantee_failures(&res, &rep, max_r, dm.is_some());
     if !genus_ok {
-        failures.push(format!("genus {genus:?}, expected {genus_expected:?}"));
-    }
-    if res.mesh.triangles.is_empty() || st.min_angle_deg < 30.0 {
-        failures.push(format!("min angle {:.3} < 30", st.min_angle_deg));
-    }
-    if max_r > 1.0 + 1e-9 {
-        failures.push(format!("max r/sigma {max_r:.4} > 1"));
-    }
-    if st.control_points_missing > 0 {
-        failures.push(format!(
-            "{} control points are not vertices",
-            st.control_points_missing
-        ));
-    }
-    if let Some(s) = &st.stopped_by {
-        failures.push(format!("stopped by {s}"));
-    }
-    if !st.unmet.is_empty() {
-        failures.push(format!("unmet: {}", st.unmet_summary()));
-    }
-    // The checks that must have run (a SKIP would hide a guarantee).
-    let mut required = vec![
-        "closed",
-        "edge-manifold",
-        "vertex-manifold",
-        "oriented",
-        "self-intersections",
-        "angles",
-        "hausdorff",
-        "components-sampled",
-    ];
-    if dm.is_some() {
-        required.push("loose-epsilon");
-    }
-    for name in required {
-        if rep.status(name) != Some(verify::Status::Pass) {
-            failures.push(format!("verify check {name} did not pass"));
-        }
+        failures.insert(
+            usize::from(!manifold_ok),
+            format!("genus {genus:?}, expected {genus_expected:?}"),
+        );
     }
     let verify_failures: Vec<String> = rep.failures().iter().map(|f| f.to_string()).collect();
     let verify_ok = verify_failures.is_empty();
@@ -293,28 +313,7 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         facets: st.facets,
         genus: genus.clone(),
     };
-    let (golden, golden_ok) = if a.update_golden {
-        let text = serde_json::to_string_pretty(&current)? + "\n";
-        std::fs::write(&gpath, text).with_context(|| format!("writing {}", gpath.display()))?;
-        ("written".to_string(), true)
-    } else {
-        match std::fs::read_to_string(&gpath) {
-            Err(_) => (
-                format!(
-                    "missing {} (run `cargo xtask regress --update-golden`)",
-                    gpath.display()
-                ),
-                false,
-            ),
-            Ok(text) => match serde_json::from_str::<Golden>(&text) {
-                Err(e) => (
-                    format!("{}: not a golden file: {e}", gpath.display()),
-                    false,
-                ),
-                Ok(g) => compare_golden(&g, &current, a.tolerance),
-            },
-        }
-    };
+    let (golden, golden_ok) = golden_status(&current, &gpath, a)?;
     if !golden_ok {
         failures.push(format!("golden: {golden}"));
     }
@@ -338,6 +337,32 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         golden,
         golden_ok,
         failures,
+    })
+}
+
+/// Rewrite (`--update-golden`) or compare with the golden file `gpath`: (description, ok).
+fn golden_status(current: &Golden, gpath: &Path, a: &RegressArgs) -> Result<(String, bool)> {
+    Ok(if a.update_golden {
+        let text = serde_json::to_string_pretty(current)? + "\n";
+        std::fs::write(gpath, text).with_context(|| format!("writing {}", gpath.display()))?;
+        ("written".to_string(), true)
+    } else {
+        match std::fs::read_to_string(gpath) {
+            Err(_) => (
+                format!(
+                    "missing {} (run `cargo xtask regress --update-golden`)",
+                    gpath.display()
+                ),
+                false,
+            ),
+            Ok(text) => match serde_json::from_str::<Golden>(&text) {
+                Err(e) => (
+                    format!("{}: not a golden file: {e}", gpath.display()),
+                    false,
+                ),
+                Ok(g) => compare_golden(&g, current, a.tolerance),
+            },
+        }
     })
 }
 
@@ -375,21 +400,9 @@ fn yes(b: bool) -> &'static str {
     if b { "yes" } else { "NO" }
 }
 
-pub fn run(a: &RegressArgs) -> Result<()> {
-    let mut gdir = golden_dir(a);
-    if a.update_golden {
-        std::fs::create_dir_all(&gdir)
-            .with_context(|| format!("cannot create {}", gdir.display()))?;
-    }
-    if let Ok(c) = gdir.canonicalize() {
-        gdir = c;
-    }
-    if !(a.tolerance >= 0.0 && a.tolerance.is_finite()) {
-        bail!(
-            "--tolerance {}: must be a non-negative number, e.g. 0.05",
-            a.tolerance
-        );
-    }
+/// The cases to run: every surface at its sizes (`--quick`: the first) with both oracles,
+/// filtered by name.
+fn jobs(a: &RegressArgs) -> Vec<Job> {
     let mut jobs = Vec::new();
     for s in SURFACES {
         for (i, &(size, sigma)) in s.sizes.iter().enumerate() {
@@ -413,6 +426,68 @@ pub fn run(a: &RegressArgs) -> Result<()> {
             }
         }
     }
+    jobs
+}
+
+/// One line per row.
+fn print_table(rows: &[Row]) {
+    outln!(
+        "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7} {:>7} {:>9} {:>9} {:>8} {:>7} {:>5} {:>8} {:>7}  golden",
+        "case",
+        "oracle",
+        "sigma",
+        "verts",
+        "facets",
+        "time s",
+        "min ang",
+        "max r/sig",
+        "Hausdorff",
+        "H bound",
+        "eps",
+        "genus",
+        "manifold",
+        "verify"
+    );
+    for r in rows {
+        let verify = if r.verify_ok { "PASS" } else { "FAIL" };
+        outln!(
+            "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7.2} {:>7.2} {:>9.4} {:>9} {:>8.2e} {:>7} {:>5} {:>8} {:>7}  {}{}",
+            r.case,
+            r.oracle,
+            r.sigma,
+            r.vertices,
+            r.facets,
+            r.time_s,
+            r.min_angle_deg,
+            r.max_r_over_sigma,
+            r.hausdorff.map_or("-".into(), |h| format!("{h:.2e}")),
+            r.hausdorff_bound,
+            r.eps_achieved.map_or("-".into(), |e| format!("{e:.4}")),
+            yes(r.genus_ok),
+            yes(r.manifold_ok),
+            verify,
+            if r.golden_ok { "ok " } else { "NO " },
+            r.golden
+        );
+    }
+}
+
+pub fn run(a: &RegressArgs) -> Result<()> {
+    let mut gdir = golden_dir(a);
+    if a.update_golden {
+        std::fs::create_dir_all(&gdir)
+            .with_context(|| format!("cannot create {}", gdir.display()))?;
+    }
+    if let Ok(c) = gdir.canonicalize() {
+        gdir = c;
+    }
+    if !(a.tolerance >= 0.0 && a.tolerance.is_finite()) {
+        bail!(
+            "--tolerance {}: must be a non-negative number, e.g. 0.05",
+            a.tolerance
+        );
+    }
+    let jobs = jobs(a);
     if jobs.is_empty() {
         bail!("no case matches --filter {:?}", a.filter);
     }
@@ -450,45 +525,7 @@ pub fn run(a: &RegressArgs) -> Result<()> {
         }
     }
 
-    outln!(
-        "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7} {:>7} {:>9} {:>9} {:>8} {:>7} {:>5} {:>8} {:>7}  golden",
-        "case",
-        "oracle",
-        "sigma",
-        "verts",
-        "facets",
-        "time s",
-        "min ang",
-        "max r/sig",
-        "Hausdorff",
-        "H bound",
-        "eps",
-        "genus",
-        "manifold",
-        "verify"
-    );
-    for r in &rows {
-        let verify = if r.verify_ok { "PASS" } else { "FAIL" };
-        outln!(
-            "{:<17} {:<12} {:>8} {:>7} {:>7} {:>7.2} {:>7.2} {:>9.4} {:>9} {:>8.2e} {:>7} {:>5} {:>8} {:>7}  {}{}",
-            r.case,
-            r.oracle,
-            r.sigma,
-            r.vertices,
-            r.facets,
-            r.time_s,
-            r.min_angle_deg,
-            r.max_r_over_sigma,
-            r.hausdorff.map_or("-".into(), |h| format!("{h:.2e}")),
-            r.hausdorff_bound,
-            r.eps_achieved.map_or("-".into(), |e| format!("{e:.4}")),
-            yes(r.genus_ok),
-            yes(r.manifold_ok),
-            verify,
-            if r.golden_ok { "ok " } else { "NO " },
-            r.golden
-        );
-    }
+    print_table(&rows);
     let failed: Vec<&Row> = rows.iter().filter(|r| !r.failures.is_empty()).collect();
     for r in &failed {
         outln!("FAIL {} {}: {}", r.case, r.oracle, r.failures.join("; "));
