@@ -1,7 +1,7 @@
 //! Profiling probe: `cargo run -p rdt-mesher --release --example probe -- NAME SIZE [distance] [repeats]`.
 //!
 //! NAME is a catalog surface, or a `.nii` volume (meshed at iso 0, inside = below the iso).
-use rdt_mesher::{Criteria, MeshOptions, Sizing, mesh};
+use rdt_mesher::{Criteria, MeshOptions, mesh, pipeline::cgal_criteria};
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let name = args.get(1).map(String::as_str).unwrap_or("torus");
@@ -9,10 +9,10 @@ fn main() {
     let d: Option<f64> = args.get(3).map(|s| s.parse().unwrap());
     let reps: usize = args.get(4).map(|s| s.parse().unwrap()).unwrap_or(1);
     let opts = MeshOptions {
+        // CGAL's criteria with radius s; the distance bound only when given.
         criteria: Criteria {
-            size: Some(Sizing::Constant(s)),
-            min_angle_deg: 30.0,
             max_distance: d,
+            ..cgal_criteria(s)
         },
         ..Default::default()
     };

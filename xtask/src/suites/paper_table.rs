@@ -279,7 +279,7 @@ fn two_pass_row(
             eprintln!(
                 "{name}: estimating d_M^inf (lambda-medial axis + Voronoi poles, section 6.5)"
             );
-            let e = sizing::estimate_dm_inf(&s, &base)?;
+            let e = sizing::estimate_dm_inf(&s, base)?;
             // First-pass size ~ n (sigma_e / sigma_0)^2: raise eps if 0.09 would not
             // fit in half the budget.
             let sigma_min = e.sigma * (e.vertices as f64 / (0.5 * a.max_vertices as f64)).sqrt();

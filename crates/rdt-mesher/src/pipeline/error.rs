@@ -61,7 +61,7 @@ pub enum PipelineError {
         spec: String,
         /// The image backend's reason.
         #[source]
-        source: oracle::image::ImageError,
+        source: Box<oracle::image::ImageError>,
     },
     /// `SizeRequest::Size(s)` with s not a positive finite number.
     #[error(

@@ -129,6 +129,22 @@ pub struct Input<'s> {
     pub sharp_edges: Vec<(DVec3, DVec3)>,
 }
 
+impl std::fmt::Debug for Input<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Input")
+            .field("name", &self.name)
+            .field("kind", &self.kind)
+            .field("dm_inf", &self.dm_inf)
+            .field("default_size", &self.default_size)
+            .field("genus", &self.genus)
+            .field("components", &self.components)
+            .field("max_control_points", &self.max_control_points)
+            .field("notes", &self.notes)
+            .field("sharp_edges", &self.sharp_edges.len())
+            .finish_non_exhaustive()
+    }
+}
+
 impl<'s> Input<'s> {
     fn with(surface: Held<'s>, name: String, kind: InputKind, dm_inf: DmInf) -> Self {
         Input {
@@ -438,7 +454,7 @@ pub fn image_labels(spec: &str, load: &LoadOptions) -> Result<Vec<i64>, Pipeline
         .labels()
         .map_err(|source| PipelineError::NotALabelImage {
             spec: spec.to_string(),
-            source,
+            source: Box::new(source),
         })?;
     Ok(labels
         .into_iter()

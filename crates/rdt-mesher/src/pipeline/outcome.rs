@@ -135,7 +135,8 @@ impl TwoPassOutcome {
     /// assert!(tp.first_pass_uniform());
     /// ```
     pub fn first_pass_uniform(&self) -> bool {
-        !(self.dm_inf_estimate < 0.9 * self.dm_inf)
+        // (An estimate of NaN is no evidence against it.)
+        self.dm_inf_estimate.partial_cmp(&(0.9 * self.dm_inf)) != Some(std::cmp::Ordering::Less)
     }
 }
 

@@ -121,7 +121,6 @@ pub fn plan<'p, 's>(
         control_points: input.control_points.clone(),
         initialization: request.initialization,
         max_control_points: input.max_control_points,
-        ..MeshOptions::default()
     };
     Ok(Plan {
         input,

@@ -1,0 +1,160 @@
+//! The library's high-level API (`rdt_mesher::pipeline`) and the CLI give the same mesh and the
+//! same verdict with the same defaults: `cargo xtask mesh FILE` is `Input::open` + `run`.
+
+use rdt_mesher::pipeline::{Input, InputOptions, Request, SizeRequest, run};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn scratch(test: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("xtask-library")
+        .join(test);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+/// Runs `xtask mesh ARGS --strict` in `dir` writing `out.ply` and `r.json`; returns (the
+/// verdict passed, the report, the mesh).
+fn cli_mesh(dir: &Path, args: &[&str]) -> (bool, serde_json::Value, meshio::TriMesh) {
+    let out = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .arg("mesh")
+        .args(args)
+        .args(["-q", "--strict", "-o", "out.ply", "--report", "r.json"])
+        .current_dir(dir)
+        .output()
+        .expect("cannot run the xtask binary");
+    let code = out.status.code();
+    assert!(
+        code == Some(0) || code == Some(3),
+        "exit {code:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap())
+        .expect("a JSON report");
+    let mesh = meshio::read(dir.join("out.ply")).expect("the output mesh");
+    (code == Some(0), report, mesh)
+}
+
+/// The library and `cargo xtask mesh FILE --iso 300 ARGS` on a NIfTI file: the same mesh,
+/// counts, size, notes and verdict.
+fn nifti_agrees(test: &str, size: Option<f64>) {
+    let dir = scratch(test);
+    let file = root().join("fixtures/images/phantom_i16_32.nii.gz");
+    let file = file.to_str().unwrap();
+    let size_arg = size.map(|s| s.to_string());
+    let mut args = vec![file, "--iso", "300"];
+    if let Some(s) = &size_arg {
+        args.extend(["--size", s.as_str()]);
+    }
+    let (cli_passed, report, from_cli) = cli_mesh(&dir, &args);
+
+    let mut opts = InputOptions::default();
+    opts.image.iso = Some(300.0);
+    let input = Input::open(file, &opts).unwrap();
+    let req = Request {
+        size: size.map_or(SizeRequest::Auto, SizeRequest::Size),
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+
+    assert_eq!(
+        out.stats.vertices as u64,
+        report["stats"]["vertices"].as_u64().unwrap()
+    );
+    assert_eq!(
+        out.stats.facets as u64,
+        report["stats"]["facets"].as_u64().unwrap()
+    );
+    assert_eq!(
+        out.mesh, from_cli,
+        "the same mesh, coordinate for coordinate"
+    );
+    assert_eq!(out.verdict.passed(), cli_passed, "{:?}", out.verdict);
+    assert_eq!(Some(report["sigma"].as_f64().unwrap()), out.sigma);
+    let notes: Vec<&str> = report["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    assert_eq!(notes, out.notes, "the same notes");
+}
+
+/// The acceptance case at a coarse size (the rest: the defaults).
+#[test]
+fn nifti_file_library_and_cli_agree() {
+    nifti_agrees("nifti", Some(3.0));
+}
+
+/// The same with the default size, 0.09 d_M^inf (about 380k vertices, a minute or two:
+/// `cargo test --release -p xtask --test library -- --ignored`).
+#[test]
+#[ignore]
+fn nifti_file_with_default_size_library_and_cli_agree() {
+    nifti_agrees("nifti-default", None);
+}
+
+/// The default size of an image is 0.09 d_M^inf of its estimate, with the CLI's note.
+#[test]
+fn image_default_size_is_from_its_dm_inf_estimate() {
+    let file = root().join("fixtures/images/phantom_i16_32.nii.gz");
+    let mut opts = InputOptions::default();
+    opts.image.iso = Some(300.0);
+    let input = Input::open(file.to_str().unwrap(), &opts).unwrap();
+    let req = Request::default();
+    let p = rdt_mesher::pipeline::plan(&input, &req).unwrap();
+    let dm = input.dm_inf().expect("an image estimates d_M^inf");
+    assert_eq!(p.sigma(), Some(0.09 * dm));
+    assert_eq!(
+        p.notes().last().unwrap(),
+        &format!("no --size: using sigma = 0.09 * d_M^inf = {:.5}", 0.09 * dm)
+    );
+}
+
+/// Two-pass mode (`--epsilon`) and a failed verdict (a vertex budget): same counts, same
+/// verdict.
+#[test]
+fn two_pass_and_budget_library_and_cli_agree() {
+    let dir = scratch("two-pass");
+    let (cli_passed, report, from_cli) = cli_mesh(&dir, &["implicit:sphere", "--epsilon", "0.4"]);
+    let input = Input::open("implicit:sphere", &InputOptions::default()).unwrap();
+    let req = Request {
+        size: SizeRequest::Epsilon {
+            epsilon: 0.4,
+            dm_inf: None,
+        },
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+    assert_eq!(out.mesh, from_cli);
+    assert_eq!(
+        out.two_pass.as_ref().unwrap().first.stats.vertices as u64,
+        report["first"]["vertices"].as_u64().unwrap()
+    );
+    assert!(cli_passed && out.verdict.passed(), "{:?}", out.verdict);
+
+    let dir = scratch("budget");
+    let (cli_passed, report, _) = cli_mesh(
+        &dir,
+        &["implicit:sphere", "--size", "0.05", "--max-vertices", "50"],
+    );
+    let req = Request {
+        size: SizeRequest::Size(0.05),
+        max_vertices: Some(50),
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+    assert_eq!(
+        out.stats.vertices as u64,
+        report["stats"]["vertices"].as_u64().unwrap()
+    );
+    assert!(!cli_passed && !out.verdict.passed());
+}
