@@ -231,10 +231,8 @@ fn singular_row(
 ) -> Result<Row> {
     eprintln!("{name}: one pass per oracle at constant sigma {sigma}");
     let mut second = Vec::new();
-    for (kind, label) in [
-        (OracleKind::Intersection, "intersection"),
-        (OracleKind::Bipolar, "bipolar"),
-    ] {
+    for kind in [OracleKind::Intersection, OracleKind::Bipolar] {
+        let label = kind.name();
         let o = MeshOptions {
             criteria: Criteria::uniform(sigma),
             oracle: kind,
@@ -312,10 +310,8 @@ fn two_pass_row(
     let first: MeshResult = rdt_mesher::mesh(&s, &o1)?;
     let mut second = Vec::new();
     let mut certificate = None;
-    for (kind, label) in [
-        (OracleKind::Intersection, "intersection"),
-        (OracleKind::Bipolar, "bipolar"),
-    ] {
+    for kind in [OracleKind::Intersection, OracleKind::Bipolar] {
+        let label = kind.name();
         let o = MeshOptions {
             oracle: kind,
             ..base.clone()
@@ -332,7 +328,7 @@ fn two_pass_row(
         dm_inf: Some(dm),
         dm_inf_source: src,
         sigma0,
-        first: Some(Pass::of("bipolar", &first.stats)),
+        first: Some(Pass::of(OracleKind::Bipolar.name(), &first.stats)),
         second,
         certificate,
         paper_first_size: p.and_then(|p| p.0.map(|f| f.1)),
