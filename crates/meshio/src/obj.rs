@@ -1,6 +1,13 @@
-//! Wavefront OBJ: `v x y z [w]` and `f` lines (`i`, `i/t`, `i//n`, `i/t/n`, negative indices
-//! relative to the vertices read so far). Everything else is ignored. Polygons are
-//! fan-triangulated.
+//! Wavefront OBJ (ours: file format support): `v` and `f` lines; polygons are
+//! fan-triangulated; other statements are ignored.
+//!
+//! - `v x y z`, `v x y z w` (the weight `w` of rational curves, read and ignored: polygon
+//!   vertices are not divided by it), and the common colour extension `v x y z r g b` (and
+//!   `... r g b a`, as trimesh reads them), colours ignored. Every value must be a number;
+//!   5 or more than 7 numbers are errors.
+//! - `f` corners `i`, `i/t`, `i//n` or `i/t/n`: every present index an integer other than 0,
+//!   negative ones relative to the elements read so far; texture and normal indices must
+//!   refer to existing `vt` / `vn` lines.
 
 use std::io::{BufRead, Write};
 use std::path::Path;
@@ -19,6 +26,10 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
     let mut buf = String::new();
     let mut line_no = 0;
     let mut saw_statement = false;
+    // Counts of `vt` and `vn` lines so far, and the texture / normal references to check.
+    let mut counts = [0usize; 2];
+    // (line, index as written, 0-based index)
+    let mut refs: [Vec<(usize, i64, i64)>; 2] = [Vec::new(), Vec::new()];
     loop {
         buf.clear();
         let n = reader.read_line(&mut buf).map_err(|e| {
@@ -36,41 +47,49 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         let mut it = s.split_whitespace();
         match it.next() {
             Some("v") => {
-                let c: Vec<f64> = it.take(3).filter_map(crate::parse_f64).collect();
-                if c.len() < 3 {
-                    return Err(bad(line_no, format!("expected 'v x y z', found {s:?}")));
+                let toks: Vec<&str> = it.collect();
+                let c: Vec<f64> = toks.iter().filter_map(|t| crate::parse_f64(t)).collect();
+                if c.len() != toks.len() || !matches!(c.len(), 3 | 4 | 6 | 7) {
+                    return Err(bad(
+                        line_no,
+                        format!(
+                            "expected 'v x y z', 'v x y z w' or 'v x y z r g b' (numbers), \
+                             found {s:?}"
+                        ),
+                    ));
+                }
+                if c[3..].iter().any(|x| !x.is_finite()) {
+                    return Err(bad(line_no, format!("non-finite weight or colour in {s:?}")));
                 }
                 vertices.push(DVec3::new(c[0], c[1], c[2]));
                 saw_statement = true;
             }
+            Some(kw @ ("vt" | "vn")) => counts[usize::from(kw == "vn")] += 1,
             Some("f") => {
                 let mut poly = Vec::new();
                 for tok in it {
-                    let first = tok.split('/').next().unwrap_or("");
-                    let i: i64 = first.parse().map_err(|_| {
+                    let (i, t, n) = parse_corner(tok).ok_or_else(|| {
                         bad(
                             line_no,
-                            format!("bad face vertex {tok:?} (expected i, i/t, i//n or i/t/n)"),
+                            format!(
+                                "bad face corner {tok:?} (expected i, i/t, i//n or i/t/n with \
+                                 integer indices other than 0)"
+                            ),
                         )
                     })?;
-                    let idx = match i {
-                        0 => {
-                            return Err(bad(
-                                line_no,
-                                "face index 0 (OBJ indices start at 1)".into(),
-                            ));
+                    for (k, r) in [t, n].into_iter().enumerate() {
+                        if let Some(r) = r {
+                            refs[k].push((line_no, r, resolve(r, counts[k])));
                         }
-                        i if i > 0 => i - 1,
-                        i => vertices.len() as i64 + i,
-                    };
-                    poly.push(idx);
+                    }
+                    poly.push(resolve(i, vertices.len()));
                 }
                 polygons.push(poly);
                 saw_statement = true;
             }
             Some(kw) => {
-                const KNOWN: [&str; 14] = [
-                    "vt", "vn", "vp", "g", "o", "s", "usemtl", "mtllib", "l", "p", "mg", "cstype",
+                const KNOWN: [&str; 12] = [
+                    "vp", "g", "o", "s", "usemtl", "mtllib", "l", "p", "mg", "cstype",
                     "deg", "curv",
                 ];
                 if !KNOWN.contains(&kw) && !saw_statement {
@@ -81,6 +100,21 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         }
     }
     crate::check_vertex_coords(path, &vertices)?;
+    for (k, what) in ["texture (vt)", "normal (vn)"].into_iter().enumerate() {
+        if let Some((line, i, _)) = refs[k]
+            .iter()
+            .find(|(_, _, r)| *r < 0 || *r as usize >= counts[k])
+        {
+            return Err(bad(
+                *line,
+                format!(
+                    "a face corner refers to {what} index {i}, which does not exist ({} such \
+                     lines in the file)",
+                    counts[k]
+                ),
+            ));
+        }
+    }
     let mut fb = FaceBuilder::default();
     for p in &polygons {
         fb.push_polygon(p, vertices.len()).map_err(|source| {
@@ -107,6 +141,24 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         vertices,
         triangles: fb.triangles,
     })
+}
+
+/// `i`, `i/t`, `i//n` or `i/t/n` as (i, t, n), every index a non-zero integer.
+fn parse_corner(tok: &str) -> Option<(i64, Option<i64>, Option<i64>)> {
+    let idx = |s: &str| s.parse::<i64>().ok().filter(|&i| i != 0);
+    let parts: Vec<&str> = tok.split('/').collect();
+    match parts.as_slice() {
+        [i] => Some((idx(i)?, None, None)),
+        [i, t] => Some((idx(i)?, Some(idx(t)?), None)),
+        [i, "", n] => Some((idx(i)?, None, Some(idx(n)?))),
+        [i, t, n] => Some((idx(i)?, Some(idx(t)?), Some(idx(n)?))),
+        _ => None,
+    }
+}
+
+/// A 1-based OBJ index (negative: relative to the `so_far` elements read) as a 0-based one.
+fn resolve(i: i64, so_far: usize) -> i64 {
+    if i > 0 { i - 1 } else { so_far as i64 + i }
 }
 
 pub(crate) fn write<W: Write>(w: &mut W, mesh: &TriMesh, o: Options) -> std::io::Result<()> {

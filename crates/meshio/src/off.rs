@@ -1,6 +1,10 @@
-//! OFF (Object File Format), text only. Accepts `OFF`, `COFF`, `NOFF`, ... headers, `#`
-//! comments, counts on the header line or the next line, and extra per-vertex/face values
-//! (colours), which are ignored.
+//! OFF (ours: file format support), text only. Accepts `OFF`, `COFF`, `NOFF` and `CNOFF`
+//! headers, `#` comments, blank lines, and the counts `nv nf [ne]` on the header line or the
+//! next line.
+//!
+//! Strict: a vertex line has exactly `x y z` (NOFF: plus `nx ny nz`; COFF: plus an `r g b` or
+//! `r g b a` colour, ignored), a face line `n i1 ... in` and an optional colour (1, 3 or 4
+//! numbers, ignored), and nothing but comments may follow the last face.
 
 use std::io::{BufRead, Write};
 use std::path::Path;
@@ -40,6 +44,23 @@ impl<R: BufRead> Lines<'_, R> {
     }
 }
 
+/// The per-vertex values an OFF variant has: `(with_normals, with_colours)`.
+fn variant(tok: &str) -> Result<(bool, bool), String> {
+    let Some(prefix) = tok.strip_suffix("OFF") else {
+        return Err(format!("expected an OFF header, found {tok:?}"));
+    };
+    if prefix.contains(['S', 'T', '4', 'n']) {
+        return Err(format!("unsupported OFF variant {tok:?}; use plain OFF"));
+    }
+    match prefix {
+        "" => Ok((false, false)),
+        "C" => Ok((false, true)),
+        "N" => Ok((true, false)),
+        "CN" => Ok((true, true)),
+        _ => Err(format!("expected an OFF header (OFF, COFF, NOFF or CNOFF), found {tok:?}")),
+    }
+}
+
 pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, MeshIoError> {
     let bad = |line: usize, what: String| {
         MeshIoError::not_a_mesh(path, Format::Off, format!("line {line}: {what}"))
@@ -57,18 +78,7 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         });
     };
     let mut toks: Vec<String> = first.split_whitespace().map(str::to_owned).collect();
-    if !toks[0].ends_with("OFF") {
-        return Err(bad(
-            l0,
-            format!("expected an OFF header, found {:?}", toks[0]),
-        ));
-    }
-    if toks[0].starts_with("ST") || toks[0].contains('4') || toks[0].starts_with('n') {
-        return Err(bad(
-            l0,
-            format!("unsupported OFF variant {:?}; use plain OFF", toks[0]),
-        ));
-    }
+    let (normals, colours) = variant(&toks[0]).map_err(|w| bad(l0, w))?;
     toks.remove(0);
     if toks.is_empty() {
         let Some((_, l)) = lines.next_line()? else {
@@ -79,14 +89,15 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         };
         toks = l.split_whitespace().map(str::to_owned).collect();
     }
-    let counts: Vec<usize> = toks.iter().take(2).filter_map(|t| t.parse().ok()).collect();
-    if counts.len() < 2 {
+    let counts: Vec<usize> = toks.iter().filter_map(|t| t.parse().ok()).collect();
+    if counts.len() != toks.len() || !(2..=3).contains(&counts.len()) {
         return Err(bad(
             lines.line_no,
-            format!("expected 'nv nf ne' counts, found {toks:?}"),
+            format!("expected the counts 'nv nf ne' (non-negative integers), found {toks:?}"),
         ));
     }
     let (nv, nf) = (counts[0], counts[1]);
+    let per_vertex = 3 + if normals { 3 } else { 0 };
     let mut vertices = Vec::with_capacity(nv.min(1 << 16));
     for i in 0..nv {
         let Some((ln, l)) = lines.next_line()? else {
@@ -95,16 +106,18 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
                 detail: format!("the header announces {nv} vertices, the file has {i}"),
             });
         };
-        let c: Vec<f64> = l
-            .split_whitespace()
-            .take(3)
-            .filter_map(crate::parse_f64)
-            .collect();
-        if c.len() < 3 {
-            return Err(bad(
-                ln,
-                format!("vertex {i}: expected 3 coordinates, found {l:?}"),
-            ));
+        let toks: Vec<&str> = l.split_whitespace().collect();
+        let c: Vec<f64> = toks.iter().filter_map(|t| crate::parse_f64(t)).collect();
+        let extra = toks.len().wrapping_sub(per_vertex);
+        let ok = c.len() == toks.len() && (extra == 0 || (colours && (extra == 3 || extra == 4)));
+        if !ok {
+            let want = match (normals, colours) {
+                (false, false) => "x y z",
+                (false, true) => "x y z r g b [a]",
+                (true, false) => "x y z nx ny nz",
+                (true, true) => "x y z nx ny nz r g b [a]",
+            };
+            return Err(bad(ln, format!("vertex {i}: expected '{want}' (numbers), found {l:?}")));
         }
         vertices.push(DVec3::new(c[0], c[1], c[2]));
     }
@@ -118,28 +131,42 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
                 detail: format!("the header announces {nf} faces, the file has {i}"),
             });
         };
-        let mut it = l.split_whitespace();
-        let n: usize = it.next().and_then(|t| t.parse().ok()).ok_or_else(|| {
+        let toks: Vec<&str> = l.split_whitespace().collect();
+        let n: usize = toks[0].parse().map_err(|_| {
             bad(
                 ln,
                 format!("face {i}: expected a vertex count, found {l:?}"),
             )
         })?;
+        let rest = &toks[1..];
+        let colour = rest.len().checked_sub(n);
+        let ok_colour = matches!(colour, Some(0 | 1 | 3 | 4))
+            && rest[n..].iter().all(|t| crate::parse_f64(t).is_some_and(f64::is_finite));
         idx.clear();
-        for _ in 0..n {
-            let v: i64 = it.next().and_then(|t| t.parse().ok()).ok_or_else(|| {
-                bad(
-                    ln,
-                    format!("face {i}: expected {n} integer indices, found {l:?}"),
-                )
-            })?;
-            idx.push(v);
+        idx.extend(rest.iter().take(n).map_while(|t| t.parse::<i64>().ok()));
+        if idx.len() != n || !ok_colour {
+            return Err(bad(
+                ln,
+                format!(
+                    "face {i}: expected {n} integer indices and an optional colour (1, 3 or 4 \
+                     numbers), found {l:?}"
+                ),
+            ));
         }
         fb.push_polygon(&idx, nv)
             .map_err(|source| MeshIoError::Invalid {
                 path: path.to_owned(),
                 source,
             })?;
+    }
+    if let Some((ln, l)) = lines.next_line()? {
+        return Err(bad(
+            ln,
+            format!(
+                "data after the last face ({l:?}); the header announces {nv} vertices and {nf} \
+                 faces"
+            ),
+        ));
     }
     Ok(TriMesh {
         vertices,

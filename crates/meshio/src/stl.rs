@@ -1,5 +1,10 @@
-//! STL, ASCII and binary. Vertices are merged by exact coordinate equality on read
-//! (`-0.0` and `0.0` are the same vertex), in order of first appearance.
+//! STL (ours: file format support), ASCII and binary. Vertices are merged by exact coordinate
+//! equality on read (`-0.0` and `0.0` are the same vertex), in order of first appearance.
+//!
+//! Strict: a binary STL has exactly `84 + 50 n` bytes (`n` from its header); an ASCII STL is
+//! checked statement by statement (`solid`, `facet normal`, `outer loop`, three `vertex`,
+//! `endloop`, `endfacet`, `endsolid`), so garbled keywords and facets with other than three
+//! vertices are errors naming the line.
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -85,6 +90,17 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
             ),
         });
     }
+    if bytes.len() as u64 != need {
+        return Err(MeshIoError::not_a_mesh(
+            path,
+            Format::Stl,
+            format!(
+                "the binary STL header announces {n} facets, i.e. 84 + 50 * {n} = {need} bytes, \
+                 but the file has {} bytes",
+                bytes.len()
+            ),
+        ));
+    }
     let mut m = Merger::default();
     let f = |b: &[u8]| f32::from_le_bytes(b.try_into().unwrap()) as f64;
     for k in 0..n as usize {
@@ -104,6 +120,49 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
     Ok(m.mesh)
 }
 
+/// Where the ASCII STL parser is: the statement it expects next.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Expect {
+    /// `solid [name]` (at the start, or after `endsolid`: files may hold several solids).
+    Solid,
+    /// `facet normal ni nj nk` or `endsolid [name]`.
+    FacetOrEnd,
+    OuterLoop,
+    /// `vertex x y z` number `0, 1, 2`, then `endloop`.
+    Vertex(usize),
+    EndLoop,
+    EndFacet,
+}
+
+impl Expect {
+    fn describe(self) -> &'static str {
+        match self {
+            Expect::Solid => "'solid [name]'",
+            Expect::FacetOrEnd => "'facet normal ni nj nk' or 'endsolid [name]'",
+            Expect::OuterLoop => "'outer loop'",
+            Expect::Vertex(_) => "'vertex x y z' (a facet has exactly 3 vertices)",
+            Expect::EndLoop => "'endloop' (a facet has exactly 3 vertices)",
+            Expect::EndFacet => "'endfacet'",
+        }
+    }
+}
+
+/// Three numbers after a keyword, or `None`.
+fn three_numbers<'a>(it: impl Iterator<Item = &'a str>) -> Option<[f64; 3]> {
+    let v: Vec<&str> = it.collect();
+    match v.as_slice() {
+        [a, b, c] => Some([
+            crate::parse_f64(a)?,
+            crate::parse_f64(b)?,
+            crate::parse_f64(c)?,
+        ]),
+        _ => None,
+    }
+}
+
+/// ASCII STL, checked statement by statement (keywords case-insensitive, as most readers do):
+/// `solid`, then per facet `facet normal n n n`, `outer loop`, three `vertex x y z`,
+/// `endloop`, `endfacet`, and `endsolid`. The normal is read and ignored.
 fn read_ascii(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
     let text = std::str::from_utf8(bytes).map_err(|_| {
         MeshIoError::not_a_mesh(
@@ -112,55 +171,62 @@ fn read_ascii(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
             "starts with \"solid\" but is not ASCII text",
         )
     })?;
+    let bad = |ln: usize, what: String| {
+        MeshIoError::not_a_mesh(path, Format::Stl, format!("line {}: {what}", ln + 1))
+    };
     let mut m = Merger::default();
-    let mut corners: Vec<DVec3> = Vec::with_capacity(3);
+    let mut corners = [DVec3::ZERO; 3];
     let mut facet = 0;
-    let mut in_facet = false;
+    let mut state = Expect::Solid;
     for (ln, line) in text.lines().enumerate() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("facet") => {
-                corners.clear();
-                in_facet = true;
+        let lower = line.to_ascii_lowercase();
+        let mut it = lower.split_ascii_whitespace();
+        let Some(kw) = it.next() else { continue };
+        let next = match (state, kw) {
+            (Expect::Solid, "solid") => Some(Expect::FacetOrEnd),
+            (Expect::FacetOrEnd, "endsolid") => Some(Expect::Solid),
+            (Expect::FacetOrEnd, "facet") => {
+                let ok = it.next() == Some("normal") && three_numbers(it).is_some();
+                ok.then_some(Expect::OuterLoop)
             }
-            Some("vertex") => {
-                let c: Vec<f64> = it.take(3).filter_map(crate::parse_f64).collect();
-                if c.len() < 3 || !in_facet {
-                    return Err(MeshIoError::not_a_mesh(
-                        path,
-                        Format::Stl,
-                        format!("line {}: bad vertex line {line:?}", ln + 1),
-                    ));
-                }
-                corners.push(DVec3::new(c[0], c[1], c[2]));
+            (Expect::OuterLoop, "outer") => {
+                (it.next() == Some("loop") && it.next().is_none()).then_some(Expect::Vertex(0))
             }
-            Some("endfacet") => {
-                if corners.len() < 3 {
-                    return Err(MeshIoError::not_a_mesh(
-                        path,
-                        Format::Stl,
-                        format!(
-                            "line {}: facet {facet} has {} vertices",
-                            ln + 1,
-                            corners.len()
-                        ),
-                    ));
+            (Expect::Vertex(k), "vertex") => three_numbers(it).map(|[x, y, z]| {
+                corners[k] = DVec3::new(x, y, z);
+                if k == 2 { Expect::EndLoop } else { Expect::Vertex(k + 1) }
+            }),
+            (Expect::EndLoop, "endloop") => it.next().is_none().then_some(Expect::EndFacet),
+            (Expect::EndFacet, "endfacet") => {
+                if it.next().is_some() {
+                    None
+                } else {
+                    check_finite(path, &corners, facet)?;
+                    m.triangle(corners);
+                    facet += 1;
+                    Some(Expect::FacetOrEnd)
                 }
-                for k in 1..corners.len() - 1 {
-                    let t = [corners[0], corners[k], corners[k + 1]];
-                    check_finite(path, &t, facet)?;
-                    m.triangle(t);
-                }
-                facet += 1;
-                in_facet = false;
             }
-            _ => {}
-        }
+            _ => None,
+        };
+        state = next.ok_or_else(|| {
+            bad(
+                ln,
+                format!(
+                    "facet {facet}: expected {}, found {:?}",
+                    state.describe(),
+                    line.trim()
+                ),
+            )
+        })?;
     }
-    if in_facet {
+    if state != Expect::Solid {
         return Err(MeshIoError::Truncated {
             path: path.to_owned(),
-            detail: format!("ASCII STL ends inside facet {facet} (no endfacet)"),
+            detail: format!(
+                "ASCII STL ends at facet {facet} while expecting {}",
+                state.describe()
+            ),
         });
     }
     Ok(m.mesh)
