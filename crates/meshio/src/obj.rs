@@ -59,7 +59,10 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
                     ));
                 }
                 if c[3..].iter().any(|x| !x.is_finite()) {
-                    return Err(bad(line_no, format!("non-finite weight or colour in {s:?}")));
+                    return Err(bad(
+                        line_no,
+                        format!("non-finite weight or colour in {s:?}"),
+                    ));
                 }
                 vertices.push(DVec3::new(c[0], c[1], c[2]));
                 saw_statement = true;
@@ -89,8 +92,8 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
             }
             Some(kw) => {
                 const KNOWN: [&str; 12] = [
-                    "vp", "g", "o", "s", "usemtl", "mtllib", "l", "p", "mg", "cstype",
-                    "deg", "curv",
+                    "vp", "g", "o", "s", "usemtl", "mtllib", "l", "p", "mg", "cstype", "deg",
+                    "curv",
                 ];
                 if !KNOWN.contains(&kw) && !saw_statement {
                     return Err(bad(line_no, format!("unknown OBJ statement {kw:?}")));

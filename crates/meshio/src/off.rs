@@ -57,7 +57,9 @@ fn variant(tok: &str) -> Result<(bool, bool), String> {
         "C" => Ok((false, true)),
         "N" => Ok((true, false)),
         "CN" => Ok((true, true)),
-        _ => Err(format!("expected an OFF header (OFF, COFF, NOFF or CNOFF), found {tok:?}")),
+        _ => Err(format!(
+            "expected an OFF header (OFF, COFF, NOFF or CNOFF), found {tok:?}"
+        )),
     }
 }
 
@@ -117,7 +119,10 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
                 (true, false) => "x y z nx ny nz",
                 (true, true) => "x y z nx ny nz r g b [a]",
             };
-            return Err(bad(ln, format!("vertex {i}: expected '{want}' (numbers), found {l:?}")));
+            return Err(bad(
+                ln,
+                format!("vertex {i}: expected '{want}' (numbers), found {l:?}"),
+            ));
         }
         vertices.push(DVec3::new(c[0], c[1], c[2]));
     }
@@ -141,7 +146,9 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         let rest = &toks[1..];
         let colour = rest.len().checked_sub(n);
         let ok_colour = matches!(colour, Some(0 | 1 | 3 | 4))
-            && rest[n..].iter().all(|t| crate::parse_f64(t).is_some_and(f64::is_finite));
+            && rest[n..]
+                .iter()
+                .all(|t| crate::parse_f64(t).is_some_and(f64::is_finite));
         idx.clear();
         idx.extend(rest.iter().take(n).map_while(|t| t.parse::<i64>().ok()));
         if idx.len() != n || !ok_colour {

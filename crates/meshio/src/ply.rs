@@ -97,7 +97,11 @@ impl Scalar {
         macro_rules! de {
             ($t:ty) => {{
                 let a = b.try_into().expect("scalar size");
-                (if big { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as f64
+                (if big {
+                    <$t>::from_be_bytes(a)
+                } else {
+                    <$t>::from_le_bytes(a)
+                }) as f64
             }};
         }
         match self {
@@ -270,7 +274,9 @@ fn parse_format(toks: &[&str]) -> Result<Encoding, String> {
     };
     match &toks[2..] {
         ["1.0"] => Ok(enc),
-        [v] => Err(format!("PLY version {v} is not supported (only 1.0 exists)")),
+        [v] => Err(format!(
+            "PLY version {v} is not supported (only 1.0 exists)"
+        )),
         _ => Err(format!(
             "expected 'format {} 1.0', found {:?}",
             toks[1],
@@ -286,9 +292,9 @@ fn parse_element(toks: &[&str]) -> Result<Element, String> {
             toks.join(" ")
         ));
     };
-    let count = count
-        .parse::<usize>()
-        .map_err(|_| format!("element {name}: the count {count:?} is not a non-negative integer"))?;
+    let count = count.parse::<usize>().map_err(|_| {
+        format!("element {name}: the count {count:?} is not a non-negative integer")
+    })?;
     Ok(Element {
         name: name.to_string(),
         count,
@@ -309,11 +315,16 @@ fn parse_property(toks: &[&str]) -> Result<Prop, String> {
         [_, "list", c, i, name] => {
             let count = ty(c)?;
             if count.is_float() {
-                return Err(format!("list {name}: the count type {c} is not an integer type"));
+                return Err(format!(
+                    "list {name}: the count type {c} is not an integer type"
+                ));
             }
             Ok(Prop {
                 name: name.to_string(),
-                kind: Kind::List { count, item: ty(i)? },
+                kind: Kind::List {
+                    count,
+                    item: ty(i)?,
+                },
             })
         }
         [_, t, name] if *t != "list" => Ok(Prop {
@@ -349,7 +360,7 @@ enum Fail {
     /// The binary data ended.
     Eof,
     /// The ASCII token is not a value of the property's type.
-    Token(String),
+    Token(String, Scalar),
     /// A list count is negative.
     NegativeCount(f64),
     Io(std::io::Error),
@@ -365,7 +376,8 @@ struct Tokens<'a>(std::str::SplitAsciiWhitespace<'a>);
 impl Values for Tokens<'_> {
     fn next(&mut self, t: Scalar) -> Result<f64, Fail> {
         let tok = self.0.next().ok_or(Fail::Missing)?;
-        t.parse_token(tok).ok_or_else(|| Fail::Token(tok.to_string()))
+        t.parse_token(tok)
+            .ok_or_else(|| Fail::Token(tok.to_string(), t))
     }
 }
 
@@ -511,23 +523,21 @@ impl<R: BufRead> DataReader<'_, R> {
             Encoding::Ascii => format!("line {}: {} {i}", self.line_no, el.name),
             Encoding::Binary { .. } => format!("{} {i}", el.name),
         };
-        let ty = match p.kind {
-            Kind::Scalar(s) => s.name(),
-            Kind::List { item, .. } => item.name(),
-        };
         match fail {
             Fail::Missing => self.bad(format!(
                 "{at} has too few values: property {} is missing (the header declares {})",
                 p.name,
                 el.describe()
             )),
-            Fail::Token(t) => self.bad(format!(
-                "{at}, property {}: {t:?} is not a {ty} number",
+            Fail::Token(t, ty) => self.bad(format!(
+                "{at}, property {}: {t:?} is not a valid {} value",
+                p.name,
+                ty.name()
+            )),
+            Fail::NegativeCount(n) => self.bad(format!(
+                "{at}, property {}: list count {n} is negative",
                 p.name
             )),
-            Fail::NegativeCount(n) => {
-                self.bad(format!("{at}, property {}: list count {n} is negative", p.name))
-            }
             Fail::Eof => MeshIoError::Truncated {
                 path: self.path.to_owned(),
                 detail: format!(
@@ -618,7 +628,9 @@ pub(crate) fn read_points_and_faces<R: BufRead>(
             .iter()
             .enumerate()
             .map(|(k, p)| {
-                let coord = ["x", "y", "z", "nx", "ny", "nz"].iter().position(|&c| c == p.name);
+                let coord = ["x", "y", "z", "nx", "ny", "nz"]
+                    .iter()
+                    .position(|&c| c == p.name);
                 match coord {
                     Some(c) if e == vi && matches!(p.kind, Kind::Scalar(_)) => Slot::Coord(c),
                     _ if Some(e) == fi && Some(k) == index_list => Slot::Indices,

@@ -194,7 +194,11 @@ fn read_ascii(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
             }
             (Expect::Vertex(k), "vertex") => three_numbers(it).map(|[x, y, z]| {
                 corners[k] = DVec3::new(x, y, z);
-                if k == 2 { Expect::EndLoop } else { Expect::Vertex(k + 1) }
+                if k == 2 {
+                    Expect::EndLoop
+                } else {
+                    Expect::Vertex(k + 1)
+                }
             }),
             (Expect::EndLoop, "endloop") => it.next().is_none().then_some(Expect::EndFacet),
             (Expect::EndFacet, "endfacet") => {

@@ -1,0 +1,407 @@
+//! Issue 17: the readers are strict where the format is. Each case is a minimized input a
+//! black-box fuzz found accepted (silently cut, or read leniently) before; each must now be an
+//! error naming the file, the line (text formats) and what was expected, in plain words.
+mod common;
+use common::*;
+use meshio::{Format, MeshIoError};
+
+/// Read `text` from a temporary file named `name`; return the error message.
+fn err(name: &str, text: &[u8]) -> String {
+    let p = tmp(name);
+    std::fs::write(&p, text).unwrap();
+    let e = meshio::read(&p).expect_err(name);
+    let s = e.to_string();
+    assert!(s.contains(&p.display().to_string()), "names the file: {s}");
+    for debug in ["ParseError", "LineCol", "ParseIntError", "kind:", "{ "] {
+        assert!(!s.contains(debug), "no Rust Debug text ({debug}): {s}");
+    }
+    s
+}
+
+fn ok(name: &str, text: &[u8]) -> meshio::TriMesh {
+    let p = tmp(name);
+    std::fs::write(&p, text).unwrap();
+    meshio::read(&p).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+const PLY_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+end_header\n";
+
+fn ply(body: &str) -> Vec<u8> {
+    format!("{PLY_HEAD}{body}").into_bytes()
+}
+
+#[test]
+fn ply_ascii_valid_triangle_reads() {
+    let m = ok("valid.ply", &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+    assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    // Blank lines and trailing blank lines are harmless; CRLF too.
+    let crlf = ply("0 0 0\r\n\r\n1 0 0\r\n0 1 0\r\n3 0 1 2\r\n\n").to_vec();
+    assert_eq!(ok("crlf.ply", &crlf), m);
+}
+
+#[test]
+fn ply_ascii_vertex_with_an_extra_token_is_rejected() {
+    // The header declares 3 properties; `0 0 1 9` has 4 values (was cut to 0 0 1).
+    let s = err("extra_v.ply", &ply("0 0 0\n1 0 0\n0 0 1 9\n3 0 1 2\n"));
+    assert!(s.contains("line 12: vertex 2 has 1 value(s) more"), "{s}");
+    assert!(s.contains("float x, float y, float z"), "{s}");
+}
+
+#[test]
+fn ply_ascii_face_with_an_extra_index_is_rejected() {
+    // `3 0 1 3 2`: the count says 3 indices, the line has 4.
+    let s = err("extra_f.ply", &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 3 2\n"));
+    assert!(s.contains("line 13: face 0 has 1 value(s) more"), "{s}");
+}
+
+#[test]
+fn ply_ascii_space_inside_a_number_is_rejected() {
+    // `0 1 -0 5` was `0 1 -0.5` with a space: z became 0 and 5 was dropped.
+    let s = err("space.ply", &ply("0 0 0\n1 0 0\n0 1 -0 5\n3 0 1 2\n"));
+    assert!(s.contains("line 12: vertex 2 has 1 value(s) more"), "{s}");
+    // A number cut the other way: too few values on the line.
+    let s = err("short.ply", &ply("0 0 0\n1 0 0\n0 1\n3 0 1 2\n"));
+    assert!(
+        s.contains("line 12: vertex 2 has too few values: property z is missing"),
+        "{s}"
+    );
+}
+
+#[test]
+fn ply_ascii_bad_tokens_name_line_and_property() {
+    let s = err("tok.ply", &ply("0 0 0\n1 0x 0\n0 1 0\n3 0 1 2\n"));
+    assert!(
+        s.contains("line 11: vertex 1, property y: \"0x\" is not a valid float value"),
+        "{s}"
+    );
+    let s = err("nan.ply", &ply("0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"));
+    assert!(s.contains("\"nan\" is not a valid float value"), "{s}");
+    let s = err("idx.ply", &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n"));
+    assert!(
+        s.contains("line 13: face 0, property vertex_indices: \"2.5\" is not a valid int value"),
+        "{s}"
+    );
+    let s = err("count.ply", &ply("0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n"));
+    assert!(s.contains("\"300\" is not a valid uchar value"), "{s}");
+}
+
+#[test]
+fn ply_data_after_the_last_element_is_rejected() {
+    let s = err("more.ply", &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"));
+    assert!(s.contains("line 14: data after the last element"), "{s}");
+    // Binary: bytes after the declared elements.
+    let m = octahedron();
+    let mut b = Vec::new();
+    meshio::write_to(&mut b, &m, Format::Ply, meshio::Options::default(), "mem").unwrap();
+    b.extend_from_slice(&[0, 0, 0]);
+    let s = err("more_bin.ply", &b);
+    assert!(s.contains("3 bytes after the last element"), "{s}");
+}
+
+#[test]
+fn ply_ascii_too_few_lines_is_truncated() {
+    let p = tmp("few.ply");
+    std::fs::write(&p, ply("0 0 0\n1 0 0\n")).unwrap();
+    let e = meshio::read(&p).unwrap_err();
+    assert!(matches!(e, MeshIoError::Truncated { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains("declares 3 vertex elements, the data ends after 2"),
+        "{e}"
+    );
+}
+
+#[test]
+fn ply_format_version_other_than_1_0_is_rejected() {
+    for v in ["2.0", "1.1", "0.9", "1"] {
+        let text = PLY_HEAD.replace("ascii 1.0", &format!("ascii {v}"));
+        let s = err(
+            "ver.ply",
+            format!("{text}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").as_bytes(),
+        );
+        assert!(
+            s.contains(&format!(
+                "PLY version {v} is not supported (only 1.0 exists)"
+            )),
+            "{s}"
+        );
+    }
+}
+
+#[test]
+fn ply_header_errors_are_plain_words() {
+    let cases: [(&str, &str); 7] = [
+        ("format ascii 1.0", "format text 1.0"),
+        ("property float y", "property flaot y"),
+        ("element face 1", "element face -1"),
+        ("element face 1", "element face one"),
+        ("property float z", "propertyfloat z"),
+        ("property float y", "property float x"),
+        ("end_header", "end_header extra"),
+    ];
+    let expect = [
+        "header line 2: expected 'format ascii|binary_little_endian|binary_big_endian 1.0'",
+        "header line 5: unknown type \"flaot\"",
+        "header line 7: element face: the count \"-1\" is not a non-negative integer",
+        "header line 7: element face: the count \"one\" is not a non-negative integer",
+        "header line 6: expected format, comment, obj_info, element, property or end_header",
+        "header line 5: element vertex has a second property \"x\"",
+        "header line 9: expected format, comment, obj_info, element, property or end_header",
+    ];
+    for ((from, to), want) in cases.iter().zip(expect) {
+        let text = PLY_HEAD.replacen(from, to, 1);
+        let s = err(
+            "hdr.ply",
+            format!("{text}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").as_bytes(),
+        );
+        assert!(s.contains(want), "{to}: {s}");
+    }
+    // No end_header: truncated, in words.
+    let p = tmp("noend.ply");
+    std::fs::write(&p, "ply\nformat ascii 1.0\nelement vertex 1\n").unwrap();
+    let e = meshio::read(&p).unwrap_err();
+    assert!(matches!(e, MeshIoError::Truncated { .. }), "{e}");
+    assert!(e.to_string().contains("without end_header"), "{e}");
+}
+
+const STL_FACET: &str =
+    "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
+
+fn stl(facets: &str) -> Vec<u8> {
+    format!("solid t\n{facets}endsolid t\n").into_bytes()
+}
+
+#[test]
+fn stl_ascii_valid_facets_read() {
+    let m = ok("valid.stl", &stl(&STL_FACET.repeat(2)));
+    assert_eq!(m.triangles.len(), 2);
+    // Keywords are case-insensitive; several solids in one file are read in turn.
+    let upper = STL_FACET.to_ascii_uppercase();
+    let two = format!("solid a\n{upper}endsolid a\nsolid b\n{STL_FACET}endsolid\n");
+    assert_eq!(ok("two.stl", two.as_bytes()).triangles.len(), 2);
+}
+
+#[test]
+fn stl_ascii_garbled_keywords_are_rejected() {
+    let cases = [
+        (
+            "outer loop",
+            "outer lop",
+            "line 3: facet 0: expected 'outer loop'",
+        ),
+        (
+            "outer loop",
+            "outerloop",
+            "line 3: facet 0: expected 'outer loop'",
+        ),
+        (
+            "facet normal",
+            "facet nromal",
+            "line 2: facet 0: expected 'facet normal",
+        ),
+        ("endloop", "end loop", "line 7: facet 0: expected 'endloop'"),
+        (
+            "endfacet",
+            "endfacets",
+            "line 8: facet 0: expected 'endfacet'",
+        ),
+        (
+            "vertex 1 0 0",
+            "vertex 1 0",
+            "line 5: facet 0: expected 'vertex x y z'",
+        ),
+        (
+            "vertex 1 0 0",
+            "vertex 1 0 0 0",
+            "line 5: facet 0: expected 'vertex x y z'",
+        ),
+        (
+            "vertex 1 0 0",
+            "vertex 1 O 0",
+            "line 5: facet 0: expected 'vertex x y z'",
+        ),
+    ];
+    for (from, to, want) in cases {
+        let s = err("garbled.stl", &stl(&STL_FACET.replacen(from, to, 1)));
+        assert!(s.contains(want), "{to}: {s}");
+    }
+}
+
+#[test]
+fn stl_ascii_facets_with_other_than_3_vertices_are_rejected() {
+    let four = STL_FACET.replace("endloop", "vertex 1 1 0\nendloop");
+    let s = err("quad.stl", &stl(&four));
+    assert!(
+        s.contains("line 7: facet 0: expected 'endloop' (a facet has exactly 3 vertices)"),
+        "{s}"
+    );
+    let two = STL_FACET.replace("vertex 0 1 0\n", "");
+    let s = err("two.stl", &stl(&two));
+    assert!(
+        s.contains("line 6: facet 0: expected 'vertex x y z'"),
+        "{s}"
+    );
+}
+
+#[test]
+fn stl_ascii_without_endsolid_is_truncated() {
+    let p = tmp("noend.stl");
+    std::fs::write(&p, format!("solid t\n{STL_FACET}")).unwrap();
+    let e = meshio::read(&p).unwrap_err();
+    assert!(matches!(e, MeshIoError::Truncated { .. }), "{e}");
+    assert!(e.to_string().contains("'endsolid [name]'"), "{e}");
+}
+
+#[test]
+fn binary_stl_size_must_be_84_plus_50n() {
+    let m = octahedron();
+    let mut b = Vec::new();
+    meshio::write_to(&mut b, &m, Format::Stl, meshio::Options::default(), "mem").unwrap();
+    assert_eq!(b.len(), 84 + 50 * 8);
+    b.push(0);
+    let s = err("long.stl", &b);
+    assert!(
+        s.contains("announces 8 facets, i.e. 84 + 50 * 8 = 484 bytes, but the file has 485"),
+        "{s}"
+    );
+    b.truncate(484 - 7);
+    let s = err("short.stl", &b);
+    assert!(s.contains("484 bytes), the file has 477 bytes"), "{s}");
+}
+
+const OBJ_V: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+
+#[test]
+fn obj_junk_in_face_corners_is_rejected() {
+    for corner in [
+        "5//-inf", "1/nan/1", "6/13/1/1", "1/", "1//", "1/0/1", "1/+/1", "x",
+    ] {
+        let text = format!("{OBJ_V}f 1 2 {corner}\n");
+        let s = err("corner.obj", text.as_bytes());
+        assert!(
+            s.contains(&format!("line 6: bad face corner {corner:?}")),
+            "{corner}: {s}"
+        );
+    }
+    // Well-formed corners that refer to missing texture or normal lines.
+    let s = err("vt.obj", format!("{OBJ_V}f 1/1 2/2 3/1\n").as_bytes());
+    assert!(
+        s.contains("line 6: a face corner refers to texture (vt) index 2, which does not exist"),
+        "{s}"
+    );
+    let s = err("vn.obj", format!("{OBJ_V}f 1//1 2//1 3//-2\n").as_bytes());
+    assert!(s.contains("normal (vn) index -2"), "{s}");
+    // The valid forms still read.
+    let m = ok(
+        "corners.obj",
+        format!("{OBJ_V}f 1/1/1 2//1 3/-1\n").as_bytes(),
+    );
+    assert_eq!(m.triangles, vec![[0, 1, 2]]);
+}
+
+#[test]
+fn obj_vertex_lines_take_3_4_6_or_7_numbers() {
+    for v in [
+        "v 0 1 0 1 0",
+        "v 0 1",
+        "v 0 1 0 1 2 3 4 5",
+        "v 0 1 0 junk",
+        "v 0 1 0 1 nan 1",
+    ] {
+        let text = OBJ_V.replace("v 0 1 0", v) + "f 1 2 3\n";
+        let s = err("v.obj", text.as_bytes());
+        assert!(s.contains("line 3: "), "{v}: {s}");
+    }
+    // x y z, x y z w (w ignored), x y z r g b and x y z r g b a (colours ignored).
+    for v in [
+        "v 0 1 0",
+        "v 0 1 0 0.5",
+        "v 0 1 0 1 0.5 0",
+        "v 0 1 0 1 0.5 0 1",
+    ] {
+        let text = OBJ_V.replace("v 0 1 0", v) + "f 1 2 3\n";
+        let m = ok("v.obj", text.as_bytes());
+        assert_eq!(m.vertices[2], glam::DVec3::new(0.0, 1.0, 0.0), "{v}");
+    }
+}
+
+const OFF_TRI: &str = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+
+#[test]
+fn off_counts_and_tokens_are_checked() {
+    let cases = [
+        (
+            "3 1 0\n",
+            "3 1 0 7\n",
+            "line 2: expected the counts 'nv nf ne'",
+        ),
+        (
+            "3 1 0\n",
+            "3 x 0\n",
+            "line 2: expected the counts 'nv nf ne'",
+        ),
+        (
+            "3 1 0\n",
+            "-3 1 0\n",
+            "line 2: expected the counts 'nv nf ne'",
+        ),
+        (
+            "1 0 0\n",
+            "1 0 0 9\n",
+            "line 4: vertex 1: expected 'x y z' (numbers)",
+        ),
+        (
+            "1 0 0\n",
+            "1 0\n",
+            "line 4: vertex 1: expected 'x y z' (numbers)",
+        ),
+        (
+            "1 0 0\n",
+            "1 0 0x\n",
+            "line 4: vertex 1: expected 'x y z' (numbers)",
+        ),
+        (
+            "3 0 1 2\n",
+            "3 0 1 2 9 9\n",
+            "line 6: face 0: expected 3 integer indices",
+        ),
+        (
+            "3 0 1 2\n",
+            "3 0 1 2.5\n",
+            "line 6: face 0: expected 3 integer indices",
+        ),
+        (
+            "3 0 1 2\n",
+            "3 0 1\n",
+            "line 6: face 0: expected 3 integer indices",
+        ),
+        (
+            "3 0 1 2\n",
+            "3 0 1 2\n3 0 2 1\n",
+            "line 7: data after the last face",
+        ),
+        ("OFF\n", "XOFF\n", "line 1: expected an OFF header"),
+    ];
+    for (from, to, want) in cases {
+        let s = err("bad.off", OFF_TRI.replacen(from, to, 1).as_bytes());
+        assert!(s.contains(want), "{to:?}: {s}");
+    }
+    // Valid variants: counts without ne, face colours, COFF vertex colours, NOFF normals.
+    for text in [
+        OFF_TRI.replace("3 1 0\n", "3 1\n"),
+        OFF_TRI.replace("3 0 1 2\n", "3 0 1 2 255 0 0\n"),
+        OFF_TRI.replace("3 0 1 2\n", "3 0 1 2 0.5 0.5 0.5 1\n"),
+        "COFF\n3 1 0\n0 0 0 255 0 0\n1 0 0 0 255 0 255\n0 1 0 0 0 255\n3 0 1 2\n".to_string(),
+        OFF_TRI
+            .replace("OFF\n", "NOFF\n")
+            .replace("0 0 0\n", "0 0 0 0 0 1\n")
+            .replace("1 0 0\n", "1 0 0 0 0 1\n")
+            .replace("0 1 0\n", "0 1 0 0 0 1\n"),
+    ] {
+        let m = ok("good.off", text.as_bytes());
+        assert_eq!(m.triangles, vec![[0, 1, 2]], "{text}");
+        assert_eq!(m.vertices[1], glam::DVec3::X, "{text}");
+    }
+}
