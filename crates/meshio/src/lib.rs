@@ -103,7 +103,7 @@ pub enum MeshIoError {
          holds: re-export or re-download it"
     )]
     Truncated { path: PathBuf, detail: String },
-    #[error("{path}: the file has vertices but no faces; read it with read_point_cloud")]
+    #[error("{path}: the file has vertices but no faces; mesh it as a point set (--as points)")]
     NoFaces { path: PathBuf },
     #[error("{path}: {source}")]
     Invalid { path: PathBuf, source: InvalidMesh },

@@ -297,7 +297,8 @@ fn negative_determinant_affines_keep_the_inside_inside() {
     let back = read_nifti(&p2).unwrap();
     assert!((back.affine().matrix3 - qa.matrix3).abs_diff_eq(DMat3::ZERO, 1e-6));
     check(&ImageSurface::new(back, &dark(0.0)).unwrap());
-    // No sform, no qform: diagonal pixdim with pixdim[1] < 0.
+    // No sform, no qform: diagonal pixdim with pixdim[1] < 0. As nibabel, the absolute value
+    // is used (issue 17: a negative pixdim must not mirror the mesh silently).
     let pd = DAffine3::from_mat3(DMat3::from_diagonal(DVec3::new(-1.0, 1.0, 1.0)));
     let c0 = DVec3::new(-11.5, 11.5, 11.5);
     let ball0 = |p: DVec3| (p - c0).length() - 6.0;
@@ -310,9 +311,11 @@ fn negative_determinant_affines_keep_the_inside_inside() {
     };
     write_nifti(&p3, &vold, &opts).unwrap();
     let back = read_nifti(&p3).unwrap();
-    assert_eq!(back.affine(), pd);
+    assert_eq!(back.affine(), DAffine3::IDENTITY);
     let s = ImageSurface::new(back, &dark(0.0)).unwrap();
-    assert!(s.value(c0) < 0.0 && s.value(c0 + DVec3::X * 7.0) > 0.0);
+    let c1 = DVec3::splat(11.5); // the ball's centre voxel, at |pixdim| = 1
+    assert!(s.value(c1) < 0.0 && s.value(c1 + DVec3::X * 7.0) > 0.0);
+    assert!(s.value(c0) > 0.0, "not mirrored to x < 0");
 }
 
 #[test]
@@ -522,7 +525,7 @@ fn labels_are_listed_and_meshed_one_at_a_time() {
     let e = ImageSurface::new(vol.clone(), &ImageOptions::default()).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "iso value required for a non-binary image; the data range is [0, 7] (pass an iso value, or a label for a segmentation)"
+        "iso value required for a non-binary image; the data range is [0, 7] (pass --iso VALUE, or --label L for a segmentation)"
     );
     let e = ImageSurface::new(vol, &opt(5)).unwrap_err();
     assert!(e.to_string().contains("labels present: 0, 3, 7"), "{e}");

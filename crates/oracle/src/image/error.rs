@@ -2,6 +2,15 @@
 
 use std::path::PathBuf;
 
+/// What a flat image is, for [`ImageError::NotAVolume`].
+fn flat_kind(dims: &[u64], nz: u64) -> String {
+    if dims.iter().all(|&d| d == 1) {
+        "a single voxel".to_string()
+    } else {
+        format!("a 2D image (dim[3] = {nz})")
+    }
+}
+
 fn show(p: &Option<PathBuf>) -> String {
     match p {
         Some(p) => format!("{}: ", p.display()),
@@ -24,16 +33,47 @@ pub enum ImageError {
         path.display()
     )]
     Truncated { path: PathBuf, detail: String },
-    #[error("{}: not a valid NIfTI-1 file ({detail}); NIfTI-2 is not supported, convert it with e.g. `nibabel`", path.display())]
+    #[error("{}: not a valid NIfTI-1 file ({detail})", path.display())]
     Nifti { path: PathBuf, detail: String },
+    #[error(
+        "{}: a NIfTI-2 file (sizeof_hdr = 540); only NIfTI-1 is supported: convert it, e.g. with \
+         nibabel: `nib.save(nib.Nifti1Image.from_image(nib.load(IN)), OUT)`",
+        path.display()
+    )]
+    Nifti2 { path: PathBuf },
+    #[error("{}: NIfTI-1 header field {field} {detail}", path.display())]
+    BadHeader {
+        path: PathBuf,
+        field: String,
+        detail: String,
+    },
+    #[error(
+        "{}: the gzip data is corrupt ({detail}); the file is damaged (`gzip -t` checks it): \
+         re-download or re-export it",
+        path.display()
+    )]
+    CorruptGzip { path: PathBuf, detail: String },
+    #[error(
+        "{}: the voxel data after vox_offset {offset} has {actual} bytes, but dim and datatype \
+         need exactly {expected}; the header does not match the data (check dim, datatype and \
+         vox_offset)",
+        path.display()
+    )]
+    DataLength {
+        path: PathBuf,
+        offset: u64,
+        expected: u64,
+        actual: u64,
+    },
     #[error(
         "{}: datatype {field} is not supported; convert the image to u8, i8, u16, i16, u32, i32, f32 or f64",
         path.display()
     )]
     UnsupportedType { path: PathBuf, field: String },
     #[error(
-        "{}: dim = {dims:?} is a 2D image (dim[3] = {nz}), not a volume; give a 3D file, or a folder of 2D slices with a spacing",
-        path.display()
+        "{}: dim = {dims:?} is {}, not a volume; give a 3D image, or a folder of 2D slices (with --spacing)",
+        path.display(),
+        flat_kind(dims, *nz)
     )]
     NotAVolume {
         path: PathBuf,
@@ -64,7 +104,7 @@ pub enum ImageError {
         actual: usize,
     },
     #[error(
-        "{}{field} gives a singular or non-finite voxel-to-world transform ({detail}); fix the header or pass a spacing",
+        "{}{field} gives an unusable voxel-to-world transform: {detail}",
         show(path)
     )]
     BadAffine {
@@ -88,7 +128,7 @@ pub enum ImageError {
         index: [usize; 3],
     },
     #[error(
-        "iso value required for a non-binary image; the data range is [{min}, {max}] (pass an iso value, or a label for a segmentation)"
+        "iso value required for a non-binary image; the data range is [{min}, {max}] (pass --iso VALUE, or --label L for a segmentation)"
     )]
     IsoRequired { min: f64, max: f64 },
     #[error(

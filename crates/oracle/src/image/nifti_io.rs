@@ -1,24 +1,37 @@
-//! NIfTI-1 reading (through the `nifti` crate, raw bytes only) and a small writer for tests.
+//! NIfTI-1 reading (ours: file format support; the header is parsed by the `nifti` crate, the
+//! rest here) and a small writer for tests.
 //!
 //! The voxel-to-world transform is computed here, not by `nifti` (whose `nalgebra_affine`
-//! helpers panic on a negative `pixdim`): the standard NIfTI-1 rule, in this order:
-//! 1. `sform_code > 0`: the rows `srow_x`, `srow_y`, `srow_z`;
-//! 2. else `qform_code > 0`: the quaternion (`quatern_b/c/d`), offsets (`qoffset_x/y/z`),
-//!    voxel sizes `|pixdim[1..4]|` (0 read as 1) and `qfac = pixdim[0]` (0 read as 1);
-//! 3. else the diagonal `diag(pixdim[1..4])` (0 read as 1, a negative value flips the axis).
+//! helpers panic on a negative `pixdim`), by nibabel's rules (`get_best_affine`, after the
+//! header fixes nibabel applies on load), in this order:
+//! 1. `sform_code` 1 to 4: the rows `srow_x`, `srow_y`, `srow_z`;
+//! 2. else `qform_code` 1 to 4: the quaternion (`quatern_b/c/d`), offsets (`qoffset_x/y/z`),
+//!    voxel sizes `|pixdim[1..4]|` and `qfac` = -1 if `pixdim[0]` is -1, else 1;
+//! 3. else the diagonal `diag(|pixdim[1..4]|)` (the NIfTI-1 standard's method 1; nibabel's
+//!    fallback also flips x and centres the grid, an Analyze convention not followed here).
+//!
+//! A negative `pixdim` never mirrors the mesh: as nibabel, its absolute value is used. Codes
+//! outside 0 to 4 count as 0 (nibabel resets them). [`read_nifti`] rejects what nibabel would
+//! silently repair into something else: a `pixdim[1..4]` that is 0, NaN or infinite when the
+//! transform uses it (methods 2 and 3), and a quaternion with `b² + c² + d² > 1`.
 
 use super::volume::check_affine;
 use super::{Dtype, ImageError, Volume, Voxel, Voxels};
 use glam::{DAffine3, DMat3, DVec3};
-use nifti::{NiftiHeader, NiftiObject, NiftiType, ReaderOptions};
+use nifti::{NiftiHeader, NiftiType};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Whether a `qform_code` / `sform_code` selects its transform (valid codes are 1 to 4).
+fn code_set(code: i16) -> bool {
+    (1..=4).contains(&code)
+}
 
 /// Voxel-to-world affine of a NIfTI-1 header (see the module documentation for the rule).
 /// Returns the affine and the name of the header field it came from.
 pub fn nifti_affine(h: &NiftiHeader) -> (DAffine3, &'static str) {
     let f = |x: f32| x as f64;
-    if h.sform_code > 0 {
+    if code_set(h.sform_code) {
         let r = [h.srow_x, h.srow_y, h.srow_z];
         let m = DMat3::from_cols(
             DVec3::new(f(r[0][0]), f(r[1][0]), f(r[2][0])),
@@ -28,23 +41,60 @@ pub fn nifti_affine(h: &NiftiHeader) -> (DAffine3, &'static str) {
         let t = DVec3::new(f(r[0][3]), f(r[1][3]), f(r[2][3]));
         return (DAffine3::from_mat3_translation(m, t), "sform (srow_x/y/z)");
     }
+    // nibabel's header fixes: 0 becomes 1, a negative value its absolute value.
     let px = |i: usize| {
-        let d = f(h.pixdim[i]);
+        let d = f(h.pixdim[i]).abs();
         if d == 0.0 || !d.is_finite() { 1.0 } else { d }
     };
-    if h.qform_code > 0 {
+    if code_set(h.qform_code) {
         let q = Qform {
             b: f(h.quatern_b),
             c: f(h.quatern_c),
             d: f(h.quatern_d),
             offset: DVec3::new(f(h.quatern_x), f(h.quatern_y), f(h.quatern_z)),
-            qfac: if h.pixdim[0] < 0.0 { -1.0 } else { 1.0 },
-            pixdim: DVec3::new(px(1).abs(), px(2).abs(), px(3).abs()),
+            qfac: if h.pixdim[0] == -1.0 { -1.0 } else { 1.0 },
+            pixdim: DVec3::new(px(1), px(2), px(3)),
         };
         return (q.affine(), "qform (quatern_b/c/d, qoffset, pixdim)");
     }
     let d = DVec3::new(px(1), px(2), px(3));
     (DAffine3::from_mat3(DMat3::from_diagonal(d)), "pixdim[1..4]")
+}
+
+/// [`nifti_affine`] after checking the fields it uses: `pixdim[1..4]` finite and non-zero
+/// (qform and pixdim methods), the quaternion's `b² + c² + d² <= 1` (qform, with nibabel's
+/// tolerance of 3 f32 epsilons).
+fn checked_affine(path: &Path, h: &NiftiHeader) -> Result<(DAffine3, &'static str), ImageError> {
+    if !code_set(h.sform_code) {
+        for i in 1..=3 {
+            let d = h.pixdim[i];
+            if d == 0.0 || !d.is_finite() {
+                return Err(bad_header(
+                    path,
+                    &format!("pixdim[{i}]"),
+                    format!(
+                        "= {d}: the voxel size must be a finite non-zero number (there is no \
+                         sform, so the transform uses it); fix the header, e.g. with nibabel"
+                    ),
+                ));
+            }
+        }
+    }
+    if !code_set(h.sform_code) && code_set(h.qform_code) {
+        let (b, c, d) = (h.quatern_b as f64, h.quatern_c as f64, h.quatern_d as f64);
+        let n2 = b * b + c * c + d * d;
+        if !(n2 <= 1.0 + 3.0 * f32::EPSILON as f64) {
+            return Err(bad_header(
+                path,
+                "quatern_b/c/d",
+                format!(
+                    "= ({b}, {c}, {d}): b² + c² + d² = {n2} exceeds 1, so this is not a rotation \
+                     quaternion; fix the qform (or set an sform)"
+                ),
+            ));
+        }
+    }
+    Ok(nifti_affine(h))
 }
 
 /// A NIfTI-1 quaternion transform (the `qform_code > 0` method).
@@ -95,66 +145,155 @@ impl Qform {
     }
 }
 
-fn map_nifti_err(path: &Path, e: nifti::NiftiError) -> ImageError {
-    use nifti::NiftiError as E;
-    match e {
-        E::IncompatibleLength(got, expected) => ImageError::Truncated {
-            path: path.to_path_buf(),
-            detail: format!(
-                "the voxel data has {got} bytes, the header's dim and datatype need {expected}"
-            ),
-        },
-        E::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => ImageError::Truncated {
-            path: path.to_path_buf(),
-            detail: format!("unexpected end of data: {io}"),
-        },
-        E::Io(io) if io.kind() == std::io::ErrorKind::NotFound => ImageError::Io {
-            path: path.to_path_buf(),
-            source: io,
-        },
-        E::Io(io) => ImageError::Truncated {
-            path: path.to_path_buf(),
-            detail: format!("read error: {io}"),
-        },
-        E::UnsupportedDataType(t) => ImageError::UnsupportedType {
-            path: path.to_path_buf(),
-            field: format!("{t:?}"),
-        },
-        other => ImageError::Nifti {
-            path: path.to_path_buf(),
-            detail: other.to_string(),
-        },
+/// Read a file, decompressing it (see [`gunzip`]) if its name ends with `.gz`.
+fn read_bytes(path: &Path) -> Result<Vec<u8>, ImageError> {
+    let raw = std::fs::read(path).map_err(|source| ImageError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let gz = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    if gz { gunzip(path, &raw) } else { Ok(raw) }
+}
+
+/// Decompress every gzip member of `raw` to its end, so that each member's CRC-32 and length
+/// (ISIZE) are checked (flate2 checks them only when a member is read to its end). Zero bytes
+/// after the last member are allowed (gzip and Python's gzip module skip them); anything else
+/// after it is an error, and so is a corrupt deflate stream (called corrupt, not truncated).
+fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, ImageError> {
+    use std::io::Read;
+    let corrupt = |detail: String| ImageError::CorruptGzip {
+        path: path.to_path_buf(),
+        detail,
+    };
+    if !raw.starts_with(&[0x1f, 0x8b]) {
+        return Err(corrupt(
+            "the file does not start with the gzip magic bytes 1f 8b, although its name ends \
+             with .gz"
+                .into(),
+        ));
+    }
+    // ISIZE of the last member: a hint only (it is checked below, modulo 2^32).
+    let hint = raw.len().checked_sub(4).map_or(0, |i| {
+        u32::from_le_bytes(raw[i..].try_into().expect("4 bytes")) as usize
+    });
+    let mut out = Vec::with_capacity(hint.min(raw.len().saturating_mul(1032)));
+    let mut rest = raw;
+    loop {
+        let mut dec = flate2::bufread::GzDecoder::new(rest);
+        dec.read_to_end(&mut out).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                ImageError::Truncated {
+                    path: path.to_path_buf(),
+                    detail: "the gzip stream ends before its end marker and checksum".into(),
+                }
+            } else {
+                corrupt(e.to_string())
+            }
+        })?;
+        rest = dec.into_inner();
+        if rest.iter().all(|&b| b == 0) {
+            return Ok(out);
+        }
+        if !rest.starts_with(&[0x1f, 0x8b]) {
+            return Err(corrupt(format!(
+                "{} bytes of trailing garbage after the gzip stream",
+                rest.len()
+            )));
+        }
     }
 }
 
-/// Read a NIfTI-1 volume (`.nii`, `.nii.gz`, or a `.hdr`/`.img` pair). The voxels keep their
-/// on-disk type; `scl_slope`/`scl_inter` are stored as the volume's scaling (applied at sampling
-/// time); the affine follows [`nifti_affine`].
-///
-/// Errors: truncated data, NIfTI-2 or garbage, 2D images (`dim[3] = 1`), 4D series
-/// (`dim[4] > 1`), unsupported types (complex, RGB, 64-bit integers), singular transforms.
-pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
-    let path = path.as_ref();
-    if !path.exists() {
-        return Err(ImageError::Io {
+/// Parse the 348-byte NIfTI-1 header at the start of `b` (NIfTI-2 and other files are errors).
+fn parse_header(path: &Path, b: &[u8]) -> Result<NiftiHeader, ImageError> {
+    if b.len() >= 4 {
+        let w: [u8; 4] = b[..4].try_into().expect("4 bytes");
+        if i32::from_le_bytes(w) == 540 || i32::from_be_bytes(w) == 540 {
+            return Err(ImageError::Nifti2 {
+                path: path.to_path_buf(),
+            });
+        }
+    }
+    if b.len() < HEADER_SIZE {
+        return Err(ImageError::Truncated {
             path: path.to_path_buf(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+            detail: format!(
+                "a NIfTI-1 header has {HEADER_SIZE} bytes, the file has {}",
+                b.len()
+            ),
         });
     }
-    let obj = ReaderOptions::new()
-        .read_file(path)
-        .map_err(|e| map_nifti_err(path, e))?;
-    let h = obj.header().clone();
-    let nd = h.dim[0].clamp(1, 7) as usize;
-    let dims_all: Vec<u64> = h.dim[1..=nd].iter().map(|&d| d as u64).collect();
-    let get = |i: usize| if i <= nd { h.dim[i] as usize } else { 1 };
+    let magic = &b[344..348];
+    if magic != b"n+1\0" && magic != b"ni1\0" {
+        let shown: String = String::from_utf8_lossy(magic).escape_debug().collect();
+        return Err(ImageError::Nifti {
+            path: path.to_path_buf(),
+            detail: format!(
+                "the magic (bytes 344-347) is \"{shown}\", expected \"n+1\" (a .nii file) or \
+                 \"ni1\" (a .hdr/.img pair); Analyze 7.5 headers are not read"
+            ),
+        });
+    }
+    let h = NiftiHeader::from_reader(b).map_err(|e| ImageError::Nifti {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })?;
+    if h.sizeof_hdr != HEADER_SIZE as i32 {
+        return Err(bad_header(
+            path,
+            "sizeof_hdr",
+            format!(
+                "= {} (bytes 0-3), but a NIfTI-1 header has {HEADER_SIZE}: the file is damaged \
+                 or not NIfTI-1",
+                h.sizeof_hdr
+            ),
+        ));
+    }
+    Ok(h)
+}
+
+/// Size of a NIfTI-1 header; a single file's voxels start at `vox_offset >= 352`.
+const HEADER_SIZE: usize = 348;
+const MIN_SINGLE_OFFSET: f64 = 352.0;
+
+fn bad_header(path: &Path, field: &str, detail: String) -> ImageError {
+    ImageError::BadHeader {
+        path: path.to_path_buf(),
+        field: field.to_string(),
+        detail,
+    }
+}
+
+/// What the header says about the voxel data.
+struct Layout {
+    dims: [usize; 3],
+    dtype: Dtype,
+    /// Byte offset of the voxels in the data file (`vox_offset`).
+    offset: usize,
+}
+
+/// Check `dim`, `datatype` and `vox_offset` (`single`: data in the header's file).
+fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageError> {
+    let dim: Vec<i64> = h.dim.iter().map(|&d| d as i16 as i64).collect();
+    if !(1..=7).contains(&dim[0]) {
+        return Err(bad_header(
+            path,
+            "dim[0]",
+            format!("= {}: the number of dimensions must be 1 to 7", dim[0]),
+        ));
+    }
+    let nd = dim[0] as usize;
+    if let Some(i) = (1..=nd).find(|&i| dim[i] < 1) {
+        return Err(bad_header(
+            path,
+            &format!("dim[{i}]"),
+            format!("= {}: every dimension must be at least 1", dim[i]),
+        ));
+    }
+    let dims_all: Vec<u64> = dim[1..=nd].iter().map(|&d| d as u64).collect();
+    let get = |i: usize| if i <= nd { dim[i] as usize } else { 1 };
     let dims = [get(1), get(2), get(3)];
-    if dims.contains(&0) {
-        return Err(ImageError::Empty {
-            path: Some(path.to_path_buf()),
-            dims,
-        });
-    }
     if nd < 3 || dims[2] == 1 {
         return Err(ImageError::NotAVolume {
             path: path.to_path_buf(),
@@ -162,7 +301,7 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             nz: dims[2] as u64,
         });
     }
-    let frames: u64 = (4..=nd).map(|i| h.dim[i].max(1) as u64).product();
+    let frames: u64 = (4..=nd).map(|i| dim[i] as u64).product();
     if frames > 1 {
         return Err(ImageError::FourD {
             path: path.to_path_buf(),
@@ -170,7 +309,33 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             frames,
         });
     }
-    let dtype = match h.data_type() {
+    let dtype = dtype_of(path, h)?;
+    let off = h.vox_offset as f64;
+    let min = if single { MIN_SINGLE_OFFSET } else { 0.0 };
+    if !(off.is_finite() && off.fract() == 0.0 && off >= min && off <= 1e15) {
+        return Err(bad_header(
+            path,
+            "vox_offset",
+            format!(
+                "= {off}: the voxel data offset must be a whole number of bytes, at least {min} \
+                 {}",
+                if single {
+                    "in a .nii file (348 header bytes and 4 extension bytes come first)"
+                } else {
+                    "in the .img file"
+                }
+            ),
+        ));
+    }
+    Ok(Layout {
+        dims,
+        dtype,
+        offset: off as usize,
+    })
+}
+
+fn dtype_of(path: &Path, h: &NiftiHeader) -> Result<Dtype, ImageError> {
+    Ok(match h.data_type() {
         Ok(NiftiType::Uint8) => Dtype::U8,
         Ok(NiftiType::Int8) => Dtype::I8,
         Ok(NiftiType::Uint16) => Dtype::U16,
@@ -191,29 +356,149 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
                 field: format!("datatype code {}", h.datatype),
             });
         }
+    })
+}
+
+/// `scl_slope`/`scl_inter` as nibabel reads them: a slope of 0 or NaN means no scaling (the
+/// intercept is then ignored); an infinite slope, or a non-finite intercept with a valid slope,
+/// is an error.
+fn scaling(path: &Path, h: &NiftiHeader) -> Result<(f64, f64), ImageError> {
+    let (slope, inter) = (h.scl_slope as f64, h.scl_inter as f64);
+    if slope == 0.0 || slope.is_nan() {
+        return Ok((1.0, 0.0));
+    }
+    if slope.is_infinite() {
+        return Err(bad_header(
+            path,
+            "scl_slope",
+            format!("= {slope}: the intensity scale must be finite (0 or NaN for no scaling)"),
+        ));
+    }
+    if !inter.is_finite() {
+        return Err(bad_header(
+            path,
+            "scl_inter",
+            format!("= {inter} with scl_slope = {slope}: the intensity offset must be finite"),
+        ));
+    }
+    Ok((slope, inter))
+}
+
+/// The header file and the data file of `path` (the same file for `.nii`/`.nii.gz`; for a
+/// `.hdr`/`.img` pair, given either name, the other one next to it, plain or gzipped).
+fn pair_paths(path: &Path) -> (PathBuf, PathBuf) {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let lower = name.to_ascii_lowercase();
+    let sibling = |from: &str, to: &str| -> Option<PathBuf> {
+        let stem_len = if lower.ends_with(&format!("{from}.gz")) {
+            name.len() - from.len() - 3
+        } else if lower.ends_with(from) {
+            name.len() - from.len()
+        } else {
+            return None;
+        };
+        let stem = &name[..stem_len];
+        let plain = path.with_file_name(format!("{stem}{to}"));
+        let gz = path.with_file_name(format!("{stem}{to}.gz"));
+        Some(if !plain.exists() && gz.exists() {
+            gz
+        } else {
+            plain
+        })
     };
-    let big = h.endianness == nifti::Endianness::Big;
-    let raw = obj.into_volume().into_raw_data();
-    let n = dims[0] * dims[1] * dims[2];
-    if raw.len() < n * dtype.size() {
-        return Err(ImageError::Truncated {
+    if let Some(hdr) = sibling(".img", ".hdr") {
+        (hdr, path.to_path_buf())
+    } else if let Some(img) = sibling(".hdr", ".img") {
+        (path.to_path_buf(), img)
+    } else {
+        (path.to_path_buf(), path.to_path_buf())
+    }
+}
+
+/// Read a NIfTI-1 volume (`.nii`, `.nii.gz`, or a `.hdr`/`.img` pair, each possibly gzipped).
+/// The voxels keep their on-disk type and are read from `vox_offset`; `scl_slope`/`scl_inter`
+/// are stored as the volume's scaling (applied at sampling time, see [`scaling`]); the affine
+/// follows [`nifti_affine`] and must pass the volume's transform checks.
+///
+/// Strict: a gzip stream is read to its end (checksums and lengths checked), `sizeof_hdr` must
+/// be 348, `vox_offset` a whole number (at least 352 in a `.nii`), and the data after it exactly
+/// `dim` x datatype bytes. Errors name the field: truncated or corrupt data, NIfTI-2 or
+/// garbage, 2D images (`dim[3] = 1`), 4D series (`dim[4] > 1`), unsupported types (complex,
+/// RGB, 64-bit integers), bad `pixdim` or scaling, unusable transforms.
+pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
+    let path = path.as_ref();
+    if !path.exists() {
+        return Err(ImageError::Io {
             path: path.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+        });
+    }
+    let (hdr_path, img_path) = pair_paths(path);
+    let hbytes = read_bytes(&hdr_path)?;
+    let h = parse_header(&hdr_path, &hbytes)?;
+    let single = &h.magic == b"n+1\0";
+    if single != (hdr_path == img_path) {
+        return Err(ImageError::Nifti {
+            path: hdr_path,
+            detail: if single {
+                "the magic \"n+1\" says a single .nii file, but the name is a .hdr/.img pair's"
+                    .into()
+            } else {
+                "the magic \"ni1\" says a .hdr/.img pair, but the name ends with .nii: rename \
+                 it .hdr and put the voxels in a .img next to it"
+                    .into()
+            },
+        });
+    }
+    let lay = layout(&hdr_path, &h, single)?;
+    let dbytes = if single {
+        hbytes
+    } else {
+        read_bytes(&img_path)?
+    };
+    let n = lay.dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+    let need = n.and_then(|n| n.checked_mul(lay.dtype.size()));
+    let avail = dbytes.len().saturating_sub(lay.offset);
+    let (Some(n), Some(need)) = (n, need) else {
+        return Err(ImageError::TooLarge {
+            n: usize::MAX,
+            max: usize::MAX / 8,
+        });
+    };
+    if lay.offset > dbytes.len() || avail < need {
+        return Err(ImageError::Truncated {
+            path: img_path,
             detail: format!(
-                "the voxel data has {} bytes, {n} voxels of {dtype} need {}",
-                raw.len(),
-                n * dtype.size()
+                "the voxel data after vox_offset {} has {avail} bytes, {n} voxels of {} need \
+                 {need}",
+                lay.offset, lay.dtype
             ),
         });
     }
-    let voxels = if dtype == Dtype::U8 && raw.len() == n {
-        Voxels::U8(raw)
+    if avail > need {
+        return Err(ImageError::DataLength {
+            path: img_path,
+            offset: lay.offset as u64,
+            expected: need as u64,
+            actual: avail as u64,
+        });
+    }
+    let (slope, inter) = scaling(&hdr_path, &h)?;
+    let (affine, field) = checked_affine(&hdr_path, &h)?;
+    let big = h.endianness == nifti::Endianness::Big;
+    let voxels = if lay.dtype == Dtype::U8 {
+        let mut d = dbytes;
+        d.drain(..lay.offset);
+        Voxels::U8(d)
     } else {
-        Voxels::from_bytes(dtype, &raw[..n * dtype.size()], big)
+        Voxels::from_bytes(lay.dtype, &dbytes[lay.offset..], big)
     };
-    let (affine, field) = nifti_affine(&h);
-    check_affine(&affine, Some(path), field)?;
-    let vol = Volume::new(dims, voxels, affine)?
-        .with_scaling(h.scl_slope as f64, h.scl_inter as f64)
+    check_affine(&affine, Some(&hdr_path), field)?;
+    let vol = Volume::new(lay.dims, voxels, affine)?
+        .with_scaling(slope, inter)
         .with_source(path);
     Ok(vol)
 }

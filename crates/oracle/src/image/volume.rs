@@ -1,7 +1,8 @@
-//! Voxel storage in the native type, with a voxel-to-world affine.
+//! Voxel storage in the native type, with a voxel-to-world affine (ours: the image backend's
+//! data; section 6.6.2 meshes its level sets).
 
 use super::ImageError;
-use glam::{DAffine3, DVec3};
+use glam::{DAffine3, DMat3, DVec3};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -210,7 +211,8 @@ pub struct Stats {
 /// A 3D scalar image: native voxels, dims, voxel-to-world affine and intensity scaling.
 ///
 /// Invariants (checked by [`Volume::new`]): `voxels.len() == dims[0] * dims[1] * dims[2]`,
-/// every dim is at least 1, the affine is finite and invertible, `slope` is finite and non-zero.
+/// every dim is at least 1, the affine is finite, invertible and within the limits of
+/// [`check_affine`] (voxel sizes, anisotropy, offset), `slope` is finite and non-zero.
 /// The world position of voxel `(i, j, k)` (its centre) is `affine.transform_point3((i, j, k))`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Volume {
@@ -224,7 +226,7 @@ pub struct Volume {
 
 impl Volume {
     /// A volume with identity scaling. Errors if the length does not match the dims, a dim is
-    /// zero, or the affine is singular or not finite.
+    /// zero, or the affine is singular, not finite or outside the limits of [`check_affine`].
     pub fn new(dims: [usize; 3], voxels: Voxels, affine: DAffine3) -> Result<Volume, ImageError> {
         let n = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
         if dims.contains(&0) {
@@ -481,23 +483,87 @@ fn hist(it: impl Iterator<Item = usize>, n: usize) -> Vec<usize> {
     h
 }
 
-/// Check that an affine is finite and invertible; `field` names its origin for the message.
+/// Smallest and largest voxel size (length of an affine column, in world units).
+pub(crate) const MIN_VOXEL_SIZE: f64 = 1e-12;
+pub(crate) const MAX_VOXEL_SIZE: f64 = 1e12;
+/// Largest anisotropy of a voxel: `‖M‖_F ‖M⁻¹‖_F / 3` of the affine's matrix `M` (1 for a
+/// cube, about the ratio of the longest to the shortest voxel axis otherwise).
+pub(crate) const MAX_ANISOTROPY: f64 = 1e6;
+/// Largest distance of the world origin from the grid, in voxels (`‖t‖_∞ / smallest size`).
+pub(crate) const MAX_OFFSET_VOXELS: f64 = 1e12;
+
+/// Check that an affine is usable; `field` names its origin for the message. The limits keep
+/// every coordinate the mesher computes far inside what `f64` and the exact predicates
+/// represent (world coordinates within about `1e12 * 1e12`, voxel coordinates of the
+/// region around the grid below `1e13`, several digits of sub-voxel precision):
+/// - every entry finite and the determinant not 0 (nor below `1e-12` of the product of the
+///   column lengths, i.e. not numerically singular);
+/// - each voxel size (column length) in [[`MIN_VOXEL_SIZE`], [`MAX_VOXEL_SIZE`]];
+/// - the anisotropy at most [`MAX_ANISOTROPY`];
+/// - the translation at most [`MAX_OFFSET_VOXELS`] voxel sizes from the origin.
 pub(crate) fn check_affine(
     a: &DAffine3,
     path: Option<&std::path::Path>,
     field: &str,
 ) -> Result<(), ImageError> {
+    let bad = |detail: String| {
+        let fix = if path.is_some() && field != "affine" {
+            "fix the header's transform (e.g. with nibabel)"
+        } else {
+            "check the transform (for a slice stack or raw volume: --spacing)"
+        };
+        Err(ImageError::BadAffine {
+            path: path.map(|p| p.to_path_buf()),
+            field: field.to_string(),
+            detail: format!("{detail}; {fix}"),
+        })
+    };
     let m = a.matrix3;
     let finite = a.translation.is_finite() && m.x_axis.is_finite() && m.y_axis.is_finite();
     let finite = finite && m.z_axis.is_finite();
+    let sizes = [m.x_axis.length(), m.y_axis.length(), m.z_axis.length()];
+    if !finite {
+        return bad(format!(
+            "an entry is NaN or infinite (voxel axes {:?}, translation {:?})",
+            m.to_cols_array(),
+            a.translation.to_array()
+        ));
+    }
     let det = m.determinant();
-    let scale = m.x_axis.length() * m.y_axis.length() * m.z_axis.length();
-    if !finite || !(det.abs() > 1e-12 * scale) || !(scale > 0.0) {
-        return Err(ImageError::BadAffine {
-            path: path.map(|p| p.to_path_buf()),
-            field: field.to_string(),
-            detail: format!("matrix {:?}, determinant {det}", m.to_cols_array()),
-        });
+    let scale = sizes[0] * sizes[1] * sizes[2];
+    if !(det.abs() > 1e-12 * scale) || !(scale > 0.0) {
+        return bad(format!(
+            "the determinant is {det} (voxel sizes {sizes:?}): the voxel axes are \
+             (nearly) linearly dependent"
+        ));
+    }
+    if let Some(s) = sizes
+        .iter()
+        .find(|s| !(**s >= MIN_VOXEL_SIZE && **s <= MAX_VOXEL_SIZE))
+    {
+        return bad(format!(
+            "a voxel size is {s:e} (sizes {sizes:?}); voxel sizes must be within \
+             [{MIN_VOXEL_SIZE:e}, {MAX_VOXEL_SIZE:e}] world units"
+        ));
+    }
+    let frob = |m: DMat3| {
+        (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
+    };
+    let aniso = frob(m) * frob(m.inverse()) / 3.0;
+    if !(aniso <= MAX_ANISOTROPY) {
+        return bad(format!(
+            "the voxels are about {aniso:.3e} times longer in one direction than in another \
+             (sizes {sizes:?}); at most {MAX_ANISOTROPY:e} is supported"
+        ));
+    }
+    let smallest = sizes.iter().fold(f64::INFINITY, |x, &y| x.min(y));
+    let off = a.translation.abs().max_element() / smallest;
+    if !(off <= MAX_OFFSET_VOXELS) {
+        return bad(format!(
+            "the translation {:?} puts the grid {off:.3e} voxels from the origin; at most \
+             {MAX_OFFSET_VOXELS:e} keeps sub-voxel precision",
+            a.translation.to_array()
+        ));
     }
     Ok(())
 }
