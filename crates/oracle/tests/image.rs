@@ -1326,3 +1326,375 @@ fn normal_uncertainty_from_integer_rounding() {
     assert!((got - expect).abs() < 1e-6, "{got} vs {expect}");
     assert_eq!(s32.normal_uncertainty_deg(p), 0.0);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Issue 17: strict NIfTI-1 reading. Each case is a file built as bytes here (a valid 8^3 u8 ball
+// written by `write_nifti`, then patched); each was accepted (or misread) before.
+
+mod strict_nifti {
+    use super::*;
+    use std::io::Write;
+
+    /// A binary ball on 8^3 u8 voxels, identity sform centred on the grid (nibabel reads one
+    /// centred ball).
+    fn ball() -> Volume {
+        let aff = DAffine3::from_translation(DVec3::splat(-3.5));
+        let v: Vec<u8> = (0..512)
+            .map(|i| {
+                let p = DVec3::new((i % 8) as f64, (i / 8 % 8) as f64, (i / 64) as f64);
+                u8::from((p - DVec3::splat(3.5)).length() <= 3.2)
+            })
+            .collect();
+        Volume::new([8; 3], Voxels::U8(v), aff).unwrap()
+    }
+
+    /// The bytes of `ball()` as a single-file NIfTI-1 (little endian, vox_offset 352).
+    fn ball_bytes() -> Vec<u8> {
+        let p = tmpdir("strict-src").join("ball.nii");
+        write_nifti(&p, &ball(), &NiftiWriteOptions::new()).unwrap();
+        std::fs::read(p).unwrap()
+    }
+
+    fn put_f32(b: &mut [u8], off: usize, v: f32) {
+        b[off..off + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    fn put_i16(b: &mut [u8], off: usize, v: i16) {
+        b[off..off + 2].copy_from_slice(&v.to_le_bytes());
+    }
+
+    fn gz(data: &[u8], level: flate2::Compression) -> Vec<u8> {
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), level);
+        e.write_all(data).unwrap();
+        e.finish().unwrap()
+    }
+
+    /// Read `bytes` saved as `name`.
+    fn read(name: &str, bytes: &[u8]) -> Result<Volume, ImageError> {
+        let p = tmpdir(&format!("strict-{name}")).join(name);
+        std::fs::write(&p, bytes).unwrap();
+        read_nifti(&p)
+    }
+
+    fn err(name: &str, bytes: &[u8]) -> (ImageError, String) {
+        let e = read(name, bytes).expect_err(name);
+        let s = e.to_string();
+        assert!(s.contains(name), "names the file: {s}");
+        assert!(
+            !s.contains("NIfTI-2"),
+            "a NIfTI-1 error does not mention NIfTI-2: {s}"
+        );
+        (e, s)
+    }
+
+    fn bad_field(name: &str, bytes: &[u8], field: &str) -> String {
+        let (e, s) = err(name, bytes);
+        match &e {
+            ImageError::BadHeader { field: f, .. } => assert_eq!(f, field, "{s}"),
+            _ => panic!("{name}: expected a BadHeader error on {field}, got {s}"),
+        }
+        assert!(s.contains(&format!("header field {field} ")), "{s}");
+        s
+    }
+
+    #[test]
+    fn the_valid_ball_reads_back() {
+        let v = read("ok.nii", &ball_bytes()).unwrap();
+        assert_eq!(v.voxels(), ball().voxels());
+        assert_eq!(v.affine(), ball().affine());
+    }
+
+    #[test]
+    fn vox_offset_1024_is_honoured() {
+        let b = ball_bytes();
+        let mut c = b[..352].to_vec();
+        put_f32(&mut c, 108, 1024.0);
+        c.resize(1024, 0);
+        c.extend_from_slice(&b[352..]);
+        let v = read("off1024.nii", &c).unwrap();
+        assert_eq!(
+            v.voxels(),
+            ball().voxels(),
+            "the voxels start at vox_offset"
+        );
+        let s = ImageSurface::new(v, &ImageOptions::default()).unwrap();
+        assert_eq!(s.component_count(), 1, "one centred ball");
+        assert!(s.value(DVec3::ZERO) < 0.0);
+        // Gzipped too.
+        let v = read("off1024.nii.gz", &gz(&c, flate2::Compression::default())).unwrap();
+        assert_eq!(v.voxels(), ball().voxels());
+    }
+
+    #[test]
+    fn bad_vox_offsets_are_rejected() {
+        for (v, name) in [
+            (1e9f32, "off1e9.nii"),
+            (-100.0, "offneg.nii"),
+            (f32::NAN, "offnan.nii"),
+            (352.5, "offhalf.nii"),
+            (0.0, "off0.nii"),
+            (348.0, "off348.nii"),
+        ] {
+            let mut b = ball_bytes();
+            put_f32(&mut b, 108, v);
+            if v == 1e9 {
+                let (e, s) = err(name, &b);
+                assert!(matches!(e, ImageError::Truncated { .. }), "{s}");
+                assert!(s.contains("after vox_offset 1000000000 has 0 bytes"), "{s}");
+            } else {
+                let s = bad_field(name, &b, "vox_offset");
+                assert!(s.contains("at least 352"), "{s}");
+            }
+        }
+    }
+
+    #[test]
+    fn data_length_must_match_dims_and_datatype() {
+        let mut b = ball_bytes();
+        b.extend_from_slice(&[1, 2, 3]);
+        let (e, s) = err("long.nii", &b);
+        assert!(
+            matches!(
+                e,
+                ImageError::DataLength {
+                    expected: 512,
+                    actual: 515,
+                    ..
+                }
+            ),
+            "{s}"
+        );
+        b.truncate(352 + 511);
+        let (e, s) = err("short.nii", &b);
+        assert!(matches!(e, ImageError::Truncated { .. }), "{s}");
+        assert!(
+            s.contains("has 511 bytes, 512 voxels of u8 need 512"),
+            "{s}"
+        );
+    }
+
+    #[test]
+    fn gzip_checksum_and_length_errors_are_detected() {
+        let b = ball_bytes();
+        // Stored (uncompressed) blocks: zero voxel bytes inside the block; the CRC-32 differs.
+        let mut z = gz(&b, flate2::Compression::none());
+        // One stored block: 10 bytes of gzip header, 5 of block header, then the file.
+        let first_one = 352 + b[352..].iter().position(|&x| x == 1).unwrap();
+        let at = 15 + first_one;
+        assert_eq!(z[at..at + 8], b[first_one..first_one + 8]);
+        assert!(z[at..at + 8].iter().any(|&x| x != 0));
+        z[at..at + 8].fill(0);
+        let (e, s) = err("zeroed.nii.gz", &z);
+        assert!(matches!(e, ImageError::CorruptGzip { .. }), "{s}");
+        // A wrong ISIZE (length modulo 2^32) in the trailer.
+        let mut z = gz(&b, flate2::Compression::default());
+        let n = z.len();
+        z[n - 4] ^= 1;
+        let (e, s) = err("isize.nii.gz", &z);
+        assert!(matches!(e, ImageError::CorruptGzip { .. }), "{s}");
+        // A corrupt deflate stream is corrupt, not truncated.
+        let mut z = gz(&b, flate2::Compression::default());
+        z[10] = 0xff; // the first block header: an invalid block type
+        let (e, s) = err("deflate.nii.gz", &z);
+        assert!(matches!(e, ImageError::CorruptGzip { .. }), "{s}");
+        assert!(!s.contains("truncated"), "{s}");
+        // Trailing garbage after the stream.
+        let mut z = gz(&b, flate2::Compression::default());
+        z.extend_from_slice(b"garbage");
+        let (e, s) = err("trailing.nii.gz", &z);
+        assert!(matches!(e, ImageError::CorruptGzip { .. }), "{s}");
+        assert!(s.contains("7 bytes of trailing garbage"), "{s}");
+        // A stream cut short is truncated.
+        let z = gz(&b, flate2::Compression::default());
+        let (e, s) = err("cut.nii.gz", &z[..z.len() - 5]);
+        assert!(matches!(e, ImageError::Truncated { .. }), "{s}");
+        // Valid: zero padding after the stream, and two concatenated members.
+        let mut z = gz(&b, flate2::Compression::default());
+        z.extend_from_slice(&[0; 16]);
+        assert_eq!(read("pad.nii.gz", &z).unwrap().voxels(), ball().voxels());
+        let mut z = gz(&b[..400], flate2::Compression::default());
+        z.extend_from_slice(&gz(&b[400..], flate2::Compression::best()));
+        assert_eq!(read("two.nii.gz", &z).unwrap().voxels(), ball().voxels());
+    }
+
+    /// The ball without an sform (`sform_code = 0`), with the given pixdim and qform code.
+    fn no_sform(pixdim: [f32; 3], qform: bool) -> Vec<u8> {
+        let mut b = ball_bytes();
+        put_i16(&mut b, 254, 0);
+        put_i16(&mut b, 252, i16::from(qform));
+        for (i, p) in pixdim.iter().enumerate() {
+            put_f32(&mut b, 80 + 4 * i, *p);
+        }
+        b
+    }
+
+    #[test]
+    fn pixdim_zero_nan_or_inf_is_rejected_when_the_transform_uses_it() {
+        for qform in [false, true] {
+            for (k, d) in [0.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY]
+                .iter()
+                .enumerate()
+            {
+                let mut px = [1.0f32; 3];
+                px[k % 3] = *d;
+                let s = bad_field(
+                    &format!("pix{k}{qform}.nii"),
+                    &no_sform(px, qform),
+                    &format!("pixdim[{}]", k % 3 + 1),
+                );
+                assert!(s.contains("finite non-zero"), "{s}");
+            }
+        }
+        // With an sform, pixdim is not used (nibabel reads such a file with its sform).
+        let mut b = ball_bytes();
+        put_f32(&mut b, 80, 0.0);
+        assert_eq!(read("pix_sform.nii", &b).unwrap().affine(), ball().affine());
+    }
+
+    #[test]
+    fn negative_pixdim_does_not_mirror_with_a_qform() {
+        // nibabel: pixdim[1..4] -> |pixdim|, so (-2, 1, 1) and (2, 1, 1) give the same qform.
+        let neg = read("qneg.nii", &no_sform([-2.0, 1.0, 1.0], true)).unwrap();
+        let pos = read("qpos.nii", &no_sform([2.0, 1.0, 1.0], true)).unwrap();
+        assert_eq!(neg.affine(), pos.affine());
+        assert!(neg.affine().matrix3.determinant() > 0.0);
+        // qfac = pixdim[0] flips z only when it is -1 (nibabel resets other values to 1).
+        let mut b = no_sform([1.0; 3], true);
+        put_f32(&mut b, 76, -0.5);
+        assert_eq!(read("qfac.nii", &b).unwrap().affine(), DAffine3::IDENTITY);
+        put_f32(&mut b, 76, -1.0);
+        let flipped = read("qfac1.nii", &b).unwrap().affine();
+        assert_eq!(flipped.matrix3.z_axis, DVec3::new(0.0, 0.0, -1.0));
+    }
+
+    #[test]
+    fn a_non_unit_quaternion_is_rejected() {
+        let mut b = no_sform([1.0; 3], true);
+        put_f32(&mut b, 256, 0.9);
+        put_f32(&mut b, 260, 0.9);
+        let s = bad_field("quat.nii", &b, "quatern_b/c/d");
+        assert!(s.contains("exceeds 1"), "{s}");
+    }
+
+    #[test]
+    fn wrong_sizeof_hdr_is_rejected_and_nifti2_named() {
+        for v in [349i32, 0, 348 * 256] {
+            let mut b = ball_bytes();
+            b[..4].copy_from_slice(&v.to_le_bytes());
+            let s = bad_field("sizeof.nii", &b, "sizeof_hdr");
+            assert!(s.contains("a NIfTI-1 header has 348"), "{s}");
+        }
+        let mut b = ball_bytes();
+        b[..4].copy_from_slice(&540i32.to_le_bytes());
+        let e = read("nifti2.nii", &b).unwrap_err();
+        assert!(matches!(e, ImageError::Nifti2 { .. }), "{e}");
+        assert!(e.to_string().contains("only NIfTI-1 is supported"), "{e}");
+    }
+
+    #[test]
+    fn infinite_scaling_is_rejected_and_slope_0_or_nan_means_none() {
+        let mut b = ball_bytes();
+        put_f32(&mut b, 112, f32::INFINITY);
+        bad_field("slope.nii", &b, "scl_slope");
+        put_f32(&mut b, 112, f32::NEG_INFINITY);
+        bad_field("slope2.nii", &b, "scl_slope");
+        put_f32(&mut b, 112, 2.0);
+        put_f32(&mut b, 116, f32::INFINITY);
+        bad_field("inter.nii", &b, "scl_inter");
+        put_f32(&mut b, 116, f32::NAN);
+        bad_field("inter2.nii", &b, "scl_inter");
+        for slope in [0.0, f32::NAN] {
+            put_f32(&mut b, 112, slope);
+            put_f32(&mut b, 116, 5.0);
+            assert_eq!(read("none.nii", &b).unwrap().scaling(), (1.0, 0.0));
+        }
+        put_f32(&mut b, 112, 2.0);
+        put_f32(&mut b, 116, -1.0);
+        assert_eq!(read("scaled.nii", &b).unwrap().scaling(), (2.0, -1.0));
+    }
+
+    #[test]
+    fn dim_errors_name_the_right_field() {
+        let mut b = ball_bytes();
+        put_i16(&mut b, 42, 0); // dim[1] = 0
+        let s = bad_field("dim1.nii", &b, "dim[1]");
+        assert!(
+            s.contains("dim[1] = 0: every dimension must be at least 1"),
+            "{s}"
+        );
+        assert!(!s.contains("dim[0]"), "{s}");
+        let mut b = ball_bytes();
+        put_i16(&mut b, 44, -3); // dim[2] = -3
+        bad_field("dim2.nii", &b, "dim[2]");
+        let mut b = ball_bytes();
+        put_i16(&mut b, 40, 0); // dim[0] = 0
+        bad_field("dim0.nii", &b, "dim[0]");
+        // A 1x1x1 volume is a single voxel, not "a 2D image".
+        let one = Volume::new([1; 3], Voxels::U8(vec![1]), DAffine3::IDENTITY).unwrap();
+        let p = tmpdir("strict-one").join("one.nii");
+        write_nifti(&p, &one, &NiftiWriteOptions::new()).unwrap();
+        let s = read_nifti(&p).unwrap_err().to_string();
+        assert!(s.contains("is a single voxel, not a volume"), "{s}");
+        assert!(!s.contains("2D image"), "{s}");
+    }
+
+    #[test]
+    fn garbage_is_named_without_nifti2() {
+        let (e, s) = err("garbage.nii", &[7u8; 400]);
+        assert!(matches!(e, ImageError::Nifti { .. }), "{s}");
+        assert!(s.contains("the magic (bytes 344-347)"), "{s}");
+        let (e, s) = err("short_header.nii", &[0u8; 20]);
+        assert!(matches!(e, ImageError::Truncated { .. }), "{s}");
+    }
+
+    /// The ball with these sform rows.
+    fn with_sform(rows: [[f32; 4]; 3]) -> Vec<u8> {
+        let mut b = ball_bytes();
+        for (r, row) in rows.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                put_f32(&mut b, 280 + 16 * r + 4 * c, *v);
+            }
+        }
+        b
+    }
+
+    #[test]
+    fn huge_or_degenerate_sforms_are_rejected_at_load() {
+        let id = |sx: f32, t: f32| {
+            [
+                [sx, 0.0, 0.0, t],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+            ]
+        };
+        for (name, rows, want) in [
+            ("x1e20.nii", id(1e20, 0.0), "a voxel size is 1.00000002"),
+            ("srow38.nii", id(3.4e38, 0.0), "a voxel size is 3.39"),
+            ("srow30.nii", id(1e30, 0.0), "a voxel size is 1"),
+            ("aniso.nii", id(1e7, 0.0), "times longer in one direction"),
+            ("tiny.nii", id(1e-13, 0.0), "a voxel size is 9.99"),
+            ("far.nii", id(1.0, 1e15), "voxels from the origin"),
+            ("inf.nii", id(f32::INFINITY, 0.0), "NaN or infinite"),
+            ("det0.nii", id(0.0, 0.0), "the determinant is 0"),
+        ] {
+            let (e, s) = err(name, &with_sform(rows));
+            assert!(matches!(e, ImageError::BadAffine { .. }), "{s}");
+            assert!(
+                s.contains("sform (srow_x/y/z)") && s.contains(want),
+                "{name}: {s}"
+            );
+            assert!(s.contains("fix the header's transform"), "{s}");
+        }
+        // Within the limits: read (the mesher's budget, not the reader, bounds the work).
+        for sx in [1e4f32, 1e-6, 1e6] {
+            read("okaniso.nii", &with_sform(id(sx, 0.0))).unwrap();
+        }
+        // The same limits apply to every loader (here a raw volume's spacing).
+        let e = Volume::new(
+            [2; 3],
+            Voxels::U8(vec![0; 8]),
+            DAffine3::from_scale(DVec3::new(1e20, 1.0, 1.0)),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("--spacing"), "{e}");
+    }
+}
