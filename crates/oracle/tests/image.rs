@@ -1671,6 +1671,7 @@ mod strict_nifti {
             ("srow38.nii", id(3.4e38, 0.0), "a voxel size is 3.39"),
             ("srow30.nii", id(1e30, 0.0), "a voxel size is 1"),
             ("aniso.nii", id(1e7, 0.0), "times longer in one direction"),
+            ("aniso6.nii", id(1e6, 0.0), "times longer in one direction"),
             ("tiny.nii", id(1e-13, 0.0), "a voxel size is 9.99"),
             ("far.nii", id(1.0, 1e15), "voxels from the origin"),
             ("inf.nii", id(f32::INFINITY, 0.0), "NaN or infinite"),
@@ -1685,7 +1686,7 @@ mod strict_nifti {
             assert!(s.contains("fix the header's transform"), "{s}");
         }
         // Within the limits: read (the mesher's budget, not the reader, bounds the work).
-        for sx in [1e4f32, 1e-6, 1e6] {
+        for sx in [1e4f32, 1e-2] {
             read("okaniso.nii", &with_sform(id(sx, 0.0))).unwrap();
         }
         // The same limits apply to every loader (here a raw volume's spacing).

@@ -488,7 +488,7 @@ pub(crate) const MIN_VOXEL_SIZE: f64 = 1e-12;
 pub(crate) const MAX_VOXEL_SIZE: f64 = 1e12;
 /// Largest anisotropy of a voxel: `‖M‖_F ‖M⁻¹‖_F / 3` of the affine's matrix `M` (1 for a
 /// cube, about the ratio of the longest to the shortest voxel axis otherwise).
-pub(crate) const MAX_ANISOTROPY: f64 = 1e6;
+pub(crate) const MAX_ANISOTROPY: f64 = 1e4;
 /// Largest distance of the world origin from the grid, in voxels (`‖t‖_∞ / smallest size`).
 pub(crate) const MAX_OFFSET_VOXELS: f64 = 1e12;
 
