@@ -1350,7 +1350,10 @@ mod strict_nifti {
 
     /// The bytes of `ball()` as a single-file NIfTI-1 (little endian, vox_offset 352).
     fn ball_bytes() -> Vec<u8> {
-        let p = tmpdir("strict-src").join("ball.nii");
+        // One folder per call: tests run in parallel and `tmpdir` empties its folder.
+        static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let k = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let p = tmpdir(&format!("strict-src{k}")).join("ball.nii");
         write_nifti(&p, &ball(), &NiftiWriteOptions::new()).unwrap();
         std::fs::read(p).unwrap()
     }
