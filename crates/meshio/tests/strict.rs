@@ -238,7 +238,7 @@ fn stl_ascii_facets_with_other_than_3_vertices_are_rejected() {
         "{s}"
     );
     let two = STL_FACET.replace("vertex 0 1 0\n", "");
-    let s = err("two.stl", &stl(&two));
+    let s = err("two_vertices.stl", &stl(&two));
     assert!(
         s.contains("line 6: facet 0: expected 'vertex x y z'"),
         "{s}"
