@@ -103,21 +103,7 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         }
     }
     crate::check_vertex_coords(path, &vertices)?;
-    for (k, what) in ["texture (vt)", "normal (vn)"].into_iter().enumerate() {
-        if let Some((line, i, _)) = refs[k]
-            .iter()
-            .find(|(_, _, r)| *r < 0 || *r as usize >= counts[k])
-        {
-            return Err(bad(
-                *line,
-                format!(
-                    "a face corner refers to {what} index {i}, which does not exist ({} such \
-                     lines in the file)",
-                    counts[k]
-                ),
-            ));
-        }
-    }
+    check_refs(&refs, counts).map_err(|(line, what)| bad(line, what))?;
     let mut fb = FaceBuilder::default();
     for p in &polygons {
         fb.push_polygon(p, vertices.len()).map_err(|source| {
@@ -144,6 +130,30 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         vertices,
         triangles: fb.triangles,
     })
+}
+
+/// Check that every texture / normal reference `(line, index as written, 0-based index)`
+/// names an existing `vt` / `vn` line; on failure, the line and the message.
+fn check_refs(
+    refs: &[Vec<(usize, i64, i64)>; 2],
+    counts: [usize; 2],
+) -> Result<(), (usize, String)> {
+    for (k, what) in ["texture (vt)", "normal (vn)"].into_iter().enumerate() {
+        if let Some((line, i, _)) = refs[k]
+            .iter()
+            .find(|(_, _, r)| *r < 0 || *r as usize >= counts[k])
+        {
+            return Err((
+                *line,
+                format!(
+                    "a face corner refers to {what} index {i}, which does not exist ({} such \
+                     lines in the file)",
+                    counts[k]
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `i`, `i/t`, `i//n` or `i/t/n` as (i, t, n), every index a non-zero integer.
