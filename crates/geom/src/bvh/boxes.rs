@@ -1,0 +1,189 @@
+//! The box BVH (ours): items known by their boxes only (e.g. points as degenerate boxes),
+//! over the shared median split of their box centres.
+
+use glam::DVec3;
+
+use super::{Aabb, split};
+
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    bounds: Aabb,
+    /// Leaf: first index into `items`; inner: index of the left child (right = left + 1).
+    first: u32,
+    /// Leaf: number of items (> 0); inner: 0.
+    count: u32,
+}
+
+/// A BVH over item boxes; items are identified by their index in the input.
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    items: Vec<u32>,
+    boxes: Vec<Aabb>,
+}
+
+impl Bvh {
+    /// Build over `boxes` (item `i` has box `boxes[i]`).
+    pub fn new(boxes: Vec<Aabb>) -> Bvh {
+        let centers: Vec<DVec3> = boxes.iter().map(Aabb::center).collect();
+        let s = split(&centers);
+        let mut nodes: Vec<Node> = s
+            .nodes
+            .iter()
+            .map(|&[first, count]| Node {
+                bounds: Aabb::EMPTY,
+                first,
+                count,
+            })
+            .collect();
+        // Children have larger indices than their parent: fill bounds bottom-up.
+        for ni in (0..nodes.len()).rev() {
+            let Node { first, count, .. } = nodes[ni];
+            nodes[ni].bounds = if count > 0 {
+                s.order[first as usize..(first + count) as usize]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, &i| b.union(boxes[i as usize]))
+            } else {
+                nodes[first as usize]
+                    .bounds
+                    .union(nodes[first as usize + 1].bounds)
+            };
+        }
+        Bvh {
+            nodes,
+            items: s.order,
+            boxes,
+        }
+    }
+
+    /// Number of items.
+    pub fn len(&self) -> usize {
+        self.boxes.len()
+    }
+    /// No items.
+    pub fn is_empty(&self) -> bool {
+        self.boxes.is_empty()
+    }
+    /// Box of item `i`.
+    pub fn item_box(&self, i: u32) -> Aabb {
+        self.boxes[i as usize]
+    }
+
+    /// Call `f(i)` for every item whose box overlaps `query` (closed boxes).
+    pub fn for_each_overlap(&self, query: &Aabb, mut f: impl FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = Vec::with_capacity(64);
+        stack.push(0u32);
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            if !node.bounds.overlaps(query) {
+                continue;
+            }
+            if node.count > 0 {
+                for &i in &self.items[node.first as usize..(node.first + node.count) as usize] {
+                    if self.boxes[i as usize].overlaps(query) {
+                        f(i);
+                    }
+                }
+            } else {
+                stack.push(node.first);
+                stack.push(node.first + 1);
+            }
+        }
+    }
+
+    /// The item minimising `dist2(i)` (a squared distance from `p` that is at least the
+    /// squared distance from `p` to the item's box), with that value. Exact branch and bound:
+    /// ties go to the smaller item index. `None` for an empty tree.
+    pub fn nearest(&self, p: DVec3, dist2: impl Fn(u32) -> f64) -> Option<(u32, f64)> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let mut best: Option<(u32, f64)> = None;
+        let mut stack: Vec<(f64, u32)> = Vec::with_capacity(64);
+        stack.push((self.nodes[0].bounds.distance_squared(p), 0));
+        while let Some((d, n)) = stack.pop() {
+            if let Some((_, bd)) = best
+                && d > bd
+            {
+                continue;
+            }
+            let node = &self.nodes[n as usize];
+            if node.count > 0 {
+                for &i in &self.items[node.first as usize..(node.first + node.count) as usize] {
+                    if let Some((_, bd)) = best
+                        && self.boxes[i as usize].distance_squared(p) > bd
+                    {
+                        continue;
+                    }
+                    let di = dist2(i);
+                    best = match best {
+                        Some((bi, bd)) if bd < di || (bd == di && bi < i) => Some((bi, bd)),
+                        _ => Some((i, di)),
+                    };
+                }
+            } else {
+                let (l, r) = (node.first, node.first + 1);
+                let dl = self.nodes[l as usize].bounds.distance_squared(p);
+                let dr = self.nodes[r as usize].bounds.distance_squared(p);
+                // Visit the nearer child first (pushed last).
+                if dl <= dr {
+                    stack.push((dr, r));
+                    stack.push((dl, l));
+                } else {
+                    stack.push((dl, l));
+                    stack.push((dr, r));
+                }
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SplitMix64;
+
+    #[test]
+    fn overlap_and_nearest_match_brute_force() {
+        let mut r = SplitMix64(7);
+        let mut u = || r.next_f64();
+        let pts: Vec<DVec3> = (0..500).map(|_| DVec3::new(u(), u(), u())).collect();
+        let boxes: Vec<Aabb> = pts
+            .iter()
+            .map(|&p| Aabb {
+                min: p,
+                max: p + DVec3::splat(0.02 * u()),
+            })
+            .collect();
+        let bvh = Bvh::new(boxes.clone());
+        assert_eq!(bvh.len(), 500);
+        for _ in 0..50 {
+            let q = DVec3::new(u(), u(), u()) * 1.2 - 0.1;
+            let qb = Aabb {
+                min: q,
+                max: q + DVec3::splat(0.1),
+            };
+            let mut got = Vec::new();
+            bvh.for_each_overlap(&qb, |i| got.push(i));
+            got.sort();
+            let want: Vec<u32> = (0..500u32)
+                .filter(|&i| boxes[i as usize].overlaps(&qb))
+                .collect();
+            assert_eq!(got, want);
+            let (i, d) = bvh
+                .nearest(q, |i| boxes[i as usize].distance_squared(q))
+                .unwrap();
+            let bd = boxes
+                .iter()
+                .map(|b| b.distance_squared(q))
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(d, bd);
+            assert_eq!(boxes[i as usize].distance_squared(q), bd);
+        }
+        assert!(Bvh::new(Vec::new()).nearest(DVec3::ZERO, |_| 0.0).is_none());
+    }
+}
