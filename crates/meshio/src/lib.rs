@@ -30,6 +30,9 @@ mod obj;
 mod off;
 mod ply;
 mod stl;
+pub mod xyz;
+
+pub use xyz::{XyzError, read_xyz, read_xyz_from};
 
 /// An indexed triangle mesh. Invariant (when produced by the mesher): every index is
 /// `< vertices.len()`; triangles are counter-clockwise seen from outside.
@@ -39,10 +42,16 @@ pub struct TriMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// A point set, with normals if the file has `nx ny nz` for every point.
+/// A point set, with normals if the file has `nx ny nz` for every point: the one point-cloud
+/// type of the workspace (read by [`read_point_cloud`] and [`read_xyz`], consumed by
+/// `oracle::pointset`, which re-exports it). It lives here, next to [`TriMesh`], as the data
+/// the readers return; the kernel crate `geom` stays free of I/O types.
+/// Invariant: `normals`, when present, has one entry per point.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PointCloud {
+    /// The points.
     pub points: Vec<DVec3>,
+    /// One normal per point, if the input had them (not necessarily unit length).
     pub normals: Option<Vec<DVec3>>,
 }
 

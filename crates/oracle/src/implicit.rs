@@ -508,39 +508,12 @@ pub fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
 
 /// Greedy farthest-point selection of up to `k` points of `pool`, away from `fixed` and from each
 /// other, stopping when the next point would be closer than `min_sep` (duplicates). Ties go to
-/// the lowest index: deterministic.
+/// the lowest index: deterministic ([`geom::farthest::farthest_points`]).
 fn farthest_points(fixed: &[DVec3], pool: &[DVec3], k: usize, min_sep: f64) -> Vec<DVec3> {
-    let mut out = Vec::new();
-    if pool.is_empty() || k == 0 {
-        return out;
-    }
-    let mut d2: Vec<f64> = pool
-        .iter()
-        .map(|p| {
-            fixed
-                .iter()
-                .map(|q| (*p - *q).length_squared())
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    let sep2 = min_sep * min_sep;
-    while out.len() < k {
-        let mut best = 0;
-        for i in 1..pool.len() {
-            if d2[i] > d2[best] {
-                best = i;
-            }
-        }
-        if d2[best] <= sep2 {
-            break;
-        }
-        let q = pool[best];
-        out.push(q);
-        for (p, d) in pool.iter().zip(d2.iter_mut()) {
-            *d = d.min((*p - q).length_squared());
-        }
-    }
-    out
+    geom::farthest::farthest_points(fixed, pool, k, Some(min_sep))
+        .into_iter()
+        .map(|i| pool[i])
+        .collect()
 }
 
 /// Values of `f` on a regular grid of `(n+1)^3` vertices over the ball's bounding cube;

@@ -53,8 +53,8 @@ mod levels;
 mod mesher;
 mod options;
 mod output;
-mod queue;
 pub mod pipeline;
+mod queue;
 mod restricted;
 mod schedule;
 // The sizing module is being reworked (issue 13, another branch); its docs follow there.

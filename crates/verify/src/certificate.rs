@@ -9,35 +9,14 @@ use serde::Serialize;
 
 use crate::distance::MeshDistance;
 
-/// A surface Delaunay ball of a restricted facet: centred on S, through the facet's vertices.
-#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
-pub struct SurfaceBall {
-    pub facet: usize,
-    pub center: DVec3,
-    pub radius: f64,
-}
-
-impl SurfaceBall {
-    /// Balls given as (center, radius) in facet order: ball `i` belongs to triangle `i` (the
-    /// form in which a mesher such as `rdt_mesher` reports them).
-    ///
-    /// ```
-    /// use verify::SurfaceBall;
-    /// let b = SurfaceBall::per_facet([(glam::DVec3::ZERO, 0.5)]);
-    /// assert_eq!((b[0].facet, b[0].radius), (0, 0.5));
-    /// ```
-    pub fn per_facet(balls: impl IntoIterator<Item = (DVec3, f64)>) -> Vec<SurfaceBall> {
-        balls
-            .into_iter()
-            .enumerate()
-            .map(|(facet, (center, radius))| SurfaceBall {
-                facet,
-                center,
-                radius,
-            })
-            .collect()
-    }
-}
+/// A surface Delaunay ball of a restricted facet (the kernel's type, [`geom::SurfaceBall`]).
+///
+/// ```
+/// use verify::SurfaceBall;
+/// let b = SurfaceBall::per_facet([(glam::DVec3::ZERO, 0.5)]);
+/// assert_eq!((b[0].facet, b[0].radius), (0, 0.5));
+/// ```
+pub use geom::SurfaceBall;
 
 /// Condition 1 of definition 2.2: every surface Delaunay ball B(c, r) has r <= eps d_M(c).
 #[derive(Clone, Debug, Serialize, PartialEq)]

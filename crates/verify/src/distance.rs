@@ -7,93 +7,25 @@ use oracle::Surface;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::bvh::Bvh;
-
-/// Closest point of the triangle `abc` to `p` (Ericson, Real-Time Collision Detection 5.1.5).
-/// Works for degenerate triangles too (falls back to the closest edge point).
-pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return a + v * ab;
-    }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return a + w * ac;
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return b + w * (c - b);
-    }
-    let denom = va + vb + vc;
-    if denom == 0.0 || !denom.is_finite() {
-        // Degenerate: nearest of the three edges.
-        let seg = |u: DVec3, v: DVec3| {
-            let d = v - u;
-            let t = if d.length_squared() > 0.0 {
-                ((p - u).dot(d) / d.length_squared()).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            u + t * d
-        };
-        let cands = [seg(a, b), seg(b, c), seg(c, a)];
-        return cands
-            .into_iter()
-            .min_by(|x, y| {
-                (*x - p)
-                    .length_squared()
-                    .total_cmp(&(*y - p).length_squared())
-            })
-            .unwrap_or(a);
-    }
-    let v = vb / denom;
-    let w = vc / denom;
-    a + ab * v + ac * w
-}
+use geom::bvh::TriangleBvh;
 
 /// Exact nearest-triangle queries on a mesh (branch and bound on the BVH).
+///
+/// Distances come from [`geom::closest::closest_point_triangle`] (degenerate triangles
+/// included).
 pub struct MeshDistance<'a> {
-    mesh: &'a TriMesh,
-    bvh: &'a Bvh,
+    bvh: &'a TriangleBvh,
 }
 
 impl<'a> MeshDistance<'a> {
     /// Queries on `mesh` through `bvh` (built by [`crate::intersect::triangle_bvh`]).
-    pub fn new(mesh: &'a TriMesh, bvh: &'a Bvh) -> Self {
-        MeshDistance { mesh, bvh }
+    pub fn new(mesh: &'a TriMesh, bvh: &'a TriangleBvh) -> Self {
+        debug_assert_eq!(bvh.len(), mesh.triangles.len(), "bvh built on another mesh");
+        MeshDistance { bvh }
     }
     /// Nearest triangle to `p` and the distance (smallest index on ties).
     pub fn nearest(&self, p: DVec3) -> Option<(usize, f64)> {
-        self.bvh
-            .nearest(p, |t| {
-                let [a, b, c] =
-                    self.mesh.triangles[t as usize].map(|i| self.mesh.vertices[i as usize]);
-                (closest_point_on_triangle(p, a, b, c) - p).length_squared()
-            })
-            .map(|(t, d2)| (t as usize, d2.sqrt()))
+        self.bvh.nearest(p).map(|(t, d2)| (t as usize, d2.sqrt()))
     }
 }
 
@@ -336,7 +268,7 @@ pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviatio
 /// of the mesh samples are used (they cover only the parts of S near the mesh).
 pub fn geometry(
     mesh: &TriMesh,
-    bvh: &Bvh,
+    bvh: &TriangleBvh,
     surface: &dyn Surface,
     per_edge: usize,
     surface_samples: Option<&[DVec3]>,

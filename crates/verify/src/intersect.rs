@@ -6,8 +6,8 @@ use meshio::TriMesh;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::bvh::{Aabb, Bvh};
-use crate::predicates;
+use geom::bvh::{Aabb, TriangleBvh};
+use geom::predicates;
 
 /// Self-intersection results.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -22,14 +22,15 @@ pub struct SelfIntersections {
     pub skipped_degenerate: usize,
 }
 
-/// Build the BVH over the triangles' boxes.
-pub fn triangle_bvh(mesh: &TriMesh) -> Bvh {
-    let boxes = mesh
+/// Build the kernel's triangle BVH over the mesh (face id = triangle index; degenerate
+/// triangles included).
+pub fn triangle_bvh(mesh: &TriMesh) -> TriangleBvh {
+    let tris = mesh
         .triangles
         .par_iter()
-        .map(|t| Aabb::from_points(&t.map(|i| mesh.vertices[i as usize])))
+        .map(|t| t.map(|i| mesh.vertices[i as usize]))
         .collect();
-    Bvh::new(boxes)
+    TriangleBvh::build(tris, (0..mesh.triangles.len() as u32).collect(), 0.0)
 }
 
 /// Do triangles `i` and `j` (both non-degenerate) intersect improperly?
@@ -70,7 +71,11 @@ pub fn pair_intersects(mesh: &TriMesh, i: usize, j: usize) -> bool {
 
 /// Find every pair of non-degenerate triangles that intersect other than along shared
 /// vertices/edges. Output is sorted and independent of the thread count.
-pub fn self_intersections(mesh: &TriMesh, bvh: &Bvh, max_listed: usize) -> SelfIntersections {
+pub fn self_intersections(
+    mesh: &TriMesh,
+    bvh: &TriangleBvh,
+    max_listed: usize,
+) -> SelfIntersections {
     let degenerate: Vec<bool> = mesh
         .triangles
         .par_iter()
@@ -87,7 +92,7 @@ pub fn self_intersections(mesh: &TriMesh, bvh: &Bvh, max_listed: usize) -> SelfI
             }
             let mut cand = 0;
             let mut hits = Vec::new();
-            bvh.for_each_overlap(&bvh.item_box(i as u32), |j| {
+            bvh.for_each_overlap(&Aabb::from_points(&corners(mesh, i)), |j| {
                 let j = j as usize;
                 if j > i && !degenerate[j] {
                     cand += 1;

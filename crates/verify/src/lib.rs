@@ -43,9 +43,11 @@ pub mod certificate;
 pub mod distance;
 pub mod intersect;
 pub mod medial;
-pub mod predicates;
 pub mod quality;
 pub mod topology;
+
+/// The exact predicates and intersection tests of the shared kernel ([`geom::predicates`]).
+pub use geom::predicates;
 
 pub use certificate::{
     ComponentCoverage, EpsilonCertificate, HausdorffBound, SeedCoverage, SurfaceBall,
@@ -527,7 +529,13 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
     r
 }
 
-fn against(r: &mut Report, mesh: &TriMesh, bvh: &bvh::Bvh, surface: &dyn Surface, opts: &Options) {
+fn against(
+    r: &mut Report,
+    mesh: &TriMesh,
+    bvh: &bvh::TriangleBvh,
+    surface: &dyn Surface,
+    opts: &Options,
+) {
     let ml = opts.max_listed;
     let g = distance::geometry(
         mesh,

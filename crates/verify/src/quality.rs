@@ -100,7 +100,7 @@ pub fn analyze(mesh: &TriMesh, bin_deg: f64) -> Quality {
         q.min_angle_deg = 0.0;
         q.radius_edge_min = 0.0;
     }
-    let bb = crate::bvh::Aabb::from_points(&mesh.vertices);
+    let bb = geom::bvh::Aabb::from_points(&mesh.vertices);
     let o = if mesh.vertices.is_empty() {
         DVec3::ZERO
     } else {

@@ -1,10 +1,10 @@
 //! Distances, normals and the paper's conditions against an analytic unit sphere.
 mod common;
 use common::*;
+use geom::closest::closest_point_triangle as closest_point_on_triangle;
 use glam::DVec3;
 use meshio::TriMesh;
 use oracle::Surface;
-use verify::distance::closest_point_on_triangle;
 use verify::{DmSource, Options, Status, check_against};
 
 /// Exact max over the mesh of | |p| - 1 | for a mesh with all vertices on the unit sphere:

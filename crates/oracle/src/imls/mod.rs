@@ -40,9 +40,9 @@ mod normals;
 mod surface;
 
 use crate::BoundingSphere;
-use crate::polyhedron::bvh::Bvh;
 use crate::roots::SplitMix64;
 use far::FarCache;
+use geom::bvh::TriangleBvh as Bvh;
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lfs::LfsSample;

@@ -1,10 +1,11 @@
 //! The exact polyhedron oracle (section 6.6.4): a triangle mesh, possibly a soup with small
 //! holes; see [`super`] for the oracles and invariants.
 
-use super::bvh::Bvh;
-use super::predicates;
 use crate::roots::{SplitMix64, bisect};
 use crate::{BoundingSphere, Surface};
+use geom::bvh::TriangleBvh as Bvh;
+use geom::closest::closest_point_segment;
+use geom::predicates::collinear;
 use glam::DVec3;
 use meshio::TriMesh;
 
@@ -135,7 +136,7 @@ impl PolyhedronSurface {
             }
             let c = t.map(|i| canon[i as usize]);
             let [a, b, d] = c.map(|i| mesh.vertices[i as usize]);
-            if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] || predicates::is_degenerate(a, b, d) {
+            if c[0] == c[1] || c[1] == c[2] || c[0] == c[2] || collinear(a, b, d) {
                 degenerate += 1;
                 continue;
             }
@@ -170,12 +171,12 @@ impl PolyhedronSurface {
         let ids: Vec<u32> = (0..faces.len() as u32).collect();
         let bvh = Bvh::build(tris, ids, pad);
         let component = bvh
-            .face_ids
+            .face_ids()
             .iter()
             .map(|&i| face_comp[i as usize])
             .collect();
         let pseudo = if watertight {
-            pseudonormals(&mesh.vertices, &faces, &edges, &bvh.face_ids)
+            pseudonormals(&mesh.vertices, &faces, &edges, bvh.face_ids())
         } else {
             Vec::new()
         };
@@ -303,7 +304,7 @@ impl PolyhedronSurface {
     /// Closest point on the triangles and the input index of the face it lies on.
     pub fn closest_point(&self, p: DVec3) -> (DVec3, usize) {
         let (q, k, _, _) = self.bvh.closest(p);
-        let f = self.faces[self.bvh.face_ids[k as usize] as usize].1;
+        let f = self.faces[self.bvh.face_ids()[k as usize] as usize].1;
         (q, f as usize)
     }
 
@@ -347,7 +348,7 @@ impl PolyhedronSurface {
         let n = match self.pseudo.get(k as usize) {
             Some(ps) => ps[f as usize],
             None => {
-                let t = self.bvh.tris[k as usize];
+                let t = self.bvh.tris()[k as usize];
                 (t[1] - t[0]).cross(t[2] - t[0])
             }
         };
@@ -540,7 +541,7 @@ pub fn distance_to_sharp_edges(edges: &[(DVec3, DVec3)], points: &[DVec3]) -> Ve
         .map(|&p| {
             edges
                 .iter()
-                .map(|&(a, b)| (predicates::closest_point_segment(p, a, b) - p).length())
+                .map(|&(a, b)| (closest_point_segment(p, a, b) - p).length())
                 .fold(f64::INFINITY, f64::min)
         })
         .collect()
@@ -627,7 +628,7 @@ impl Surface for PolyhedronSurface {
         let ncomp = self.stats.components;
         let mut best: Vec<(f64, usize)> = vec![(-1.0, 0); ncomp];
         let mut members: Vec<Vec<usize>> = vec![Vec::new(); ncomp];
-        for (k, t) in self.bvh.tris.iter().enumerate() {
+        for (k, t) in self.bvh.tris().iter().enumerate() {
             let c = self.component[k] as usize;
             let area = (t[1] - t[0]).cross(t[2] - t[0]).length();
             if area > best[c].0 {
@@ -636,7 +637,7 @@ impl Surface for PolyhedronSurface {
             members[c].push(k);
         }
         let centroid = |k: usize| {
-            let t = self.bvh.tris[k];
+            let t = self.bvh.tris()[k];
             (t[0] + t[1] + t[2]) / 3.0
         };
         let mut rng = SplitMix64(seed ^ 0x9017_5EED);

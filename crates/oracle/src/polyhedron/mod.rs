@@ -29,9 +29,7 @@
 #[cfg(doc)]
 use crate::Surface;
 
-pub(crate) mod bvh;
 mod exact;
-mod predicates;
 mod smooth;
 
 pub use exact::{
