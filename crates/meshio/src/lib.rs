@@ -20,6 +20,8 @@
 //! std::fs::remove_file(&path).unwrap();
 //! ```
 
+#![forbid(unsafe_code)]
+
 use std::fmt;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};

@@ -30,6 +30,8 @@
 //! assert!(json.contains("\"closed\""));
 //! ```
 
+#![forbid(unsafe_code)]
+
 use std::fmt;
 use std::sync::Arc;
 

@@ -235,9 +235,9 @@ mod tests {
         #[test]
         fn orient2d_matches_normal_and_swaps(a in pt(), b in pt(), c in pt()) {
             let n = normal_signs(a, b, c);
-            for k in 0..3 {
-                prop_assert_eq!(orient2d(b, a, c, k), -n[k]);
-                prop_assert_eq!(orient2d(b, c, a, k), n[k]);
+            for (k, &nk) in n.iter().enumerate() {
+                prop_assert_eq!(orient2d(b, a, c, k), -nk);
+                prop_assert_eq!(orient2d(b, c, a, k), nk);
             }
             // Integer-valued inputs: the cross product is exact, compare with it.
             let (ai, bi, ci) = (a.round(), b.round(), c.round());
