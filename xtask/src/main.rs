@@ -62,8 +62,13 @@ enum Cmd {
 fn main() {
     let cli = Cli::parse();
     if let Some(n) = cli.threads {
+        let max = cli::output::MAX_THREADS;
         let built = if n == 0 {
             Err("--threads 0: give at least 1 thread".to_string())
+        } else if n > max {
+            Err(format!(
+                "--threads {n}: at most {max} (the results do not depend on the count)"
+            ))
         } else {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n)

@@ -987,3 +987,147 @@ fn strict_exit_status_follows_the_verdict() {
     );
     assert!(ok(&good).contains("verify: PASS"));
 }
+
+/// Numeric flags the library cannot take unchecked are usage errors naming the flag (issue
+/// 17: `--time-limit=-1`, nan, inf and 1e300 used to panic converting to a Duration; 100,000
+/// threads used to be spawned).
+#[test]
+fn bad_time_limits_and_thread_counts_are_usage_errors() {
+    let d = scratch("numeric-flags");
+    for v in ["-1", "nan", "inf", "1e300", "0"] {
+        let arg = format!("--time-limit={v}");
+        for cmd in [
+            vec![
+                "mesh",
+                "-q",
+                "implicit:torus",
+                "--size",
+                "0.1",
+                arg.as_str(),
+            ],
+            vec!["paper-table", arg.as_str()],
+        ] {
+            let out = xtask(&d, &cmd);
+            assert_no_panic(&out);
+            assert_eq!(out.status.code(), Some(2), "{cmd:?}: {}", text(&out.stderr));
+            mentions(&text(&out.stderr), &["--time-limit", "seconds"]);
+        }
+    }
+    let out = xtask(
+        &d,
+        &["--threads", "100000", "mesh", "-q", "implicit:sphere"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    mentions(&text(&out.stderr), &["--threads 100000", "at most 256"]);
+}
+
+/// An output never overwrites the input or another output of the same run, and is written
+/// through a temporary file renamed into place: a run killed at any moment leaves the previous
+/// output intact or the new one complete, never a truncated file.
+#[test]
+fn outputs_are_atomic_and_never_overwrite_the_input() {
+    let d = scratch("atomic-outputs");
+    let input = d.join("cube.off");
+    std::fs::copy(root().join("fixtures/meshes/cube.off"), &input).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    let out = xtask(&d, &["mesh", "-q", "cube.off", "-o", "./cube.off"]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    mentions(
+        &text(&out.stderr),
+        &["-o ./cube.off", "that is the input file"],
+    );
+    assert_eq!(
+        std::fs::read(&input).unwrap(),
+        before,
+        "the input was changed"
+    );
+    let out = xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:sphere",
+            "-o",
+            "m.ply",
+            "--report",
+            "m.ply",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    mentions(&text(&out.stderr), &["-o and --report both name m.ply"]);
+    assert!(!d.join("m.ply").exists());
+
+    // A good previous output; then runs killed the moment their temporary file appears,
+    // i.e. while the new mesh is being written: the final path still holds the previous
+    // mesh. Up to five tries (a fast write can be missed by the polling); one catch is needed.
+    ok(&xtask(
+        &d,
+        &[
+            "mesh",
+            "-q",
+            "implicit:torus",
+            "--size",
+            "0.1",
+            "--no-verify",
+            "-o",
+            "t.ply",
+        ],
+    ));
+    let good = std::fs::read(d.join("t.ply")).unwrap();
+    let is_tmp = |n: &str| n.starts_with(".t.ply.") && n.ends_with(".tmp.ply");
+    let mut caught = 0;
+    for _ in 0..5 {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_xtask"))
+            .args([
+                "mesh",
+                "-q",
+                "implicit:torus",
+                "--size",
+                "0.006",
+                "--no-verify",
+            ])
+            .args(["-o", "t.ply"])
+            .current_dir(&d)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let mut seen = false;
+        while child.try_wait().unwrap().is_none() {
+            let names: Vec<String> = std::fs::read_dir(&d)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            if names.iter().any(|n| is_tmp(n)) {
+                let _ = child.kill();
+                seen = true;
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_micros(200));
+        }
+        let _ = child.wait();
+        let now = std::fs::read(d.join("t.ply")).unwrap();
+        if seen {
+            caught += 1;
+            assert_eq!(
+                now, good,
+                "killed while writing: the previous mesh was lost"
+            );
+        } else {
+            // The run finished first: the new mesh is complete.
+            let m = meshio::read(d.join("t.ply")).expect("a complete mesh");
+            assert!(m.triangles.len() > 10_000);
+            std::fs::write(d.join("t.ply"), &good).unwrap();
+        }
+        for e in std::fs::read_dir(&d).unwrap() {
+            let n = e.unwrap().file_name().to_string_lossy().into_owned();
+            if is_tmp(&n) {
+                std::fs::remove_file(d.join(n)).unwrap();
+            }
+        }
+        if caught > 0 {
+            break;
+        }
+    }
+    assert!(caught > 0, "never caught a run while it wrote its output");
+}

@@ -63,7 +63,7 @@ pub struct MeshArgs {
     #[arg(long)]
     pub max_vertices: Option<usize>,
     /// Stop after this many seconds (likewise).
-    #[arg(long)]
+    #[arg(long, value_parser = super::output::parse_seconds)]
     pub time_limit: Option<f64>,
     /// Output mesh (.ply, .off, .obj, .stl). Default: out/NAME.ply.
     #[arg(short, long)]
@@ -179,6 +179,15 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         .clone()
         .unwrap_or_else(|| "implicit:torus".to_string());
     let opened = input::open(&spec, a.bounding_sphere.as_deref(), &a.surface)?;
+    let out_path = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/{}.ply", opened.name)));
+    let mut outputs = vec![("-o", out_path.as_path())];
+    if let Some(r) = &a.report {
+        outputs.push(("--report", r.as_path()));
+    }
+    super::output::check_outputs(Some(Path::new(&spec)), &outputs)?;
     let req = request(a)?;
     let plan = pipeline::plan(&opened, &req).map_err(|e| cli_error(e, &spec))?;
     for n in plan.notes() {
@@ -202,10 +211,6 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         })
         .map_err(|e| cli_error(e, &spec))?;
     bar.finish_and_clear();
-    let out_path = a
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("out/{}.ply", opened.name)));
     if out.two_pass.is_some() {
         print_two_pass(&spec, &out);
     }
@@ -221,12 +226,17 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
 }
 
 fn write_mesh(out_path: &Path, out: &Outcome) -> Result<()> {
-    if let Some(dir) = out_path.parent()
-        && !dir.as_os_str().is_empty()
-    {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    meshio::write(out_path, &out.mesh).with_context(|| format!("writing {}", out_path.display()))
+    super::output::write_atomically(out_path, |tmp| {
+        meshio::write(tmp, &out.mesh).with_context(|| format!("writing {}", out_path.display()))
+    })
+}
+
+/// Write a JSON report atomically.
+fn write_json(r: &Path, report: &serde_json::Value) -> Result<()> {
+    let text = serde_json::to_string_pretty(report)?;
+    super::output::write_atomically(r, |tmp| {
+        std::fs::write(tmp, &text).with_context(|| format!("cannot write report {}", r.display()))
+    })
 }
 
 /// The lines of a constant-size run.
@@ -315,8 +325,7 @@ fn write_report(a: &MeshArgs, spec: &str, out_path: &Path, out: &Outcome) -> Res
         "stats": out.stats,
         "verify": out.report,
     });
-    std::fs::write(r, serde_json::to_string_pretty(&report)?)
-        .with_context(|| format!("cannot write report {}", r.display()))
+    write_json(r, &report)
 }
 
 /// The summary of a two-pass run (`--epsilon`), before the mesh is written.
@@ -396,6 +405,5 @@ fn write_two_pass_report(a: &MeshArgs, spec: &str, out_path: &Path, out: &Outcom
         "sigma0": tp.sigma0, "eps_prime": tp.eps_prime,
         "first": tp.first.stats, "second": out.stats, "verify": out.report,
     });
-    std::fs::write(r, serde_json::to_string_pretty(&report)?)
-        .with_context(|| format!("cannot write report {}", r.display()))
+    write_json(r, &report)
 }

@@ -4,5 +4,6 @@
 pub mod delaunay;
 pub mod input;
 pub mod mesh;
+pub mod output;
 pub mod points;
 pub mod verify;

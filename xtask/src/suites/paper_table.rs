@@ -22,7 +22,7 @@ pub struct PaperTableArgs {
     #[arg(long, default_value_t = 150_000)]
     pub max_vertices: usize,
     /// Stop any run after this many seconds.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::cli::output::parse_seconds)]
     pub time_limit: f64,
     /// Surfaces (catalog names); default: the paper's nine.
     #[arg(long, value_delimiter = ',')]

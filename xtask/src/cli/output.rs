@@ -1,0 +1,160 @@
+//! (ours) Writing what a command produces without losing anything: outputs are written to a
+//! temporary file in the destination folder and renamed over the final path, so a run killed
+//! while writing leaves either the previous file or the new one, never a truncated one; and
+//! no output may be the input or another output of the same run.
+//!
+//! Also the value parser of `--time-limit` (the library cannot take every float as a
+//! duration), so clap reports a bad value as a usage error naming the flag.
+
+use anyhow::{Context, Result, bail};
+use std::path::{Path, PathBuf};
+
+/// The most worker threads `--threads` accepts (checked in `main`).
+pub const MAX_THREADS: usize = 256;
+
+/// The longest `--time-limit` accepted, in seconds (a year).
+pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
+
+/// `--time-limit S`: a finite number of seconds in (0, a year].
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of seconds (e.g. 60 or 2.5)"))?;
+    if !(v.is_finite() && v > 0.0 && v <= MAX_SECONDS) {
+        return Err(format!(
+            "{s} seconds: give a positive, finite number of seconds, at most {MAX_SECONDS} (a year)"
+        ));
+    }
+    Ok(v)
+}
+
+/// The absolute, normalized form of a path that may not exist yet (its folder may not
+/// either): the longest existing ancestor is canonicalized, the rest appended.
+fn normalized(p: &Path) -> PathBuf {
+    let abs = if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        std::env::current_dir().unwrap_or_default().join(p)
+    };
+    let mut tail = Vec::new();
+    let mut head = abs.as_path();
+    loop {
+        if let Ok(c) = head.canonicalize() {
+            return tail.iter().rev().fold(c, |acc: PathBuf, t| acc.join(t));
+        }
+        match (head.parent(), head.file_name()) {
+            (Some(parent), Some(name)) => {
+                tail.push(name.to_os_string());
+                head = parent;
+            }
+            _ => return abs,
+        }
+    }
+}
+
+/// Refuse a run whose outputs would overwrite its input or each other. `outputs` are
+/// (flag, path) pairs, e.g. `("-o", mesh)`, `("--report", report)`.
+pub fn check_outputs(input: Option<&Path>, outputs: &[(&str, &Path)]) -> Result<()> {
+    let norm: Vec<(&str, &Path, PathBuf)> = outputs
+        .iter()
+        .map(|&(f, p)| (f, p, normalized(p)))
+        .collect();
+    if let Some(inp) = input.filter(|p| p.exists()) {
+        let i = normalized(inp);
+        for (flag, p, n) in &norm {
+            if *n == i {
+                bail!(
+                    "{flag} {}: that is the input file; write the output elsewhere (e.g. {flag} out/{})",
+                    p.display(),
+                    p.file_name()
+                        .map_or("mesh.ply".into(), |f| f.to_string_lossy())
+                );
+            }
+        }
+    }
+    for (k, (f1, p1, n1)) in norm.iter().enumerate() {
+        for (f2, _, n2) in &norm[k + 1..] {
+            if n1 == n2 {
+                bail!(
+                    "{f1} and {f2} both name {}: give each output its own file",
+                    p1.display()
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Write `path` through `write(tmp)`: `tmp` is a new file beside `path` with the same
+/// extension; it is renamed over `path` once `write` succeeded, and removed if it failed.
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let name = path
+        .file_name()
+        .with_context(|| format!("{}: not a file name", path.display()))?
+        .to_string_lossy()
+        .into_owned();
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.tmp{ext}", std::process::id()));
+    let result = write(&tmp).and_then(|()| {
+        std::fs::rename(&tmp, path)
+            .with_context(|| format!("cannot move {} to {}", tmp.display(), path.display()))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numeric_flags_are_checked() {
+        for bad in ["-1", "0", "nan", "inf", "1e300", "x", ""] {
+            assert!(parse_seconds(bad).is_err(), "{bad}");
+        }
+        assert_eq!(parse_seconds("2.5"), Ok(2.5));
+    }
+
+    #[test]
+    fn outputs_may_not_overwrite_the_input_or_each_other() {
+        let d = std::env::temp_dir().join(format!("xtask-out-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let input = d.join("in.ply");
+        std::fs::write(&input, "x").unwrap();
+        let same = d.join("sub/../in.ply");
+        let e = check_outputs(Some(&input), &[("-o", &same)]).unwrap_err();
+        assert!(e.to_string().contains("that is the input file"), "{e}");
+        let m = d.join("new/m.ply");
+        let e = check_outputs(None, &[("-o", &m), ("--report", &m)]).unwrap_err();
+        assert!(e.to_string().contains("-o and --report both name"), "{e}");
+        check_outputs(Some(&input), &[("-o", &m), ("--report", &d.join("r.json"))]).unwrap();
+        // A failed write leaves the old file and no temporary behind.
+        let out = d.join("keep.ply");
+        std::fs::write(&out, "old").unwrap();
+        let r = write_atomically(&out, |tmp| {
+            std::fs::write(tmp, "partial")?;
+            bail!("interrupted")
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "old");
+        assert_eq!(
+            std::fs::read_dir(&d).unwrap().count(),
+            2,
+            "no temporary left"
+        );
+        write_atomically(&out, |tmp| Ok(std::fs::write(tmp, "new")?)).unwrap();
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "new");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+}
