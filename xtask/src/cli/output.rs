@@ -32,11 +32,22 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
 /// The absolute, normalized form of a path that may not exist yet (its folder may not
 /// either): the longest existing ancestor is canonicalized, the rest appended.
 fn normalized(p: &Path) -> PathBuf {
-    let abs = if p.is_absolute() {
+    let joined = if p.is_absolute() {
         p.to_path_buf()
     } else {
         std::env::current_dir().unwrap_or_default().join(p)
     };
+    // `.` and `..` resolved lexically first (a folder named in the path may not exist).
+    let mut abs = PathBuf::new();
+    for c in joined.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                abs.pop();
+            }
+            other => abs.push(other),
+        }
+    }
     let mut tail = Vec::new();
     let mut head = abs.as_path();
     loop {
