@@ -1131,3 +1131,25 @@ fn outputs_are_atomic_and_never_overwrite_the_input() {
     }
     assert!(caught > 0, "never caught a run while it wrote its output");
 }
+
+/// An input that bounds no solid (a single triangle) is an error, not an empty mesh written
+/// with exit 0 (issue 17).
+#[test]
+fn an_empty_result_is_an_error() {
+    let d = scratch("empty-result");
+    std::fs::write(
+        d.join("tri.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+         0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    )
+    .unwrap();
+    let out = xtask(&d, &["mesh", "-q", "tri.ply", "-o", "out.ply"]);
+    assert_no_panic(&out);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    mentions(
+        &text(&out.stderr),
+        &["tri.ply", "the mesh is empty", "--as points"],
+    );
+    assert!(!d.join("out.ply").exists(), "an empty mesh was written");
+}

@@ -211,6 +211,14 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         })
         .map_err(|e| cli_error(e, &spec))?;
     bar.finish_and_clear();
+    if out.mesh.triangles.is_empty() {
+        bail!(
+            "{spec}: the mesh is empty ({} sample points, no facet on the surface); nothing written. \
+             An open or flat input mesh bounds no solid: close it, or mesh its vertices with \
+             --as points; for other inputs check --iso / --label or try a smaller --size",
+            out.stats.sample_points
+        );
+    }
     if out.two_pass.is_some() {
         print_two_pass(&spec, &out);
     }
