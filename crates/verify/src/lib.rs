@@ -343,15 +343,37 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
         hausdorff_bound: None,
         checks: Vec::new(),
     };
+    if !input_checks(&mut r, mesh) {
+        return r;
+    }
+    let ml = opts.max_listed;
+
+    topology_checks(&mut r, mesh, ml);
+
+    let bvh = intersect::triangle_bvh(mesh);
+    self_intersection_checks(&mut r, mesh, &bvh, opts);
+
+    quality_checks(&mut r, mesh, opts);
+
+    let Some(surface) = surface else {
+        return r;
+    };
+    against(&mut r, mesh, &bvh, surface, opts);
+    r
+}
+
+/// Reject malformed input (indices, empty mesh, coordinates outside the exact predicates'
+/// range) with a FAIL `input` check; false if rejected.
+fn input_checks(r: &mut Report, mesh: &TriMesh) -> bool {
     if let Err(e) = mesh.validate() {
         r.input_error = Some(e.to_string());
         r.push("input", Status::Fail, e.to_string());
-        return r;
+        return false;
     }
     if mesh.triangles.is_empty() {
         r.input_error = Some("the mesh has no triangles".into());
         r.push("input", Status::Fail, "the mesh has no triangles".into());
-        return r;
+        return false;
     }
     // Shewchuk's predicates are exact only if no intermediate product overflows or
     // underflows (the range Spade also enforces).
@@ -368,15 +390,18 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
         );
         r.input_error = Some(e.clone());
         r.push("input", Status::Fail, e);
-        return r;
+        return false;
     }
     r.push(
         "input",
         Status::Pass,
         "indices in range, coordinates finite and in range".into(),
     );
-    let ml = opts.max_listed;
+    true
+}
 
+/// Combinatorial checks (closed, manifold, oriented, components, degeneracies).
+fn topology_checks(r: &mut Report, mesh: &TriMesh, ml: usize) {
     let t = topology::analyze(mesh, ml);
     r.push(
         "closed",
@@ -473,10 +498,18 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
         ),
     );
     r.topology = Some(t);
+}
 
-    let bvh = intersect::triangle_bvh(mesh);
+/// The exact self-intersection check (or SKIP when disabled).
+fn self_intersection_checks(
+    r: &mut Report,
+    mesh: &TriMesh,
+    bvh: &bvh::TriangleBvh,
+    opts: &Options,
+) {
+    let ml = opts.max_listed;
     if opts.self_intersections {
-        let si = intersect::self_intersections(mesh, &bvh, ml);
+        let si = intersect::self_intersections(mesh, bvh, ml);
         r.push(
             "self-intersections",
             pass_fail(si.pairs_total == 0),
@@ -495,7 +528,10 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
             "disabled by options".into(),
         );
     }
+}
 
+/// Angle, radius-edge and area/volume checks.
+fn quality_checks(r: &mut Report, mesh: &TriMesh, opts: &Options) {
     let q = quality::analyze(mesh, opts.angle_bin_deg);
     let angle_detail = format!(
         "min {:.3} deg, max {:.3} deg",
@@ -523,12 +559,6 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
         format!("area {:.6}, signed volume {:.6}", q.total_area, q.volume),
     );
     r.quality = Some(q);
-
-    let Some(surface) = surface else {
-        return r;
-    };
-    against(&mut r, mesh, &bvh, surface, opts);
-    r
 }
 
 fn against(
