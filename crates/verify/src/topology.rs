@@ -133,8 +133,85 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
     let tris = &mesh.triangles;
 
     // Degenerate triangles (exact).
-    let degenerate: Vec<bool> = tris
-        .par_iter()
+    let degenerate = degenerate_flags(mesh);
+    let mut degenerate_triangles: Vec<usize> = (0..tris.len()).filter(|&i| degenerate[i]).collect();
+    let degenerate_triangles_total = degenerate_triangles.len();
+    cap(max_listed, &mut degenerate_triangles);
+
+    // Half-edges of triangles without repeated indices, sorted by undirected edge.
+    let he = half_edges(tris);
+
+    let EdgeScan {
+        mut boundary_edges,
+        mut non_manifold_edges,
+        mut inconsistent_edges,
+        mut tri_dsu,
+        manifold_pairs,
+        edge_groups,
+    } = scan_edges(&he, tris.len());
+
+    // Umbrellas: per vertex, incident triangles connected through shared edges at the vertex.
+    let (start, inc) = incidence(tris, nv);
+    let umbrellas = umbrella_counts(tris, nv, &start, &inc);
+    let nm_vertex: Vec<u32> = (0..nv as u32)
+        .filter(|&v| umbrellas[v as usize] > 1)
+        .collect();
+
+    // Components: triangles connected through shared vertices.
+    let (mut comps, comp_of_tri, comp_of_vertex) =
+        build_components(tris, &start, &inc, &umbrellas, &mut tri_dsu);
+    count_edges_and_loops(&mut comps, &he, &edge_groups, &comp_of_tri, &comp_of_vertex);
+    mark_non_orientable(&mut comps, tris, &manifold_pairs, &comp_of_tri);
+    set_euler_and_genus(&mut comps);
+
+    // Duplicate vertices: sort by exact coordinates.
+    let mut duplicate_vertices = duplicate_vertex_pairs(mesh);
+    let duplicate_vertices_total = duplicate_vertices.len();
+
+    let mut unreferenced = unreferenced_vertices(mesh);
+    let unreferenced_total = unreferenced.len();
+
+    let (bt, nt, it, nvt) = (
+        boundary_edges.len(),
+        non_manifold_edges.len(),
+        inconsistent_edges.len(),
+        nm_vertex.len(),
+    );
+    let mut nm_vertex = nm_vertex;
+    cap(max_listed, &mut boundary_edges);
+    cap(max_listed, &mut non_manifold_edges);
+    cap(max_listed, &mut inconsistent_edges);
+    cap(max_listed, &mut nm_vertex);
+    cap(max_listed, &mut duplicate_vertices);
+    cap(max_listed, &mut unreferenced);
+    Topology {
+        boundary_edges_total: bt,
+        boundary_edges,
+        non_manifold_edges_total: nt,
+        non_manifold_edges,
+        non_manifold_vertices_total: nvt,
+        non_manifold_vertices: nm_vertex,
+        inconsistent_edges_total: it,
+        inconsistent_edges,
+        components: comps,
+        duplicate_vertices_total,
+        duplicate_vertices,
+        degenerate_triangles_total,
+        degenerate_triangles,
+        unreferenced_vertices_total: unreferenced_total,
+        unreferenced_vertices: unreferenced,
+    }
+}
+
+/// A repeated index: such triangles take no part in edges, umbrellas or components.
+fn repeated(t: &[u32; 3]) -> bool {
+    t[0] == t[1] || t[1] == t[2] || t[0] == t[2]
+}
+
+/// Per triangle: a repeated index or collinear corners (exact).
+fn degenerate_flags(mesh: &TriMesh) -> Vec<bool> {
+    let tris = &mesh.triangles;
+    tris.par_iter()
         .map(|t| {
             t[0] == t[1]
                 || t[1] == t[2]
@@ -145,13 +222,11 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
                     mesh.vertices[t[2] as usize],
                 )
         })
-        .collect();
-    let repeated = |t: &[u32; 3]| t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
-    let mut degenerate_triangles: Vec<usize> = (0..tris.len()).filter(|&i| degenerate[i]).collect();
-    let degenerate_triangles_total = degenerate_triangles.len();
-    cap(max_listed, &mut degenerate_triangles);
+        .collect()
+}
 
-    // Half-edges of triangles without repeated indices, sorted by undirected edge.
+/// Half-edges of triangles without repeated indices, sorted by undirected edge.
+fn half_edges(tris: &[[u32; 3]]) -> Vec<HalfEdge> {
     let mut he: Vec<HalfEdge> = Vec::with_capacity(3 * tris.len());
     for (ti, t) in tris.iter().enumerate() {
         if repeated(t) {
@@ -168,11 +243,29 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
         }
     }
     he.par_sort_unstable_by_key(|h| (h.lo, h.hi, h.tri, h.forward));
+    he
+}
 
+/// What one pass over the sorted half-edges finds.
+struct EdgeScan {
+    boundary_edges: Vec<[u32; 2]>,
+    non_manifold_edges: Vec<[u32; 2]>,
+    inconsistent_edges: Vec<[u32; 2]>,
+    /// Triangles joined across shared edges.
+    tri_dsu: Dsu,
+    /// Pairs of triangles across manifold edges, with "same direction" flags.
+    manifold_pairs: Vec<(u32, u32, bool)>,
+    /// (start, len) into the half-edges, one per undirected edge.
+    edge_groups: Vec<(usize, usize)>,
+}
+
+/// Classify every undirected edge (boundary, manifold, non-manifold; inconsistent
+/// direction) and join the triangles that share it.
+fn scan_edges(he: &[HalfEdge], ntris: usize) -> EdgeScan {
     let mut boundary_edges = Vec::new();
     let mut non_manifold_edges = Vec::new();
     let mut inconsistent_edges = Vec::new();
-    let mut tri_dsu = Dsu::new(tris.len());
+    let mut tri_dsu = Dsu::new(ntris);
     // Pairs of triangles across manifold edges, with "same direction" flags (orientability).
     let mut manifold_pairs: Vec<(u32, u32, bool)> = Vec::new();
     let mut edge_groups: Vec<(usize, usize)> = Vec::new(); // (start, len) into he
@@ -200,8 +293,18 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
         edge_groups.push((i, j - i));
         i = j;
     }
+    EdgeScan {
+        boundary_edges,
+        non_manifold_edges,
+        inconsistent_edges,
+        tri_dsu,
+        manifold_pairs,
+        edge_groups,
+    }
+}
 
-    // Umbrellas: per vertex, incident triangles connected through shared edges at the vertex.
+/// Vertex -> incident triangles (without repeated indices), as CSR offsets and entries.
+fn incidence(tris: &[[u32; 3]], nv: usize) -> (Vec<u32>, Vec<u32>) {
     let mut start = vec![0u32; nv + 1];
     for t in tris.iter().filter(|t| !repeated(t)) {
         for &v in t {
@@ -222,7 +325,13 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
             fill[v as usize] += 1;
         }
     }
-    let umbrellas: Vec<u32> = (0..nv)
+    (start, inc)
+}
+
+/// Per vertex, the number of umbrellas (incident triangles connected through shared edges
+/// at the vertex).
+fn umbrella_counts(tris: &[[u32; 3]], nv: usize, start: &[u32], inc: &[u32]) -> Vec<u32> {
+    (0..nv)
         .into_par_iter()
         .map(|v| {
             let list = &inc[start[v] as usize..start[v + 1] as usize];
@@ -246,12 +355,19 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
             }
             (0..list.len() as u32).filter(|&x| dsu.find(x) == x).count() as u32
         })
-        .collect();
-    let nm_vertex: Vec<u32> = (0..nv as u32)
-        .filter(|&v| umbrellas[v as usize] > 1)
-        .collect();
+        .collect()
+}
 
-    // Components: triangles connected through shared vertices.
+/// Components (triangles connected through shared vertices) with their triangle, vertex and
+/// non-manifold vertex counts; also the component of every triangle and vertex.
+fn build_components(
+    tris: &[[u32; 3]],
+    start: &[u32],
+    inc: &[u32],
+    umbrellas: &[u32],
+    tri_dsu: &mut Dsu,
+) -> (Vec<Component>, Vec<u32>, Vec<u32>) {
+    let nv = start.len() - 1;
     for v in 0..nv {
         let list = &inc[start[v] as usize..start[v + 1] as usize];
         for k in 1..list.len() {
@@ -297,9 +413,21 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
             }
         }
     }
+    (comps, comp_of_tri, comp_of_vertex)
+}
+
+/// Per component: edges, boundary and non-manifold edges, boundary loops.
+fn count_edges_and_loops(
+    comps: &mut [Component],
+    he: &[HalfEdge],
+    edge_groups: &[(usize, usize)],
+    comp_of_tri: &[u32],
+    comp_of_vertex: &[u32],
+) {
+    let nv = comp_of_vertex.len();
     let mut boundary_dsu = Dsu::new(nv);
     let mut on_boundary = vec![false; nv];
-    for &(s, len) in &edge_groups {
+    for &(s, len) in edge_groups {
         let c = &mut comps[comp_of_tri[he[s].tri as usize] as usize];
         c.edges += 1;
         match len {
@@ -318,10 +446,18 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
             comps[comp_of_vertex[v] as usize].boundary_loops += 1;
         }
     }
-    // Orientability: propagate a flip bit across manifold edges; a conflict means the
-    // component is not orientable.
+}
+
+/// Orientability: propagate a flip bit across manifold edges; a conflict means the
+/// component is not orientable.
+fn mark_non_orientable(
+    comps: &mut [Component],
+    tris: &[[u32; 3]],
+    manifold_pairs: &[(u32, u32, bool)],
+    comp_of_tri: &[u32],
+) {
     let mut adj_start = vec![0u32; tris.len() + 1];
-    for &(a, b, _) in &manifold_pairs {
+    for &(a, b, _) in manifold_pairs {
         adj_start[a as usize + 1] += 1;
         adj_start[b as usize + 1] += 1;
     }
@@ -330,7 +466,7 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
     }
     let mut adj_fill = adj_start.clone();
     let mut adj = vec![(0u32, false); adj_start[tris.len()] as usize];
-    for &(a, b, same) in &manifold_pairs {
+    for &(a, b, same) in manifold_pairs {
         adj[adj_fill[a as usize] as usize] = (b, same);
         adj_fill[a as usize] += 1;
         adj[adj_fill[b as usize] as usize] = (a, same);
@@ -358,7 +494,11 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
             }
         }
     }
-    for c in &mut comps {
+}
+
+/// Euler characteristic of every component, and genus where it is defined.
+fn set_euler_and_genus(comps: &mut [Component]) {
+    for c in comps {
         c.euler_characteristic = c.vertices as i64 - c.edges as i64 + c.triangles as i64;
         let chi_plus_b = c.euler_characteristic + c.boundary_loops as i64;
         if c.orientable
@@ -369,8 +509,11 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
             c.genus = Some((2 - chi_plus_b) / 2);
         }
     }
+}
 
-    // Duplicate vertices: sort by exact coordinates.
+/// Pairs (first, later) of vertices with exactly equal coordinates, sorted.
+fn duplicate_vertex_pairs(mesh: &TriMesh) -> Vec<[u32; 2]> {
+    let nv = mesh.vertices.len();
     let mut order: Vec<u32> = (0..nv as u32).collect();
     order.par_sort_unstable_by_key(|&v| (exact_key(mesh.vertices[v as usize]), v));
     let mut duplicate_vertices = Vec::new();
@@ -385,47 +528,20 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
         k = j;
     }
     duplicate_vertices.sort_unstable();
-    let duplicate_vertices_total = duplicate_vertices.len();
+    duplicate_vertices
+}
 
+/// Vertices used by no triangle.
+fn unreferenced_vertices(mesh: &TriMesh) -> Vec<u32> {
+    let nv = mesh.vertices.len();
+    let tris = &mesh.triangles;
     let mut referenced = vec![false; nv];
     for t in tris {
         for &v in t {
             referenced[v as usize] = true;
         }
     }
-    let mut unreferenced: Vec<u32> = (0..nv as u32)
+    (0..nv as u32)
         .filter(|&v| !referenced[v as usize])
-        .collect();
-    let unreferenced_total = unreferenced.len();
-
-    let (bt, nt, it, nvt) = (
-        boundary_edges.len(),
-        non_manifold_edges.len(),
-        inconsistent_edges.len(),
-        nm_vertex.len(),
-    );
-    let mut nm_vertex = nm_vertex;
-    cap(max_listed, &mut boundary_edges);
-    cap(max_listed, &mut non_manifold_edges);
-    cap(max_listed, &mut inconsistent_edges);
-    cap(max_listed, &mut nm_vertex);
-    cap(max_listed, &mut duplicate_vertices);
-    cap(max_listed, &mut unreferenced);
-    Topology {
-        boundary_edges_total: bt,
-        boundary_edges,
-        non_manifold_edges_total: nt,
-        non_manifold_edges,
-        non_manifold_vertices_total: nvt,
-        non_manifold_vertices: nm_vertex,
-        inconsistent_edges_total: it,
-        inconsistent_edges,
-        components: comps,
-        duplicate_vertices_total,
-        duplicate_vertices,
-        degenerate_triangles_total,
-        degenerate_triangles,
-        unreferenced_vertices_total: unreferenced_total,
-        unreferenced_vertices: unreferenced,
-    }
+        .collect()
 }
