@@ -11,40 +11,21 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use delaunay3::{DVec3, Triangulation};
+use geom::SplitMix64;
 use std::hint::black_box;
 use std::time::Duration;
 
-struct SplitMix(u64);
-impl SplitMix {
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 fn cube(n: usize, seed: u64) -> Vec<DVec3> {
-    let mut r = SplitMix(seed);
+    let mut r = SplitMix64(seed);
     (0..n)
-        .map(|_| DVec3::new(r.unit(), r.unit(), r.unit()))
+        .map(|_| DVec3::new(r.next_f64(), r.next_f64(), r.next_f64()))
         .collect()
 }
 
 fn sphere(n: usize, seed: u64) -> Vec<DVec3> {
-    let mut r = SplitMix(seed);
-    (0..n)
-        .map(|_| {
-            loop {
-                let p = DVec3::new(r.unit(), r.unit(), r.unit()) * 2.0 - DVec3::ONE;
-                let l = p.length_squared();
-                if l > 1e-6 && l <= 1.0 {
-                    break p / l.sqrt();
-                }
-            }
-        })
-        .collect()
+    let mut r = SplitMix64(seed);
+    // Rejection from [-1, 1)^3 (`2u - 1` per coordinate, 1e-6 < |p|^2 <= 1), then p / |p|.
+    (0..n).map(|_| r.unit_vector()).collect()
 }
 
 fn run(c: &mut Criterion, name: &str, pts: &[DVec3], samples: usize) {

@@ -2,18 +2,8 @@
 //! triangulation of the same points as `benches/cgal_baseline.cpp` and prints one JSON line.
 
 use delaunay3::{DVec3, Triangulation};
+use geom::SplitMix64;
 use std::time::Instant;
-
-struct SplitMix(u64);
-impl SplitMix {
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -22,24 +12,15 @@ fn main() {
         std::process::exit(2);
     }
     let n: usize = args[1].parse().expect("N: a number of points");
-    let mut r = SplitMix(args[2].parse().expect("SEED: an integer"));
+    let mut r = SplitMix64(args[2].parse().expect("SEED: an integer"));
     let sphere = args[3] == "sphere";
     let pts: Vec<DVec3> = (0..n)
         .map(|_| {
             if sphere {
-                loop {
-                    let p = DVec3::new(
-                        r.unit() * 2.0 - 1.0,
-                        r.unit() * 2.0 - 1.0,
-                        r.unit() * 2.0 - 1.0,
-                    );
-                    let l = p.length_squared();
-                    if l > 1e-6 && l <= 1.0 {
-                        break p / l.sqrt();
-                    }
-                }
+                // Rejection from [-1, 1)^3, 1e-6 < |p|^2 <= 1, then p / |p| (as the C++ side).
+                r.unit_vector()
             } else {
-                let (x, y, z) = (r.unit(), r.unit(), r.unit());
+                let (x, y, z) = (r.next_f64(), r.next_f64(), r.next_f64());
                 DVec3::new(x, y, z)
             }
         })

@@ -16,32 +16,10 @@
 //! tetrahedron in which the lexicographically largest point is replaced by the query.
 
 use glam::DVec3;
-use robust::{Coord, Coord3D};
+use robust::Coord3D;
 
-/// The sign of a predicate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Sign {
-    /// Below zero.
-    Negative,
-    /// Exactly zero (a degenerate configuration).
-    Zero,
-    /// Above zero.
-    Positive,
-}
-
-impl Sign {
-    /// The sign of `x` (`0.0` and `-0.0` are [`Sign::Zero`]).
-    #[inline]
-    pub fn of(x: f64) -> Sign {
-        if x > 0.0 {
-            Sign::Positive
-        } else if x < 0.0 {
-            Sign::Negative
-        } else {
-            Sign::Zero
-        }
-    }
-}
+/// The sign of a predicate: the workspace's one [`geom::Sign`].
+pub use geom::Sign;
 
 #[inline(always)]
 fn c3(p: DVec3) -> Coord3D<f64> {
@@ -250,16 +228,7 @@ fn insphere_dd_with<const FMA: bool>(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: 
 }
 
 /// Exact test: are the three points collinear (all three coordinate projections collinear)?
-pub fn collinear(a: DVec3, b: DVec3, c: DVec3) -> bool {
-    let proj = |p: DVec3, i: usize| -> Coord<f64> {
-        match i {
-            0 => Coord { x: p.x, y: p.y },
-            1 => Coord { x: p.y, y: p.z },
-            _ => Coord { x: p.z, y: p.x },
-        }
-    };
-    (0..3).all(|i| Sign::of(robust::orient2d(proj(a, i), proj(b, i), proj(c, i))) == Sign::Zero)
-}
+pub use geom::predicates::collinear;
 
 /// Strict lexicographic order on `(x, y, z)`: the fixed total order of the perturbation.
 #[inline]

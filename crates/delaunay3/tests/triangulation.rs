@@ -7,7 +7,7 @@ use proptest::prelude::*;
 
 fn uniform(n: usize, seed: u64) -> Vec<DVec3> {
     let mut r = Rng(seed);
-    (0..n).map(|_| r.point()).collect()
+    (0..n).map(|_| cube_point(&mut r)).collect()
 }
 
 #[test]
@@ -133,7 +133,7 @@ fn changes_match_conflict_zone_and_star() {
     let mut r = Rng(77);
     // Inside, outside the hull, and on existing vertices.
     let mut queries: Vec<DVec3> = pts[400..].to_vec();
-    queries.extend((0..50).map(|_| r.point() * 3.0 - DVec3::ONE));
+    queries.extend((0..50).map(|_| cube_point(&mut r) * 3.0 - DVec3::ONE));
     queries.extend_from_slice(&pts[..20]);
     for p in queries {
         let (zone, boundary) = t.conflict_zone(p, None).unwrap();
@@ -260,7 +260,7 @@ fn nearest_vertex_matches_brute_force() {
     t.insert_bulk(&pts).unwrap();
     let mut r = Rng(3);
     for _ in 0..300 {
-        let q = r.point() * 1.4 - DVec3::splat(0.2);
+        let q = cube_point(&mut r) * 1.4 - DVec3::splat(0.2);
         let v = t.nearest_vertex(q, None).unwrap();
         let best = pts
             .iter()
@@ -342,14 +342,14 @@ fn grid_points_all_orders() {
 fn coplanar_then_off_plane_and_slivers() {
     let mut r = Rng(11);
     let mut pts: Vec<DVec3> = (0..300)
-        .map(|_| DVec3::new(r.unit(), r.unit(), 0.0))
+        .map(|_| DVec3::new(r.next_f64(), r.next_f64(), 0.0))
         .collect();
     pts.push(DVec3::new(0.3, 0.3, 1.0));
     let t = build_checked(&pts);
     assert_eq!(t.dimension(), 3);
     // Nearly coplanar: tiny heights.
     let slivers: Vec<DVec3> = (0..400)
-        .map(|_| DVec3::new(r.unit(), r.unit(), (r.unit() - 0.5) * 1e-13))
+        .map(|_| DVec3::new(r.next_f64(), r.next_f64(), (r.next_f64() - 0.5) * 1e-13))
         .collect();
     build_checked(&slivers);
     // Two parallel planes of grid points (very many coplanar hull facets).
@@ -467,7 +467,7 @@ fn batched_cavities_equal_one_by_one_insertion() {
     // Random points, points on a sphere (cospherical ties) and a grid (coplanar ties): the
     // batched insertion gives the same triangulation as inserting one point at a time.
     let mut r = Rng(5);
-    let random: Vec<DVec3> = (0..2000).map(|_| r.point()).collect();
+    let random: Vec<DVec3> = (0..2000).map(|_| cube_point(&mut r)).collect();
     let sphere = sphere_points(129, 1.0, DVec3::new(1.0, 2.0, 3.0));
     let mut grid = Vec::new();
     for x in 0..7 {
@@ -570,7 +570,7 @@ proptest! {
     #[test]
     fn prop_small_inputs_match_brute_force(seed in any::<u64>(), n in 4usize..13) {
         let mut r = Rng(seed);
-        let pts: Vec<DVec3> = (0..n).map(|_| r.point()).collect();
+        let pts: Vec<DVec3> = (0..n).map(|_| cube_point(&mut r)).collect();
         let t = build_checked(&pts);
         prop_assert_eq!(tets_by_points(&t), brute_force(&pts));
     }

@@ -15,7 +15,8 @@ use crate::schedule::Policy;
 use crate::stats::{Stats, StopReason};
 use crate::voronoi::Voronoi;
 use delaunay3::{Triangulation, VertexId};
-use oracle::{BoundingSphere, Surface, roots::SplitMix64};
+use geom::SplitMix64;
+use oracle::{BoundingSphere, Surface};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 

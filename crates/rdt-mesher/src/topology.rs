@@ -191,20 +191,9 @@ pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -
     let mut out = Vec::new();
     for (_, vs) in comps {
         let pts: Vec<glam::DVec3> = vs.iter().map(|&v| mesh.vertices[v as usize]).collect();
-        let mut dist: Vec<f64> = pts.iter().map(|p| p.distance_squared(pts[0])).collect();
-        out.push(pts[0]);
-        for _ in 1..per_component.min(pts.len()) {
-            let (i, _) = dist
-                .iter()
-                .enumerate()
-                .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
-                .unwrap();
-            let p = pts[i];
-            out.push(p);
-            for (d, q) in dist.iter_mut().zip(&pts) {
-                *d = d.min(q.distance_squared(p));
-            }
-        }
+        // Farthest-point order from the first vertex (ties to the lowest index).
+        let picks = geom::farthest::farthest_points(&[], &pts, per_component.max(1), None);
+        out.extend(picks.into_iter().map(|i| pts[i]));
     }
     out
 }

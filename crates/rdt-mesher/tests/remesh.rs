@@ -2,6 +2,7 @@
 //! default of `cargo xtask mesh`) and the smoothed one, and point sets through the IMLS oracle,
 //! checked with `verify` against the exact input.
 
+use geom::SplitMix64;
 use glam::DVec3;
 use meshio::TriMesh;
 use oracle::Surface;
@@ -9,7 +10,6 @@ use oracle::pointset::{PointSetError, PointSetParams, PointSetSurface};
 use oracle::polyhedron::{
     PolyhedronError, PolyhedronSurface, SmoothPolyhedron, sharp_edge_deviation,
 };
-use oracle::roots::SplitMix64;
 use rdt_mesher::{Criteria, MeshOptions, mesh};
 
 fn bunny() -> TriMesh {

@@ -4,8 +4,8 @@
 //! ellipsoid with semi-axes 1, 0.6, 0.4 (d_M^inf = 0.4^2 / 1 = 0.16, the smallest radius of
 //! curvature, reached at the ends (+-1, 0, 0) of the long axis).
 
+use geom::SplitMix64;
 use glam::DVec3;
-use oracle::roots::SplitMix64;
 use oracle::{Surface, catalog};
 use proptest::prelude::*;
 use rdt_mesher::init::persistent_facets;

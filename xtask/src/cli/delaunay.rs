@@ -16,6 +16,7 @@ use std::time::Instant;
 use crate::cli::points::parse_xyz;
 use anyhow::{Context, Result, bail};
 use delaunay3::{DVec3, Triangulation};
+use geom::SplitMix64;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Distribution {
@@ -50,31 +51,17 @@ pub struct DelaunayArgs {
     pub validate: bool,
 }
 
-struct SplitMix(u64);
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// Random points of the given distribution (deterministic in `seed`).
 pub fn random_points(n: usize, seed: u64, dist: Distribution) -> Vec<DVec3> {
-    let mut r = SplitMix(seed);
+    let mut r = SplitMix64(seed);
     match dist {
         Distribution::Cube => (0..n)
-            .map(|_| DVec3::new(r.unit(), r.unit(), r.unit()))
+            .map(|_| DVec3::new(r.next_f64(), r.next_f64(), r.next_f64()))
             .collect(),
         Distribution::Sphere => (0..n)
             .map(|_| {
                 loop {
-                    let p = DVec3::new(r.unit(), r.unit(), r.unit()) * 2.0 - DVec3::ONE;
+                    let p = DVec3::new(r.next_f64(), r.next_f64(), r.next_f64()) * 2.0 - DVec3::ONE;
                     let l = p.length_squared();
                     if l > 0.0 && l <= 1.0 {
                         break p / l.sqrt();

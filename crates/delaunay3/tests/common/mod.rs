@@ -2,22 +2,12 @@
 use delaunay3::{DVec3, Triangulation};
 use std::collections::BTreeSet;
 
-/// SplitMix64: a tiny deterministic generator for test data.
-pub struct Rng(pub u64);
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    pub fn point(&mut self) -> DVec3 {
-        DVec3::new(self.unit(), self.unit(), self.unit())
-    }
+/// The workspace's one seeded generator (SplitMix64) for test data.
+pub use geom::SplitMix64 as Rng;
+
+/// A uniform point of the unit cube: three draws of [`Rng::next_f64`] (x, y, z).
+pub fn cube_point(r: &mut Rng) -> DVec3 {
+    DVec3::new(r.next_f64(), r.next_f64(), r.next_f64())
 }
 
 /// Distinct points (bitwise after -0 normalization) of `pts`.

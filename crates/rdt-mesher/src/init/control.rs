@@ -25,22 +25,12 @@ fn control_points(s: &dyn Surface, opts: &MeshOptions) -> Vec<DVec3> {
     if pts.len() <= k {
         return pts;
     }
-    // Farthest-point selection, deterministic (starts from the first point).
-    let mut chosen = vec![pts[0]];
-    let mut dist: Vec<f64> = pts.iter().map(|p| p.distance_squared(pts[0])).collect();
-    while chosen.len() < k {
-        let (i, _) = dist
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
-            .unwrap();
-        let p = pts[i];
-        chosen.push(p);
-        for (d, q) in dist.iter_mut().zip(&pts) {
-            *d = d.min(q.distance_squared(p));
-        }
-    }
-    chosen
+    // Farthest-point selection, deterministic (starts from the first point, ties to the
+    // lowest index).
+    geom::farthest::farthest_points(&[], &pts, k, None)
+        .into_iter()
+        .map(|i| pts[i])
+        .collect()
 }
 
 impl Mesher<'_> {

@@ -4,8 +4,8 @@
 use super::cgal::CgalBaseline;
 use super::common::{BenchArgs, Row, median};
 use anyhow::{Context, Result};
+use geom::SplitMix64;
 use glam::DVec3;
-use oracle::roots::SplitMix64;
 use std::time::Instant;
 
 /// Same generator as bench/cgal (SplitMix64), so both tools triangulate the same points.
