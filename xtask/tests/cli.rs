@@ -1153,3 +1153,19 @@ fn an_empty_result_is_an_error() {
     );
     assert!(!d.join("out.ply").exists(), "an empty mesh was written");
 }
+
+/// `delaunay --random N` beyond what memory can hold is a usage error before any allocation
+/// (issue 17: 4,000,000,000 aborted on a 96 GB allocation).
+#[test]
+fn delaunay_random_counts_are_bounded() {
+    let d = scratch("delaunay-random");
+    for n in ["4000000000", "0", "-5"] {
+        let arg = format!("--random={n}");
+        let out = xtask(&d, &["delaunay", &arg]);
+        assert_no_panic(&out);
+        assert_eq!(out.status.code(), Some(2), "{n}: {}", text(&out.stderr));
+        mentions(&text(&out.stderr), &["--random"]);
+    }
+    let out = xtask(&d, &["delaunay", "--random", "50"]);
+    assert!(ok(&out).contains("\"valid\":true"));
+}

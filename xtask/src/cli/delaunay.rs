@@ -37,8 +37,9 @@ pub struct DelaunayArgs {
     /// Output tetrahedra, one per line as four 0-based input indices.
     #[arg(long)]
     pub output: Option<PathBuf>,
-    /// Number of random points to triangulate.
-    #[arg(long)]
+    /// Number of random points to triangulate (1 to 50,000,000: about 14 GB at 280 bytes
+    /// a point).
+    #[arg(long, value_parser = parse_point_count)]
     pub random: Option<usize>,
     /// Seed of the random points.
     #[arg(long, default_value_t = 0)]
@@ -168,6 +169,25 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
         })
     );
     Ok(())
+}
+
+/// The most random points `--random` accepts (the triangulation takes about 280 bytes a
+/// point, so this is about 14 GB).
+pub const MAX_RANDOM_POINTS: usize = 50_000_000;
+
+/// `--random N`: a whole number of points, 1 to [`MAX_RANDOM_POINTS`], checked before any
+/// allocation.
+fn parse_point_count(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a whole number of points"))?;
+    if n == 0 || n > MAX_RANDOM_POINTS {
+        return Err(format!(
+            "{n} points: give 1 to {MAX_RANDOM_POINTS} (about 280 bytes a point)"
+        ));
+    }
+    Ok(n)
 }
 
 #[cfg(test)]
