@@ -1,46 +1,12 @@
-//! End-to-end properties of the refinement on analytic surfaces defined in the test (so these
+//! End-to-end properties of the refinement on analytic surfaces (`common/analytic.rs`, so these
 //! tests depend only on `oracle`'s trait, not on a backend).
 
 use glam::DVec3;
-use oracle::{BoundingSphere, Surface};
+use oracle::BoundingSphere;
 use rdt_mesher::{Criteria, MeshOptions, OracleKind, Sizing, mesh, topology};
 
-struct Analytic<F: Fn(DVec3) -> f64 + Send + Sync> {
-    f: F,
-    center: DVec3,
-    radius: f64,
-}
-
-impl<F: Fn(DVec3) -> f64 + Send + Sync> Surface for Analytic<F> {
-    fn bounding_sphere(&self) -> BoundingSphere {
-        BoundingSphere {
-            center: self.center,
-            radius: self.radius,
-        }
-    }
-    fn value(&self, p: DVec3) -> f64 {
-        (self.f)(p)
-    }
-}
-
-fn sphere() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
-    Analytic {
-        f: |p: DVec3| p.length_squared() - 1.0,
-        center: DVec3::ZERO,
-        radius: 2.0,
-    }
-}
-
-fn torus() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
-    Analytic {
-        f: |p: DVec3| {
-            let q = p.length_squared() + 1.0 - 0.09;
-            q * q - 4.0 * (p.x * p.x + p.y * p.y)
-        },
-        center: DVec3::ZERO,
-        radius: 2.0,
-    }
-}
+mod common;
+use common::analytic::{Analytic, sphere, torus};
 
 /// Euler characteristic V - E + F of a triangle mesh.
 fn euler(m: &meshio::TriMesh) -> i64 {

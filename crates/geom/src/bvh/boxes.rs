@@ -119,23 +119,13 @@ impl Bvh {
                         continue;
                     }
                     let di = dist2(i);
-                    best = match best {
-                        Some((bi, bd)) if bd < di || (bd == di && bi < i) => Some((bi, bd)),
-                        _ => Some((i, di)),
-                    };
+                    super::keep_nearest(&mut best, i, di);
                 }
             } else {
                 let (l, r) = (node.first, node.first + 1);
                 let dl = self.nodes[l as usize].bounds.distance_squared(p);
                 let dr = self.nodes[r as usize].bounds.distance_squared(p);
-                // Visit the nearer child first (pushed last).
-                if dl <= dr {
-                    stack.push((dr, r));
-                    stack.push((dl, l));
-                } else {
-                    stack.push((dl, l));
-                    stack.push((dr, r));
-                }
+                super::push_nearer_last(&mut stack, (dl, l), (dr, r));
             }
         }
         best

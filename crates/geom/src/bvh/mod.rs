@@ -126,6 +126,31 @@ pub(crate) fn split(cents: &[DVec3]) -> Split {
 
 /// Conservative segment / box overlap (slab test) of `a + t d`, `t ∈ [0, 1]`.
 #[inline]
+/// Best-first nearest search, shared by both trees: keep `(i, d2)` if it is nearer than the
+/// best so far (ties to the smaller index).
+pub(crate) fn keep_nearest<I: Copy + PartialOrd>(best: &mut Option<(I, f64)>, i: I, d2: f64) {
+    *best = match *best {
+        Some((bi, bd)) if bd < d2 || (bd == d2 && bi < i) => Some((bi, bd)),
+        _ => Some((i, d2)),
+    };
+}
+
+/// Best-first nearest search: push the two children of a node so that the nearer one is
+/// visited first (pushed last).
+pub(crate) fn push_nearer_last(
+    stack: &mut Vec<(f64, u32)>,
+    (dl, l): (f64, u32),
+    (dr, r): (f64, u32),
+) {
+    if dl <= dr {
+        stack.push((dr, r));
+        stack.push((dl, l));
+    } else {
+        stack.push((dl, l));
+        stack.push((dr, r));
+    }
+}
+
 pub(crate) fn segment_box(a: DVec3, d: DVec3, lo: DVec3, hi: DVec3) -> bool {
     let mut t0 = 0.0f64;
     let mut t1 = 1.0f64;

@@ -397,23 +397,13 @@ impl TriangleBvh {
                     let [a, b, c] = self.tris[k];
                     let di = (closest_point_triangle(p, a, b, c) - p).length_squared();
                     let i = self.face_ids[k];
-                    best = match best {
-                        Some((bi, bd)) if bd < di || (bd == di && bi < i) => Some((bi, bd)),
-                        _ => Some((i, di)),
-                    };
+                    super::keep_nearest(&mut best, i, di);
                 }
             } else {
                 let (l, r) = (node.first, node.first + 1);
                 let dl = box_dist2(p, &self.nodes[l as usize]);
                 let dr = box_dist2(p, &self.nodes[r as usize]);
-                // Visit the nearer child first (pushed last).
-                if dl <= dr {
-                    stack.push((dr, r));
-                    stack.push((dl, l));
-                } else {
-                    stack.push((dl, l));
-                    stack.push((dr, r));
-                }
+                super::push_nearer_last(&mut stack, (dl, l), (dr, r));
             }
         }
         best

@@ -1,7 +1,7 @@
 //! Bisection (ours): the safe root finder of the bipolar oracle (section 6.4.2), exact for
 //! sign-only functions.
 
-use super::bracket::{check_ends, nan_at};
+use super::bracket::{check_ends, nan_at, same_side_end};
 use crate::OracleError;
 use glam::DVec3;
 
@@ -28,10 +28,10 @@ pub fn try_bisect(
     tol: f64,
 ) -> Result<DVec3, OracleError> {
     check_ends(a, fa, b, fb)?;
-    let a_neg = fa < 0.0;
-    if a_neg == (fb < 0.0) {
-        return Ok(if fa.abs() <= fb.abs() { a } else { b });
+    if let Some(end) = same_side_end(a, fa, b, fb) {
+        return Ok(end);
     }
+    let a_neg = fa < 0.0;
     let (mut a, mut b) = (a, b);
     let tol2 = tol * tol;
     for _ in 0..2100 {

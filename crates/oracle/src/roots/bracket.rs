@@ -130,6 +130,12 @@ pub(crate) fn nan_at(p: DVec3) -> OracleError {
 }
 
 /// `Err` naming the first end whose value is NaN.
+/// The end with the smaller |value| when both ends are on the same side (a violated bracket
+/// precondition, which the root finders answer with that end), else `None`.
+pub(crate) fn same_side_end(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Option<DVec3> {
+    ((fa < 0.0) == (fb < 0.0)).then_some(if fa.abs() <= fb.abs() { a } else { b })
+}
+
 pub(crate) fn check_ends(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Result<(), OracleError> {
     if fa.is_nan() {
         return Err(nan_at(a));

@@ -1,7 +1,9 @@
 //! Illinois (modified regula falsi) root finders (ours), in the vocabulary of [`super`].
 
 use super::bisect::try_bisect;
-use super::bracket::{ParamBracket, check_ends, is_sign_value, nan_at, shrink_bracket};
+use super::bracket::{
+    ParamBracket, check_ends, is_sign_value, nan_at, same_side_end, shrink_bracket,
+};
 use crate::OracleError;
 use glam::DVec3;
 
@@ -22,10 +24,10 @@ pub fn try_find_root(
     tol: f64,
 ) -> Result<DVec3, OracleError> {
     check_ends(a, fa, b, fb)?;
-    let neg0 = fa < 0.0;
-    if neg0 == (fb < 0.0) {
-        return Ok(if fa.abs() <= fb.abs() { a } else { b });
+    if let Some(end) = same_side_end(a, fa, b, fb) {
+        return Ok(end);
     }
+    let neg0 = fa < 0.0;
     let d = b - a;
     let len = d.length();
     if len.is_nan() || len <= tol {

@@ -4,7 +4,7 @@
 use super::*;
 use crate::{Criteria, OracleKind, Sizing, Unmet};
 use glam::DVec3;
-use oracle::{BoundingSphere, catalog};
+use oracle::catalog;
 
 fn torus_opts() -> MeshOptions {
     MeshOptions {
@@ -177,43 +177,10 @@ fn scaffold_changes_speed_not_the_result() {
     assert!((a / b - 1.0).abs() < 0.05, "{a} vs {b} vertices");
 }
 
-/// Analytic surfaces defined here (the tests below depend only on `oracle`'s trait).
-struct Analytic<F: Fn(DVec3) -> f64 + Send + Sync> {
-    f: F,
-    center: DVec3,
-    radius: f64,
-}
-
-impl<F: Fn(DVec3) -> f64 + Send + Sync> Surface for Analytic<F> {
-    fn bounding_sphere(&self) -> BoundingSphere {
-        BoundingSphere {
-            center: self.center,
-            radius: self.radius,
-        }
-    }
-    fn value(&self, p: DVec3) -> f64 {
-        (self.f)(p)
-    }
-}
-
-fn sphere() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
-    Analytic {
-        f: |p: DVec3| p.length_squared() - 1.0,
-        center: DVec3::ZERO,
-        radius: 2.0,
-    }
-}
-
-fn torus() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
-    Analytic {
-        f: |p: DVec3| {
-            let q = p.length_squared() + 1.0 - 0.09;
-            q * q - 4.0 * (p.x * p.x + p.y * p.y)
-        },
-        center: DVec3::ZERO,
-        radius: 2.0,
-    }
-}
+/// Analytic surfaces through `oracle`'s trait only (shared with the integration tests).
+#[path = "../../tests/common/analytic.rs"]
+mod analytic;
+use analytic::{Analytic, sphere, torus};
 
 fn in_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
     rayon::ThreadPoolBuilder::new()

@@ -1,0 +1,42 @@
+//! Analytic test surfaces defined only through `oracle`'s trait (no backend), shared by the
+//! integration tests and the mesher's unit tests (`src/mesher/tests.rs` includes this file).
+
+use glam::DVec3;
+use oracle::{BoundingSphere, Surface};
+
+/// A surface given by a closure and a bounding sphere.
+pub struct Analytic<F: Fn(DVec3) -> f64 + Send + Sync> {
+    pub f: F,
+    pub center: DVec3,
+    pub radius: f64,
+}
+impl<F: Fn(DVec3) -> f64 + Send + Sync> Surface for Analytic<F> {
+    fn bounding_sphere(&self) -> BoundingSphere {
+        BoundingSphere {
+            center: self.center,
+            radius: self.radius,
+        }
+    }
+    fn value(&self, p: DVec3) -> f64 {
+        (self.f)(p)
+    }
+}
+
+pub fn sphere() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
+    Analytic {
+        f: |p: DVec3| p.length_squared() - 1.0,
+        center: DVec3::ZERO,
+        radius: 2.0,
+    }
+}
+
+pub fn torus() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
+    Analytic {
+        f: |p: DVec3| {
+            let q = p.length_squared() + 1.0 - 0.09;
+            q * q - 4.0 * (p.x * p.x + p.y * p.y)
+        },
+        center: DVec3::ZERO,
+        radius: 2.0,
+    }
+}
