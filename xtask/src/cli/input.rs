@@ -202,7 +202,9 @@ fn over_budget(
     dm_inf: Option<f64>,
 ) -> anyhow::Error {
     let raise_v = round_up_2(f.vertices as f64 * 1.25) as u64;
-    let raise_m = (f.memory_bytes as f64 * 1.25 / (1u64 << 30) as f64).ceil().max(1.0);
+    let raise_m = (f.memory_bytes as f64 * 1.25 / (1u64 << 30) as f64)
+        .ceil()
+        .max(1.0);
     let (asked, fitting) = match dm_inf {
         None => (format!("--size {}", f.sigma), format!("--size {fits}")),
         Some(dm) => (

@@ -4,12 +4,12 @@
 use super::output::{epsilon, parse_angle, positive};
 use crate::cli::input::{self, SurfaceOptions, cli_error};
 use crate::cli::mesh_report;
-use serde_json::{Value, json};
 use anyhow::{Context, Result, bail};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use indicatif::{ProgressBar, ProgressStyle};
 use rdt_mesher::pipeline::{self, Event, Failure, Input, Outcome, Request, SizeRequest, Verdict};
 use rdt_mesher::{Initialization, OracleKind};
+use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -42,28 +42,28 @@ pub struct MeshArgs {
     /// edge length), in the surface's units; smaller is finer, vertices grow as 1 / size^2.
     /// CGAL: radius_bound (facet_size); pygalmesh: max_radius_surface_delaunay_ball; the
     /// paper's sigma. Default: chosen from a forecast (docs/GUIDE.md).
-    #[arg(long, conflicts_with = "epsilon", value_parser = positive("--size", "the size bound", "0.05"))]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "epsilon", value_parser = positive("--size", "the size bound", "0.05"))]
     pub size: Option<f64>,
     /// Adaptive size in (0, 1): finer where the surface is curved or close to itself, in two
     /// passes (a uniform pass at epsilon times the smallest feature size, then sizes of 0.9
     /// epsilon times the local feature size; the paper's section 6.5, d_M^inf and d_M).
-    #[arg(long, value_parser = epsilon("--epsilon"))]
+    #[arg(long, allow_hyphen_values = true, value_parser = epsilon("--epsilon"))]
     pub epsilon: Option<f64>,
     /// The smallest feature size (the paper's d_M^inf: the least distance from the surface to
     /// its medial axis), for --epsilon (default: the catalog's or the backend's value).
-    #[arg(long, value_parser = positive("--dm-inf", "d_M^inf", "0.3"))]
+    #[arg(long, allow_hyphen_values = true, value_parser = positive("--dm-inf", "d_M^inf", "0.3"))]
     pub dm_inf: Option<f64>,
     /// Initial sample: control points (6.4.3) or persistent facets (6.2).
     #[arg(long, default_value = "control-points", value_parser = names::<Initialization>(Initialization::ALL.map(Initialization::name)))]
     pub initialization: Initialization,
     /// Smallest facet angle in degrees, in [0, 35) (0 = off; 30, the default, has a
     /// termination proof). CGAL: angular_bound (facet_angle); pygalmesh: min_facet_angle.
-    #[arg(long, default_value_t = 30.0, value_parser = parse_angle)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 30.0, value_parser = parse_angle)]
     pub angle: f64,
     /// Largest distance from a facet's circumcenter to the surface (to its surface Delaunay
     /// ball's center), in the surface's units. CGAL: distance_bound (facet_distance);
     /// pygalmesh: max_facet_distance.
-    #[arg(long, value_parser = positive("--distance", "the distance bound", "0.01"))]
+    #[arg(long, allow_hyphen_values = true, value_parser = positive("--distance", "the distance bound", "0.01"))]
     pub distance: Option<f64>,
     /// Oracle: bipolar (sign change + one point) or intersection (all points).
     #[arg(long, default_value = "bipolar", value_parser = names::<OracleKind>(OracleKind::ALL.map(OracleKind::name)))]
@@ -81,12 +81,12 @@ pub struct MeshArgs {
     /// Vertex budget: stop at this many sample points (the mesh so far is written, unmet
     /// criteria reported). Default 2,000,000, and then a --size or --epsilon forecasting more
     /// is refused before meshing.
-    #[arg(long, value_parser = super::output::parse_max_vertices)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::output::parse_max_vertices)]
     pub max_vertices: Option<usize>,
     /// Memory budget, e.g. 2G or 500M (binary units; default 4G): a --size or --epsilon
     /// whose forecast needs more is refused before meshing, and the run stops at the vertex
     /// count it affords.
-    #[arg(long, value_parser = super::output::parse_memory)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::output::parse_memory)]
     pub max_memory: Option<u64>,
     /// Stop after this many seconds (likewise).
     #[arg(long, value_parser = super::output::parse_seconds)]
@@ -112,7 +112,7 @@ pub struct MeshArgs {
     #[arg(long)]
     pub strict: bool,
     /// Requested epsilon for the certificate, in (0, 1) (default: sigma / d_M^inf when known).
-    #[arg(long, value_parser = epsilon("--certify-epsilon"))]
+    #[arg(long, allow_hyphen_values = true, value_parser = epsilon("--certify-epsilon"))]
     pub certify_epsilon: Option<f64>,
     /// No progress bar.
     #[arg(long, short)]

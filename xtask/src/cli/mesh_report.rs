@@ -61,7 +61,9 @@ fn bounding_box(out: &Outcome) -> Value {
     if v.is_empty() {
         return Value::Null;
     }
-    let (lo, hi) = v.iter().fold((v[0], v[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let (lo, hi) = v
+        .iter()
+        .fold((v[0], v[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     json!({ "min": lo.to_array(), "max": hi.to_array() })
 }
 

@@ -18,12 +18,9 @@ pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
 
 /// `--time-limit S`: a finite number of seconds in (0, a year].
 pub fn parse_seconds(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| {
-            format!("--time-limit {s}: not a number of seconds (e.g. --time-limit 60 or 2.5)")
-        })?;
+    let v: f64 = s.trim().parse().map_err(|_| {
+        format!("--time-limit {s}: not a number of seconds (e.g. --time-limit 60 or 2.5)")
+    })?;
     if !(v.is_finite() && v > 0.0 && v <= MAX_SECONDS) {
         return Err(format!(
             "--time-limit {s}: give a positive, finite number of seconds, at most {MAX_SECONDS} (a year), e.g. --time-limit 60"
@@ -40,7 +37,9 @@ pub fn positive(
 ) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
     move |s: &str| {
         let v: f64 = s.trim().parse().map_err(|_| {
-            format!("{flag} {s}: not a number; {what} must be a positive number, e.g. {flag} {example}")
+            format!(
+                "{flag} {s}: not a number; {what} must be a positive number, e.g. {flag} {example}"
+            )
         })?;
         if !(v.is_finite() && v > 0.0) {
             return Err(format!(
@@ -202,16 +201,26 @@ mod tests {
         let size = positive("--size", "the size bound", "0.05");
         for bad in ["-inf", "nan", "0", "-1", "x"] {
             let e = size(bad).unwrap_err();
-            assert!(e.starts_with(&format!("--size {bad}:")) && e.contains("--size 0.05"), "{e}");
+            assert!(
+                e.starts_with(&format!("--size {bad}:")) && e.contains("--size 0.05"),
+                "{e}"
+            );
         }
         assert_eq!(size("0.2"), Ok(0.2));
         for bad in ["100", "35", "-1", "nan"] {
-            assert!(parse_angle(bad).unwrap_err().contains("e.g. --angle 30"), "{bad}");
+            assert!(
+                parse_angle(bad).unwrap_err().contains("e.g. --angle 30"),
+                "{bad}"
+            );
         }
         assert_eq!(parse_angle("0"), Ok(0.0));
         assert!(epsilon("--epsilon")("1.5").is_err() && epsilon("--epsilon")("0.2").is_ok());
         assert_eq!(parse_memory("2G"), Ok(2 << 30));
-        assert!(parse_memory("-2G").unwrap_err().starts_with("--max-memory -2G"));
+        assert!(
+            parse_memory("-2G")
+                .unwrap_err()
+                .starts_with("--max-memory -2G")
+        );
         assert!(parse_max_vertices("0").is_err() && parse_max_vertices("10") == Ok(10));
     }
 

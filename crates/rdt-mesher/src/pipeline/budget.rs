@@ -25,7 +25,7 @@ pub const AUTO_MAX_VERTICES: u64 = 100_000;
 
 /// No size requested and the theorems' default forecasts too many vertices: the size chosen
 /// forecasts this many (images: unless half the voxel spacing is coarser).
-pub const AUTO_TARGET_VERTICES: u64 = 50_000;
+pub const AUTO_TARGET_VERTICES: u64 = 30_000;
 
 /// The budgets of a request, defaults applied.
 ///
@@ -89,13 +89,14 @@ impl Budgets {
         self.max_vertices.min(mem.max(1))
     }
 
-    /// The budget `f` exceeds, if any: the memory budget, or the vertex budget when it was
-    /// not requested (a requested one stops the run instead: see [`Request::max_vertices`]).
+    /// The budget `f` exceeds, if any: the vertex budget when it was not requested (a
+    /// requested one stops the run instead: see [`Request::max_vertices`]), else the memory
+    /// budget.
     pub fn exceeded_by(&self, f: &Forecast) -> Option<Budget> {
-        if f.memory_bytes > self.max_memory {
-            Some(Budget::Memory(self.max_memory))
-        } else if !self.vertices_given && f.vertices > self.max_vertices as u64 {
+        if !self.vertices_given && f.vertices > self.max_vertices as u64 {
             Some(Budget::Vertices(self.max_vertices))
+        } else if f.memory_bytes > self.max_memory {
+            Some(Budget::Memory(self.max_memory))
         } else {
             None
         }

@@ -224,7 +224,11 @@ pub fn voxel_crossing_area(img: &ImageSurface) -> AreaEstimate {
         .reduce(|| [0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
     let m = img.volume().affine().matrix3;
     let (a, b, c) = (m.x_axis, m.y_axis, m.z_axis);
-    let faces = [b.cross(c).length(), a.cross(c).length(), a.cross(b).length()];
+    let faces = [
+        b.cross(c).length(),
+        a.cross(c).length(),
+        a.cross(b).length(),
+    ];
     let projected: f64 = (0..3).map(|d| counts[d] as f64 * faces[d]).sum();
     AreaEstimate {
         area: projected / 1.5,
