@@ -389,7 +389,7 @@ pub fn round_up_3(x: f64) -> f64 {
     let e = 10f64.powi(x.log10().floor() as i32 - 2);
     let r = (x / e).ceil() * e;
     // Printing r with the digits it has gives r back (e.g. 1.73, not 1.7300000000000002).
-    format!("{}", sig(r)).parse().unwrap_or(r)
+    sig(r).parse().unwrap_or(r)
 }
 
 #[cfg(test)]
