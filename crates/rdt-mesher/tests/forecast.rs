@@ -30,7 +30,11 @@ fn forecast_is_close_to_the_count() {
         let f = *p.forecast().expect("a forecast");
         let out = p.execute(&mut |_| {}).unwrap();
         let ratio = f.vertices as f64 / out.stats.vertices as f64;
-        assert!((0.9..1.1).contains(&ratio), "{spec}: {f} vs {}", out.stats.vertices);
+        assert!(
+            (0.9..1.1).contains(&ratio),
+            "{spec}: {f} vs {}",
+            out.stats.vertices
+        );
     }
 }
 
@@ -60,7 +64,9 @@ fn over_budget_sizes_are_refused_with_one_that_fits() {
         ..sized(0.01)
     };
     let e = plan(&input, &req).err().expect("refused");
-    assert!(matches!(e, PipelineError::OverBudget { budget: Budget::Memory(b), .. } if b == 20 << 20));
+    assert!(
+        matches!(e, PipelineError::OverBudget { budget: Budget::Memory(b), .. } if b == 20 << 20)
+    );
     assert!(e.to_string().contains("memory budget of 20 MiB"), "{e}");
 }
 
@@ -74,9 +80,16 @@ fn requested_vertex_budget_stops_the_run() {
         ..sized(0.01)
     };
     let p = plan(&input, &req).unwrap();
-    assert!(p.notes().iter().any(|n| n.contains("will stop there")), "{:?}", p.notes());
+    assert!(
+        p.notes().iter().any(|n| n.contains("will stop there")),
+        "{:?}",
+        p.notes()
+    );
     let out = p.execute(&mut |_| {}).unwrap();
-    assert_eq!(out.stats.stopped_by, Some(StopReason::MaxVertices { limit: 2000 }));
+    assert_eq!(
+        out.stats.stopped_by,
+        Some(StopReason::MaxVertices { limit: 2000 })
+    );
     assert!(!out.mesh.triangles.is_empty() && !out.stats.unmet.is_empty());
     assert!(!out.verdict.passed());
     let coarse = sized(0.3);
@@ -86,7 +99,11 @@ fn requested_vertex_budget_stops_the_run() {
         max_memory: Some(1 << 30),
         ..sized(0.3)
     };
-    let cap = plan(&input, &small).unwrap().mesh_options().max_vertices.unwrap();
+    let cap = plan(&input, &small)
+        .unwrap()
+        .mesh_options()
+        .max_vertices
+        .unwrap();
     assert!(cap < DEFAULT_MAX_VERTICES && rdt_mesher::pipeline::memory_for(cap as u64) <= 1 << 30);
 }
 
@@ -112,9 +129,15 @@ fn default_size_is_kept_when_affordable_and_replaced_otherwise() {
     };
     let p = plan(&input, &tight).unwrap();
     let f = p.forecast().unwrap();
-    assert!(p.sigma().unwrap() > 0.027 && f.memory_bytes <= 20 << 20, "{f}");
+    assert!(
+        p.sigma().unwrap() > 0.027 && f.memory_bytes <= 20 << 20,
+        "{f}"
+    );
     let note = p.notes().last().unwrap();
-    assert!(note.contains("instead") && note.contains("not claimed"), "{note}");
+    assert!(
+        note.contains("instead") && note.contains("not claimed"),
+        "{note}"
+    );
 }
 
 /// Two passes: the first pass's size is what the budget checks.
@@ -129,5 +152,8 @@ fn two_pass_first_pass_is_checked() {
         ..Default::default()
     };
     let e = plan(&input, &req).err().expect("refused");
-    assert!(matches!(e, PipelineError::OverBudget { dm_inf: Some(d), .. } if d == 1.0), "{e}");
+    assert!(
+        matches!(e, PipelineError::OverBudget { dm_inf: Some(d), .. } if d == 1.0),
+        "{e}"
+    );
 }

@@ -135,7 +135,12 @@ fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
     if labels.is_empty() {
         bail!("--labels all: {spec} has no label other than the background 0: nothing to mesh");
     }
-    eprintln!("note: {} label(s) to mesh: {labels:?}", labels.len());
+    let list: Vec<String> = labels.iter().map(|l| l.to_string()).collect();
+    eprintln!(
+        "note: {} label(s) to mesh: {}",
+        labels.len(),
+        list.join(", ")
+    );
     let mut failures = Vec::new();
     for l in labels {
         let mut b = a.clone();
