@@ -38,6 +38,13 @@ fn run(d: &Path, args: &[&str]) -> Output {
         .expect("cannot run the xtask binary")
 }
 
+/// `xtask mesh -q WORDS` (split at spaces).
+fn mesh(d: &Path, words: &str) -> Output {
+    let mut args = vec!["mesh", "-q"];
+    args.extend(words.split_whitespace());
+    run(d, &args)
+}
+
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
@@ -91,7 +98,7 @@ fn report(d: &Path, name: &str) -> serde_json::Value {
 #[test]
 fn default_torus_keeps_the_theorem_size_and_prints_a_forecast() {
     let d = dir("torus");
-    let o = run(&d, &["mesh", "-q", "-o", "t.ply", "--report", "t.json"]);
+    let o = mesh(&d, "-o t.ply --report t.json");
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     has(
@@ -107,7 +114,7 @@ fn default_torus_keeps_the_theorem_size_and_prints_a_forecast() {
     let v = r["forecast"]["vertices"].as_u64().unwrap();
     assert!((9_700..=11_900).contains(&v), "forecast {v} vs 10785");
     assert_eq!(r["forecast"]["area"]["method"], "coarse-mesh");
-    let same = run(&d, &["mesh", "-q", "--size", "0.027", "-o", "s.ply"]);
+    let same = mesh(&d, "--size 0.027 -o s.ply");
     assert!(same.status.success());
     assert_eq!(
         std::fs::read(d.join("t.ply")).unwrap(),
@@ -121,12 +128,7 @@ fn default_torus_keeps_the_theorem_size_and_prints_a_forecast() {
 fn image_default_is_tied_to_the_voxel_spacing_and_says_so() {
     let d = dir("phantom");
     let file = fixture("images/phantom_i16_32.nii.gz");
-    let o = run(
-        &d,
-        &[
-            "mesh", "-q", &file, "--iso", "300", "--report", "r.json", "-o", "p.ply",
-        ],
-    );
+    let o = mesh(&d, &format!("{file} --iso 300 --report r.json -o p.ply"));
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     has(
@@ -174,18 +176,7 @@ fn image_default_is_tied_to_the_voxel_spacing_and_says_so() {
 #[test]
 fn a_size_over_budget_is_refused_at_once_with_the_size_that_fits() {
     let d = dir("refused");
-    let o = run(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0.001",
-            "-o",
-            "x.ply",
-        ],
-    );
+    let o = mesh(&d, "implicit:sphere --size 0.001 -o x.ply");
     let (e, code) = one_error(&o);
     assert_eq!(code, Some(1));
     has(
@@ -209,20 +200,7 @@ fn a_size_over_budget_is_refused_at_once_with_the_size_that_fits() {
     let f: f64 = fits.parse().unwrap();
     assert!(f > 0.001 && f < 0.003, "{fits}");
     // Memory: the same with a tiny memory budget names --max-memory.
-    let o = run(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0.01",
-            "--max-memory",
-            "20M",
-            "-o",
-            "x.ply",
-        ],
-    );
+    let o = mesh(&d, "implicit:sphere --size 0.01 --max-memory 20M -o x.ply");
     let (e, _) = one_error(&o);
     has(
         &e,
@@ -233,18 +211,7 @@ fn a_size_over_budget_is_refused_at_once_with_the_size_that_fits() {
         ],
     );
     // Two passes: the first pass's size is checked, and the epsilon that fits is named.
-    let o = run(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--epsilon",
-            "0.001",
-            "-o",
-            "x.ply",
-        ],
-    );
+    let o = mesh(&d, "implicit:sphere --epsilon 0.001 -o x.ply");
     let (e, _) = one_error(&o);
     has(&e, &["--epsilon 0.001", "first pass", "--epsilon 0.00"]);
 }
@@ -255,21 +222,9 @@ fn a_size_over_budget_is_refused_at_once_with_the_size_that_fits() {
 #[test]
 fn a_requested_vertex_budget_stops_the_run_with_a_valid_mesh() {
     let d = dir("stop");
-    let o = run(
+    let o = mesh(
         &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0.01",
-            "--max-vertices",
-            "3000",
-            "-o",
-            "s.ply",
-            "--report",
-            "s.json",
-        ],
+        "implicit:sphere --size 0.01 --max-vertices 3000 -o s.ply --report s.json",
     );
     assert!(o.status.success(), "{}", stderr(&o));
     has(&stderr(&o), &["will stop there with criteria unmet"]);
@@ -304,28 +259,12 @@ fn numeric_flags_are_checked_with_an_example() {
         ("--max-memory", "2X", "e.g. 2G"),
         ("--max-memory", "-1G", "e.g. 2G"),
     ] {
-        let o = run(
-            &d,
-            &["mesh", "-q", "implicit:sphere", flag, value, "-o", "x.ply"],
-        );
+        let o = mesh(&d, &format!("implicit:sphere {flag} {value} -o x.ply"));
         let (e, code) = one_error(&o);
         assert_eq!(code, Some(2), "{flag} {value}: {e}");
         has(&e, &[&format!("{flag} {value}"), example]);
     }
-    let ok = run(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0.3",
-            "--max-memory",
-            "1.5G",
-            "-o",
-            "x.ply",
-        ],
-    );
+    let ok = mesh(&d, "implicit:sphere --size 0.3 --max-memory 1.5G -o x.ply");
     assert!(ok.status.success(), "{}", stderr(&ok));
 }
 
@@ -333,15 +272,9 @@ fn numeric_flags_are_checked_with_an_example() {
 #[test]
 fn missing_iso_names_the_flag_and_the_range() {
     let d = dir("iso");
-    let o = run(
+    let o = mesh(
         &d,
-        &[
-            "mesh",
-            "-q",
-            &fixture("images/phantom_i16_32.nii.gz"),
-            "-o",
-            "x.ply",
-        ],
+        &format!("{} -o x.ply", fixture("images/phantom_i16_32.nii.gz")),
     );
     let (e, _) = one_error(&o);
     has(&e, &["--iso", "[-5, 605]"]);
@@ -352,18 +285,8 @@ fn missing_iso_names_the_flag_and_the_range() {
 #[test]
 fn mesh_input_notes_are_words_and_stats_are_structured() {
     let d = dir("cube");
-    let o = run(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            &fixture("meshes/cube.off"),
-            "-o",
-            "c.ply",
-            "--report",
-            "c.json",
-        ],
-    );
+    let cube = fixture("meshes/cube.off");
+    let o = mesh(&d, &format!("{cube} -o c.ply --report c.json"));
     assert!(o.status.success(), "{}", stderr(&o));
     let (out, err) = (stdout(&o), stderr(&o));
     no_debug_text(&out);
@@ -394,23 +317,9 @@ fn many_components_give_a_short_line_and_bounded_report_lists() {
         *x = u8::from(r2 < 9.0);
     }
     std::fs::write(d.join("balls.raw"), &v).unwrap();
-    let o = run(
+    let o = mesh(
         &d,
-        &[
-            "mesh",
-            "-q",
-            "balls.raw",
-            "--dims",
-            "30,30,30",
-            "--dtype",
-            "u8",
-            "--size",
-            "1",
-            "-o",
-            "b.ply",
-            "--report",
-            "b.json",
-        ],
+        "balls.raw --dims 30,30,30 --dtype u8 --size 1 -o b.ply --report b.json",
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
