@@ -88,7 +88,7 @@ pub struct MeshArgs {
     /// count it affords.
     #[arg(long, allow_hyphen_values = true, value_parser = super::output::parse_memory)]
     pub max_memory: Option<u64>,
-    /// Stop after this many seconds (likewise).
+    /// Stop after this many seconds (the mesh so far is written, unmet criteria reported).
     #[arg(long, value_parser = super::output::parse_seconds)]
     pub time_limit: Option<f64>,
     /// Output mesh (.ply, .off, .obj, .stl). Default: out/NAME.ply.
