@@ -85,6 +85,10 @@ pub struct MeshArgs {
     /// fails or a criterion is unmet: for scripts and regression suites.
     #[arg(long)]
     pub strict: bool,
+    /// Drop closed components of the output enclosing less than this volume (the surface's
+    /// units cubed, e.g. mm^3), each listed in the report's topology_decisions.
+    #[arg(long, value_name = "VOLUME", value_parser = parse_volume)]
+    pub min_component: Option<f64>,
     /// Requested epsilon for the certificate (default: sigma / d_M^inf when known).
     #[arg(long)]
     pub certify_epsilon: Option<f64>,
@@ -97,6 +101,16 @@ pub struct MeshArgs {
     /// (`NAME_label<L>.ply`, or -o's stem with `_label<L>`).
     #[arg(long, conflicts_with = "label")]
     pub labels: Option<String>,
+}
+
+/// `--min-component`: a positive, finite volume.
+fn parse_volume(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "`{s}`: give a positive, finite volume in the surface's units cubed (e.g. 8)"
+        )),
+    }
 }
 
 /// `--labels all`: one run (and one output file) per label of the image.
@@ -166,6 +180,7 @@ fn request(a: &MeshArgs) -> Result<Request> {
         },
         verify: !a.no_verify,
         certify_epsilon: a.certify_epsilon,
+        min_component: a.min_component,
     })
 }
 
