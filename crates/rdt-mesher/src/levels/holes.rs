@@ -1,7 +1,8 @@
-//! Closing a boundary loop (ours, for the topological repair after section 6.6.1's patch): the
-//! triangulation of the loop of least total area that adds no edge already in the mesh (so
-//! every edge keeps two triangles), by dynamic programming; a fan from the loop's centroid
-//! (a new vertex) when no such triangulation exists or the loop is long.
+//! Closing a boundary loop (ours, for the topological repair after section 6.6.1's patch): of
+//! the triangulations of the loop that add no edge already in the mesh (so every edge keeps
+//! two triangles), the one whose smallest angle is largest (then the least area), by dynamic
+//! programming; or a fan from the loop's centroid (a new vertex) when its smallest angle is
+//! larger, when no such triangulation exists, or when the loop is long.
 
 use glam::DVec3;
 use std::collections::HashSet;
@@ -20,17 +21,23 @@ pub(crate) fn close_loop(
 ) -> Vec<[u32; 3]> {
     let n = poly.len();
     let key = |a: u32, b: u32| [a.min(b), a.max(b)];
-    let out = if n <= MAX_DP {
-        min_area(poly, pts, &|a, b| edges.contains(&key(a, b)))
+    let dp = if n <= MAX_DP {
+        best_triangulation(poly, pts, &|a, b| edges.contains(&key(a, b)))
     } else {
         None
     };
-    let out = out.unwrap_or_else(|| {
-        let c = poly.iter().map(|&v| pts[v as usize]).sum::<DVec3>() / n as f64;
-        let m = pts.len() as u32;
-        pts.push(c);
-        (0..n).map(|i| [poly[i], poly[(i + 1) % n], m]).collect()
-    });
+    let c = poly.iter().map(|&v| pts[v as usize]).sum::<DVec3>() / n as f64;
+    let fan_angle = (0..n)
+        .map(|i| min_angle([pts[poly[i] as usize], pts[poly[(i + 1) % n] as usize], c]))
+        .fold(f64::INFINITY, f64::min);
+    let out = match dp {
+        Some((angle, t)) if angle >= fan_angle => t,
+        _ => {
+            let m = pts.len() as u32;
+            pts.push(c);
+            (0..n).map(|i| [poly[i], poly[(i + 1) % n], m]).collect()
+        }
+    };
     for t in &out {
         for i in 0..3 {
             edges.insert(key(t[i], t[(i + 1) % 3]));
@@ -39,21 +46,39 @@ pub(crate) fn close_loop(
     out
 }
 
-/// Least-area triangulation of the polygon `poly` whose diagonals avoid `taken`; `None` if
-/// every triangulation uses a taken diagonal.
-fn min_area(poly: &[u32], pts: &[DVec3], taken: &dyn Fn(u32, u32) -> bool) -> Option<Vec<[u32; 3]>> {
+/// The smallest angle of a triangle (radians; 0 if degenerate).
+fn min_angle(p: [DVec3; 3]) -> f64 {
+    (0..3)
+        .map(|i| {
+            let (a, b) = (p[(i + 1) % 3] - p[i], p[(i + 2) % 3] - p[i]);
+            let c = a.cross(b).length().atan2(a.dot(b));
+            if c.is_finite() { c } else { 0.0 }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The triangulation of the polygon `poly` whose diagonals avoid `taken` with the largest
+/// smallest angle, then the least area, with that angle; `None` if every triangulation uses
+/// a taken diagonal.
+fn best_triangulation(
+    poly: &[u32],
+    pts: &[DVec3],
+    taken: &dyn Fn(u32, u32) -> bool,
+) -> Option<(f64, Vec<[u32; 3]>)> {
     let n = poly.len();
     if n < 3 {
         return None;
     }
     let p = |i: usize| pts[poly[i] as usize];
     let area = |i: usize, j: usize, k: usize| 0.5 * (p(j) - p(i)).cross(p(k) - p(i)).length();
-    // w[i][k]: least area of the sub-polygon i..=k (k - i >= 1), choice[i][k] its apex.
+    // w[i][k]: (smallest angle, -area) of the best triangulation of the sub-polygon i..=k
+    // (k - i >= 1), compared lexicographically; choice[i][k] its apex.
     let idx = |i: usize, k: usize| i * n + k;
-    let mut w = vec![f64::INFINITY; n * n];
+    let none = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    let mut w = vec![none; n * n];
     let mut choice = vec![usize::MAX; n * n];
     for i in 0..n - 1 {
-        w[idx(i, i + 1)] = 0.0;
+        w[idx(i, i + 1)] = (f64::INFINITY, 0.0);
     }
     for len in 2..n {
         for i in 0..n - len {
@@ -62,17 +87,25 @@ fn min_area(poly: &[u32], pts: &[DVec3], taken: &dyn Fn(u32, u32) -> bool) -> Op
             if !(i == 0 && k == n - 1) && taken(poly[i], poly[k]) {
                 continue;
             }
-            let mut best = (f64::INFINITY, usize::MAX);
+            let mut best = (none, usize::MAX);
             for j in i + 1..k {
-                let c = w[idx(i, j)] + w[idx(j, k)] + area(i, j, k);
-                if c < best.0 {
+                let (a, b) = (w[idx(i, j)], w[idx(j, k)]);
+                if a.0 == f64::NEG_INFINITY || b.0 == f64::NEG_INFINITY {
+                    continue;
+                }
+                let c = (
+                    a.0.min(b.0).min(min_angle([p(i), p(j), p(k)])),
+                    a.1 + b.1 - area(i, j, k),
+                );
+                if c.0 > best.0.0 || (c.0 == best.0.0 && c.1 > best.0.1) {
                     best = (c, j);
                 }
             }
             (w[idx(i, k)], choice[idx(i, k)]) = best;
         }
     }
-    if !w[idx(0, n - 1)].is_finite() {
+    let angle = w[idx(0, n - 1)].0;
+    if angle == f64::NEG_INFINITY {
         return None;
     }
     let mut out = Vec::with_capacity(n - 2);
@@ -86,7 +119,7 @@ fn min_area(poly: &[u32], pts: &[DVec3], taken: &dyn Fn(u32, u32) -> bool) -> Op
         stack.push((i, j));
         stack.push((j, k));
     }
-    Some(out)
+    Some((angle, out))
 }
 
 #[cfg(test)]

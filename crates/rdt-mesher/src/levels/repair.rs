@@ -385,6 +385,24 @@ pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
         .filter(|d| !matches!(d.kind, DecisionKind::DropSmallComponent { .. }))
         .count();
     if changed > 0 {
+        // The new triangles' angles, measured on the mesh.
+        let min_angle = out
+            .mesh
+            .triangles
+            .iter()
+            .map(|t| crate::criteria::min_angle_deg(t.map(|v| out.mesh.vertices[v as usize])))
+            .fold(f64::INFINITY, f64::min);
+        if min_angle.is_finite() {
+            st.min_angle_deg = min_angle;
+        }
+        let bound = opts.criteria.min_angle_deg;
+        let has_angle = st.unmet.iter().any(|u| matches!(u, crate::Unmet::Angle { .. }));
+        if bound > 0.0 && st.min_angle_deg < bound && !has_angle {
+            st.unmet.push(crate::Unmet::Angle {
+                min_angle_deg: st.min_angle_deg,
+                bound_deg: bound,
+            });
+        }
         st.unmet.push(crate::Unmet::Repaired { decisions: changed });
         st.criteria_met = false;
     }
