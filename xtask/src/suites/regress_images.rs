@@ -131,21 +131,28 @@ fn checks(s: &ImageSurface, r: &MeshResult, d: f64, reference: usize, dropped: u
             "components: {comps} in the mesh + {dropped} dropped != {reference} (voxel scan)"
         ));
     }
-    // Mesh -> S: a crossing within d of every centroid, along its normal.
-    let mut far = 0usize;
-    let mut buf = Vec::new();
-    for t in &r.mesh.triangles {
-        let [a, b, c] = t.map(|v| r.mesh.vertices[v as usize]);
-        let m = (a + b + c) / 3.0;
-        let n = (b - a).cross(c - a).normalize_or_zero();
-        buf.clear();
-        s.crossings(m - n * d, m + n * d, &mut buf);
-        if buf.is_empty() && s.value(m) != 0.0 {
-            far += 1;
-        }
-    }
+    // Mesh -> S: every point of a triangle is within its ball's radius of the ball's center
+    // when that center is on S (a restricted facet), and within its longest edge of a vertex
+    // (the vertices are on S) in any case.
+    let e = 1e-3 * d;
+    let on_s = |c: DVec3| {
+        let g = s.gradient(c).normalize_or_zero();
+        (s.value(c - g * e) < 0.0) != (s.value(c + g * e) < 0.0)
+    };
+    let far = r
+        .mesh
+        .triangles
+        .iter()
+        .zip(&r.balls)
+        .filter(|(t, b)| {
+            let [a, p, q] = t.map(|v| r.mesh.vertices[v as usize]);
+            let edge = a.distance(p).max(p.distance(q)).max(q.distance(a));
+            let ball = if on_s(b.center) { b.radius } else { f64::INFINITY };
+            edge.min(ball) > d
+        })
+        .count();
     if far > 0 {
-        fails.push(format!("mesh->S: {far} centroids with no crossing within {d:.3}"));
+        fails.push(format!("mesh->S: {far} triangles not shown within {d:.3} of S"));
     }
     // S -> mesh: the scan's crossing points.
     let bvh = verify::intersect::triangle_bvh(&r.mesh);
