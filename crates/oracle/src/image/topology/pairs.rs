@@ -23,8 +23,6 @@ pub(super) const DIRS: [[i64; 3]; 7] = [
     [-1, 1, 1],
 ];
 
-/// Seed tetrahedra are built for at most this many components (the smallest).
-pub(super) const MAX_TETS: usize = 256;
 
 /// Components whose crossing edges span at most this many voxels along every axis are
 /// *small*: their seed tetrahedron ([`Topology::component_tets`]) is chosen around the whole
@@ -124,14 +122,11 @@ impl Pairs {
             .map(|(k, &i)| (*k, &self.info[i]))
             .collect();
         let depth = region_depths(pairs.iter().map(|p| p.0), exterior);
-        // Tetrahedra for the smallest components, as many as the seed budget can take.
-        let mut order: Vec<usize> = (0..pairs.len()).collect();
-        order.sort_by_key(|&i| (pairs[i].1.edges, i));
-        // Tetrahedra for the smallest components (bounded cost: up to a few thousand
-        // circumcentres each).
-        let room = MAX_TETS;
+        // A tetrahedron for every component, whatever their number (bounded cost: up to a
+        // few thousand circumcentres each, local to the first crossing edge on large ones).
+        let order: Vec<usize> = (0..pairs.len()).collect();
         let mut tets: Vec<Option<[DVec3; 4]>> = vec![None; pairs.len()];
-        for &i in order.iter().take(room) {
+        for &i in order.iter() {
             let (key, info) = pairs[i];
             tets[i] = component_tet(s, aff, [nx, ny], key, info, &depth, &point);
         }

@@ -22,9 +22,9 @@ pub struct Topology {
     pub component_edges: Vec<usize>,
     /// For each of `component_seeds`: empty, or three more points of its component that form
     /// with the seed a tetrahedron whose circumcentre lies in the region the component
-    /// encloses, near the seed (see [`Topology::seed_points_within`]). Built for the 256
-    /// components with the fewest crossing edges: around the whole component if it spans at
-    /// most 8 voxels, else around its seed.
+    /// encloses, near the seed (see [`Topology::seed_points_within`]). Built for every
+    /// component: around the whole component if it spans at most 8 voxels, else around its
+    /// seed.
     pub component_tets: Vec<Vec<DVec3>>,
     /// Further crossing points (world space), at a regular stride over the grid.
     pub extra_seeds: Vec<DVec3>,
