@@ -34,7 +34,13 @@ fn run(s: &ImageSurface, sigma: f64, resolution: Option<f64>, min: Option<f64>) 
 
 fn assert_closed_manifold(r: &MeshResult) {
     let rep = verify::check(&r.mesh, &verify::Options::default());
-    for name in ["closed", "edge-manifold", "vertex-manifold", "oriented", "self-intersections"] {
+    for name in [
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "self-intersections",
+    ] {
         assert_eq!(
             rep.status(name),
             Some(verify::Status::Pass),
@@ -42,7 +48,10 @@ fn assert_closed_manifold(r: &MeshResult) {
             rep.check(name)
         );
     }
-    assert_eq!((r.stats.nonmanifold_edges, r.stats.nonmanifold_vertices), (0, 0));
+    assert_eq!(
+        (r.stats.nonmanifold_edges, r.stats.nonmanifold_vertices),
+        (0, 0)
+    );
 }
 
 #[test]
@@ -57,14 +66,18 @@ fn the_t1_crop_is_a_closed_manifold_after_repair_and_not_before() {
     let d = &r.stats.topology_decisions;
     assert!(!d.is_empty());
     for x in d {
-        assert!(x.size.is_finite() && x.size > 0.0 && x.center.is_finite(), "{x:?}");
+        assert!(
+            x.size.is_finite() && x.size > 0.0 && x.center.is_finite(),
+            "{x:?}"
+        );
         assert!(x.facets_removed + x.facets_added > 0);
     }
-    assert!(r
-        .stats
-        .unmet
-        .iter()
-        .any(|u| matches!(u, rdt_mesher::Unmet::Repaired { .. })));
+    assert!(
+        r.stats
+            .unmet
+            .iter()
+            .any(|u| matches!(u, rdt_mesher::Unmet::Repaired { .. }))
+    );
     assert_eq!(r.balls.len(), r.mesh.triangles.len());
 }
 

@@ -35,7 +35,14 @@ fn sample(n: usize, f: impl Fn(DVec3) -> f64) -> Volume {
 
 /// Every generated case.
 pub fn all() -> Vec<Hard> {
-    vec![blobs(), sheet(), tube(), noise(), checkerboard(), integer_levels()]
+    vec![
+        blobs(),
+        sheet(),
+        tube(),
+        noise(),
+        checkerboard(),
+        integer_levels(),
+    ]
 }
 
 /// 80 blobs of radius 0.3 to 3 voxels in a 36^3 grid (specks below a voxel among them).
@@ -86,11 +93,18 @@ fn tube() -> Hard {
     let pts: Vec<DVec3> = (0..2000)
         .map(|i| {
             let t = i as f64 / 2000.0 * std::f64::consts::TAU * 3.0;
-            DVec3::new(13.5 + 8.0 * t.cos(), 13.5 + 8.0 * t.sin(), 4.0 + 20.0 * t / 18.85)
+            DVec3::new(
+                13.5 + 8.0 * t.cos(),
+                13.5 + 8.0 * t.sin(),
+                4.0 + 20.0 * t / 18.85,
+            )
         })
         .collect();
     let volume = sample(n, |p| {
-        let d = pts.iter().map(|q| q.distance(p)).fold(f64::INFINITY, f64::min);
+        let d = pts
+            .iter()
+            .map(|q| q.distance(p))
+            .fold(f64::INFINITY, f64::min);
         0.4 - d
     });
     Hard {
@@ -105,7 +119,9 @@ fn noise() -> Hard {
     let mut rng = SplitMix64(5);
     let n = 20;
     let vals: Vec<f64> = (0..n * n * n).map(|_| rng.next_f64()).collect();
-    let volume = sample(n, |p| vals[p.x as usize + n * (p.y as usize + n * p.z as usize)]);
+    let volume = sample(n, |p| {
+        vals[p.x as usize + n * (p.y as usize + n * p.z as usize)]
+    });
     Hard {
         name: "noise",
         volume,
@@ -126,7 +142,11 @@ fn checkerboard() -> Hard {
             return -1.0;
         }
         let j = jitter[p.x as usize + n * (p.y as usize + n * p.z as usize)];
-        j + if (p.x + p.y + p.z) as i64 % 2 == 0 { 1.0 } else { -1.0 }
+        j + if (p.x + p.y + p.z) as i64 % 2 == 0 {
+            1.0
+        } else {
+            -1.0
+        }
     });
     Hard {
         name: "checker",

@@ -116,12 +116,26 @@ fn mesh_components(tris: &[[u32; 3]], n: usize) -> usize {
 }
 
 /// The checks of the module docs on one result; failures as text.
-fn checks(s: &ImageSurface, r: &MeshResult, d: f64, reference: usize, dropped: usize) -> Vec<String> {
+fn checks(
+    s: &ImageSurface,
+    r: &MeshResult,
+    d: f64,
+    reference: usize,
+    dropped: usize,
+) -> Vec<String> {
     let mut fails = Vec::new();
     let rep = verify::check(&r.mesh, &verify::Options::default());
-    for name in ["closed", "edge-manifold", "vertex-manifold", "oriented", "self-intersections"] {
+    for name in [
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "self-intersections",
+    ] {
         if rep.status(name) != Some(verify::Status::Pass) {
-            let detail = rep.check(name).map_or("not run".into(), |c| c.detail.clone());
+            let detail = rep
+                .check(name)
+                .map_or("not run".into(), |c| c.detail.clone());
             fails.push(format!("{name}: {detail}"));
         }
     }
@@ -147,24 +161,38 @@ fn checks(s: &ImageSurface, r: &MeshResult, d: f64, reference: usize, dropped: u
         .filter(|(t, b)| {
             let [a, p, q] = t.map(|v| r.mesh.vertices[v as usize]);
             let edge = a.distance(p).max(p.distance(q)).max(q.distance(a));
-            let ball = if on_s(b.center) { b.radius } else { f64::INFINITY };
+            let ball = if on_s(b.center) {
+                b.radius
+            } else {
+                f64::INFINITY
+            };
             edge.min(ball) > d
         })
         .count();
     if far > 0 {
-        fails.push(format!("mesh->S: {far} triangles not shown within {d:.3} of S"));
+        fails.push(format!(
+            "mesh->S: {far} triangles not shown within {d:.3} of S"
+        ));
     }
     // S -> mesh: the scan's crossing points.
     let bvh = verify::intersect::triangle_bvh(&r.mesh);
     let dist = verify::distance::MeshDistance::new(&r.mesh, &bvh);
     let topo = s.topology();
-    let pts: Vec<DVec3> = topo.component_seeds.iter().chain(&topo.extra_seeds).copied().collect();
+    let pts: Vec<DVec3> = topo
+        .component_seeds
+        .iter()
+        .chain(&topo.extra_seeds)
+        .copied()
+        .collect();
     let far = pts
         .iter()
         .filter(|p| dist.nearest(**p).is_none_or(|(_, e)| e > d))
         .count();
     if far > 0 {
-        fails.push(format!("S->mesh: {far} of {} scan crossings farther than {d:.3}", pts.len()));
+        fails.push(format!(
+            "S->mesh: {far} of {} scan crossings farther than {d:.3}",
+            pts.len()
+        ));
     }
     fails
 }

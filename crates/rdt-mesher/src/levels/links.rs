@@ -74,9 +74,8 @@ fn classify(l: &[[u32; 2]]) -> Link {
     if l.windows(2).any(|w| w[0][0] == w[1][0]) {
         return Link::Bad;
     }
-    let next = |x: u32| -> Option<u32> {
-        l.binary_search_by(|e| e[0].cmp(&x)).ok().map(|i| l[i][1])
-    };
+    let next =
+        |x: u32| -> Option<u32> { l.binary_search_by(|e| e[0].cmp(&x)).ok().map(|i| l[i][1]) };
     // In-degree <= 1.
     let mut targets: Vec<u32> = l.iter().map(|e| e[1]).collect();
     targets.sort_unstable();
@@ -141,7 +140,10 @@ mod tests {
         assert_eq!(l.kind(0), Link::Bad);
         // Two tetrahedra sharing vertex 0: two cycles.
         let mut t = TET.to_vec();
-        t.extend(TET.iter().map(|f| f.map(|v| if v == 0 { 0 } else { v + 3 })));
+        t.extend(
+            TET.iter()
+                .map(|f| f.map(|v| if v == 0 { 0 } else { v + 3 })),
+        );
         let l = Links::new(&t, 7);
         assert_eq!(l.kind(0), Link::Bad);
         assert_eq!(l.kind(4), Link::Cycle);

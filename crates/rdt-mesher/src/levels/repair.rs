@@ -12,7 +12,8 @@
 //! 3. **Close**: every boundary loop (of the cuts, or a hole Del_S(E) had) is closed by the
 //!    least-area triangulation adding no existing edge (`holes`), so the result is a closed,
 //!    oriented 2-manifold on the same vertices (a centroid vertex when no such triangulation
-//!    exists).
+//!    exists). A closing triangle that intersects another triangle (exact test) marks the
+//!    vertices of both bad, and rules 1 to 3 run again around them (a few rounds at most).
 //! 4. **Drop a small component** (`--min-component`): closed components enclosing less than
 //!    the given volume are removed.
 //!
@@ -64,8 +65,9 @@ pub struct TopologyDecision {
     pub facets_added: usize,
 }
 
-/// Rounds of cut-and-close before giving up (each normally leaves a closed manifold).
-const ROUNDS: usize = 4;
+/// Rounds of cut-and-close before giving up (each leaves a closed manifold; later rounds
+/// only grow the cuts around closings that intersect the mesh).
+const ROUNDS: usize = 8;
 
 /// Make `mesh` a closed oriented 2-manifold by the rules of the module docs; `balls` follow
 /// the triangles. Returns the decisions (empty if the mesh was one and no component is below
@@ -76,17 +78,20 @@ pub(crate) fn repair(
     min_volume: Option<f64>,
 ) -> Vec<TopologyDecision> {
     let mut decisions = Vec::new();
+    let mut forced: Vec<u32> = Vec::new();
     for _ in 0..ROUNDS {
         if mesh.triangles.is_empty() {
             break;
         }
         let links = Links::new(&mesh.triangles, mesh.vertices.len());
-        let closed = (0..mesh.vertices.len() as u32)
-            .all(|v| !links.used(v) || links.kind(v) == Link::Cycle);
-        if closed {
+        let closed =
+            (0..mesh.vertices.len() as u32).all(|v| !links.used(v) || links.kind(v) == Link::Cycle);
+        if closed && forced.is_empty() {
             break;
         }
-        decisions.extend(cut_and_close(mesh, balls));
+        let (d, first_new) = cut_and_close(mesh, balls, &forced);
+        decisions.extend(d);
+        forced = intersecting_vertices(mesh, first_new);
     }
     if let Some(v) = min_volume {
         decisions.extend(drop_small(mesh, balls, v));
@@ -97,17 +102,53 @@ pub(crate) fn repair(
     decisions
 }
 
-/// Rules 1 to 3 once.
-fn cut_and_close(mesh: &mut TriMesh, balls: &mut Vec<SurfaceBall>) -> Vec<TopologyDecision> {
+/// The vertices of the triangles from `first_new` on that intersect another triangle (or are
+/// degenerate), and of the triangles they intersect, sorted.
+fn intersecting_vertices(mesh: &TriMesh, first_new: usize) -> Vec<u32> {
+    if first_new >= mesh.triangles.len() {
+        return Vec::new();
+    }
+    let bvh = verify::intersect::triangle_bvh(mesh);
+    let mut out = Vec::new();
+    for i in first_new..mesh.triangles.len() {
+        let c = verify::intersect::corners(mesh, i);
+        if geom::predicates::collinear(c[0], c[1], c[2]) {
+            out.extend(mesh.triangles[i]);
+            continue;
+        }
+        bvh.for_each_overlap(&geom::bvh::Aabb::from_points(&c), |j| {
+            let j = j as usize;
+            if j != i && verify::intersect::pair_intersects(mesh, i, j) {
+                out.extend(mesh.triangles[i]);
+                out.extend(mesh.triangles[j]);
+            }
+        });
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Rules 1 to 3 once, `forced` bad as well; returns the decisions and the index of the first
+/// closing triangle.
+fn cut_and_close(
+    mesh: &mut TriMesh,
+    balls: &mut Vec<SurfaceBall>,
+    forced: &[u32],
+) -> (Vec<TopologyDecision>, usize) {
     let n = mesh.vertices.len();
     let mut live = vec![true; mesh.triangles.len()];
     // Rule 1: remove stars of bad vertices until none is left.
+    let mut first = true;
     loop {
         let kept: Vec<[u32; 3]> = live_tris(&mesh.triangles, &live);
         let links = Links::new(&kept, n);
-        let bad: Vec<bool> = (0..n as u32)
+        let mut bad: Vec<bool> = (0..n as u32)
             .map(|v| links.used(v) && links.kind(v) == Link::Bad)
             .collect();
+        if std::mem::take(&mut first) {
+            forced.iter().for_each(|&v| bad[v as usize] = true);
+        }
         if !bad.iter().any(|&b| b) {
             break;
         }
@@ -151,6 +192,7 @@ fn cut_and_close(mesh: &mut TriMesh, balls: &mut Vec<SurfaceBall>) -> Vec<Topolo
         loops.push((lp, added));
     }
     let out = report(mesh, &cut, &slivers, &loops);
+    let first_new = kept.len();
     // The new triangle list: the kept ones in order, then the closings.
     let mut tris = Vec::with_capacity(kept.len());
     let mut bs = Vec::with_capacity(kept.len());
@@ -168,7 +210,7 @@ fn cut_and_close(mesh: &mut TriMesh, balls: &mut Vec<SurfaceBall>) -> Vec<Topolo
     }
     mesh.triangles = tris;
     *balls = bs;
-    out
+    (out, first_new)
 }
 
 /// The triangles still live.
@@ -223,9 +265,7 @@ fn drop_slivers(mesh: &TriMesh, live: &mut [bool]) -> Vec<Vec<usize>> {
     let mut out = Vec::new();
     for comp in components(&mesh.triangles, &which, n) {
         let verts = comp.iter().flat_map(|&i| mesh.triangles[i]);
-        let interior = verts
-            .clone()
-            .any(|v| links.kind(v) == Link::Cycle);
+        let interior = verts.clone().any(|v| links.kind(v) == Link::Cycle);
         let boundary = verts
             .clone()
             .any(|v| matches!(links.kind(v), Link::Path { .. }));
@@ -270,7 +310,13 @@ fn report(
     for s in slivers {
         let tris: Vec<[u32; 3]> = s.iter().map(|&i| mesh.triangles[i]).collect();
         let all: Vec<usize> = (0..tris.len()).collect();
-        out.push(decision(mesh, &tris, &all, DecisionKind::DropSliver, s.len()));
+        out.push(decision(
+            mesh,
+            &tris,
+            &all,
+            DecisionKind::DropSliver,
+            s.len(),
+        ));
     }
     out
 }
@@ -373,7 +419,8 @@ pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
     st.facets = out.mesh.triangles.len();
     st.nonmanifold_edges = e.len();
     st.nonmanifold_vertices = v.len();
-    st.unmet.retain(|u| !matches!(u, crate::Unmet::Manifold { .. }));
+    st.unmet
+        .retain(|u| !matches!(u, crate::Unmet::Manifold { .. }));
     if st.nonmanifold_edges + st.nonmanifold_vertices > 0 {
         st.unmet.push(crate::Unmet::Manifold {
             edges: st.nonmanifold_edges,
@@ -396,7 +443,10 @@ pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
             st.min_angle_deg = min_angle;
         }
         let bound = opts.criteria.min_angle_deg;
-        let has_angle = st.unmet.iter().any(|u| matches!(u, crate::Unmet::Angle { .. }));
+        let has_angle = st
+            .unmet
+            .iter()
+            .any(|u| matches!(u, crate::Unmet::Angle { .. }));
         if bound > 0.0 && st.min_angle_deg < bound && !has_angle {
             st.unmet.push(crate::Unmet::Angle {
                 min_angle_deg: st.min_angle_deg,

@@ -23,7 +23,6 @@ pub(super) const DIRS: [[i64; 3]; 7] = [
     [-1, 1, 1],
 ];
 
-
 /// Components whose crossing edges span at most this many voxels along every axis are
 /// *small*: their seed tetrahedron ([`Topology::component_tets`]) is chosen around the whole
 /// component, else around its first crossing edge.

@@ -4,7 +4,10 @@ use super::*;
 fn tet(at: DVec3, o: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     let v = vec![at, at + DVec3::X, at + DVec3::Y, at + DVec3::Z];
     let t = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
-    (v, t.into_iter().map(|f: [u32; 3]| f.map(|x| x + o)).collect())
+    (
+        v,
+        t.into_iter().map(|f: [u32; 3]| f.map(|x| x + o)).collect(),
+    )
 }
 
 fn closed_oriented(m: &TriMesh) -> bool {
@@ -51,7 +54,10 @@ fn a_hole_is_closed() {
     assert!(closed_oriented(&out));
     assert_eq!(out.triangles.len(), 4);
     assert_eq!(d.len(), 1);
-    assert_eq!((d[0].kind.clone(), d[0].facets_added), (DecisionKind::Close, 1));
+    assert_eq!(
+        (d[0].kind.clone(), d[0].facets_added),
+        (DecisionKind::Close, 1)
+    );
 }
 
 /// Two closed octahedra-like cones glued at one vertex (a pinched neck): cut, two caps.
@@ -88,7 +94,11 @@ fn a_pinch_is_cut_into_two_closed_pieces() {
     lower[4] = DVec3::ZERO; // its +Z vertex at the origin: shared with vertex 5
     vertices.extend(lower);
     let mut triangles: Vec<[u32; 3]> = faces.to_vec();
-    triangles.extend(faces.iter().map(|f| f.map(|v| if v == 4 { 5 } else { v + 6 })));
+    triangles.extend(
+        faces
+            .iter()
+            .map(|f| f.map(|v| if v == 4 { 5 } else { v + 6 })),
+    );
     let (out, d) = run(
         TriMesh {
             vertices,
@@ -112,7 +122,11 @@ fn two_tetrahedra_on_an_edge_and_a_lone_triangle() {
     vertices.extend([-DVec3::Y, -DVec3::Z]);
     triangles.extend([[0, 1, 4], [0, 5, 1], [0, 4, 5], [1, 5, 4]]);
     // A lone triangle far away: a sliver.
-    vertices.extend([DVec3::splat(5.0), DVec3::new(6.0, 5.0, 5.0), DVec3::new(5.0, 6.0, 5.0)]);
+    vertices.extend([
+        DVec3::splat(5.0),
+        DVec3::new(6.0, 5.0, 5.0),
+        DVec3::new(5.0, 6.0, 5.0),
+    ]);
     triangles.push([6, 7, 8]);
     let (out, d) = run(
         TriMesh {
@@ -130,7 +144,10 @@ fn two_tetrahedra_on_an_edge_and_a_lone_triangle() {
 fn small_components_are_dropped_on_request() {
     let (mut vertices, mut triangles) = tet(DVec3::ZERO, 0);
     let (v2, t2) = tet(DVec3::splat(3.0), 4);
-    vertices.extend(v2.iter().map(|p| DVec3::splat(3.0) + (*p - DVec3::splat(3.0)) * 0.1));
+    vertices.extend(
+        v2.iter()
+            .map(|p| DVec3::splat(3.0) + (*p - DVec3::splat(3.0)) * 0.1),
+    );
     triangles.extend(t2);
     let m = TriMesh {
         vertices,
