@@ -97,6 +97,12 @@ fn cases(root: &Path, quick: bool) -> Result<Vec<Case>> {
 
 /// Components of a triangle mesh (by shared vertices).
 fn mesh_components(tris: &[[u32; 3]], n: usize) -> usize {
+    let roots = component_roots(tris, n);
+    (0..n).filter(|&v| roots[v] == v as u32).count()
+}
+
+/// The component root of every vertex of a triangle mesh (`u32::MAX` for unused vertices).
+fn component_roots(tris: &[[u32; 3]], n: usize) -> Vec<u32> {
     let mut p: Vec<u32> = (0..n as u32).collect();
     fn find(p: &mut [u32], mut x: u32) -> u32 {
         while p[x as usize] != x {
@@ -116,8 +122,41 @@ fn mesh_components(tris: &[[u32; 3]], n: usize) -> usize {
     let mut used = vec![false; n];
     tris.iter().flatten().for_each(|&v| used[v as usize] = true);
     (0..n as u32)
-        .filter(|&v| used[v as usize] && find(&mut p, v) == v)
-        .count()
+        .map(|v| {
+            if used[v as usize] {
+                find(&mut p, v)
+            } else {
+                u32::MAX
+            }
+        })
+        .collect()
+}
+
+/// Which voxel-scan components the mesh has: per scan component, the mesh components lying
+/// on it (the label most of their vertices get, [`ImageSurface::component_of`]); and the
+/// mesh components none of whose vertices gets a label.
+fn account(s: &ImageSurface, r: &MeshResult) -> (Vec<usize>, usize) {
+    use std::collections::BTreeMap;
+    let roots = component_roots(&r.mesh.triangles, r.mesh.vertices.len());
+    let mut votes: BTreeMap<u32, BTreeMap<usize, usize>> = BTreeMap::new();
+    for (v, &root) in roots.iter().enumerate() {
+        if root == u32::MAX {
+            continue;
+        }
+        let e = votes.entry(root).or_default();
+        if let Some(l) = s.component_of(r.mesh.vertices[v]) {
+            *e.entry(l).or_default() += 1;
+        }
+    }
+    let mut per = vec![0usize; s.topology().component_seeds.len()];
+    let mut unlabelled = 0;
+    for (_, v) in votes {
+        match v.iter().max_by_key(|(l, c)| (**c, std::cmp::Reverse(**l))) {
+            Some((&l, _)) => per[l] += 1,
+            None => unlabelled += 1,
+        }
+    }
+    (per, unlabelled)
 }
 
 /// The checks of the module docs on one result; failures and gaps as text.
@@ -147,8 +186,25 @@ fn checks(
     }
     let comps = mesh_components(&r.mesh.triangles, r.mesh.vertices.len());
     if comps + dropped != reference {
+        let (per, unlabelled) = account(s, r);
+        let missing: Vec<usize> = (0..per.len()).filter(|&i| per[i] == 0).collect();
+        let split = per.iter().filter(|&&c| c > 1).count();
+        let topo = s.topology();
+        let list: Vec<String> = missing
+            .iter()
+            .take(4)
+            .map(|&i| {
+                let p = topo.component_seeds[i];
+                let e = topo.component_edges[i];
+                format!("({:.1}, {:.1}, {:.1}) {e} crossing edges", p.x, p.y, p.z)
+            })
+            .collect();
         gaps.push(format!(
-            "components: {comps} in the mesh + {dropped} dropped != {reference} (voxel scan)"
+            "components: {comps} in the mesh + {dropped} dropped != {reference} (voxel scan): \
+             {} scan components missing [{}], {split} split in several pieces, \
+             {unlabelled} mesh pieces unlabelled",
+            missing.len(),
+            list.join(", ")
         ));
     }
     // Mesh -> S: every point of a triangle is within its ball's radius of the ball's center

@@ -48,6 +48,11 @@ pub(super) struct Pairs {
 }
 
 impl Pairs {
+    /// The pairs' keys, sorted (the order of [`Topology::component_seeds`]).
+    pub fn keys(&self) -> Vec<(u32, u32)> {
+        self.index.keys().copied().collect()
+    }
+
     /// Record the crossing edge `e` (from node `c`, voxel coordinates) of the pair `key`.
     #[inline]
     pub fn add(&mut self, key: (u32, u32), e: Edge, c: [usize; 3]) {
@@ -138,6 +143,7 @@ impl Pairs {
             component_edges: Vec::with_capacity(pairs.len()),
             component_tets: Vec::with_capacity(pairs.len()),
             extra_seeds: extra_edges.into_iter().map(point).collect(),
+            labels: None,
         };
         for ((_, info), tet) in pairs.iter().zip(tets) {
             topo.component_edges.push(info.edges);
