@@ -25,24 +25,7 @@ pub(crate) struct Links {
 impl Links {
     /// The links of `tris` over `n` vertices (every index `< n`).
     pub fn new(tris: &[[u32; 3]], n: usize) -> Links {
-        let mut start = vec![0u32; n + 1];
-        for t in tris {
-            for &v in t {
-                start[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..n {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut edges = vec![[0u32; 2]; tris.len() * 3];
-        for t in tris {
-            for i in 0..3 {
-                let k = &mut fill[t[i] as usize];
-                edges[*k as usize] = [t[(i + 1) % 3], t[(i + 2) % 3]];
-                *k += 1;
-            }
-        }
+        let (start, mut edges) = crate::topology::link_buckets(tris, n);
         for v in 0..n {
             edges[start[v] as usize..start[v + 1] as usize].sort_unstable();
         }
