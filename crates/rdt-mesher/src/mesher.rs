@@ -27,7 +27,9 @@ pub fn mesh_with_progress(
     rayon::scope(|_| {
         let mut r = Mesher::new(surface, opts);
         r.run(progress)?;
-        r.finish()
+        let mut out = r.finish()?;
+        crate::levels::repair::apply(&mut out, opts);
+        Ok(out)
     })
 }
 

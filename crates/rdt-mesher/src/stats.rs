@@ -101,6 +101,12 @@ pub enum Unmet {
         /// How many.
         missing: usize,
     },
+    /// The output was made a closed manifold by topological decisions
+    /// ([`Stats::topology_decisions`]): there, it is not Del_S(E).
+    Repaired {
+        /// Decisions that cut, closed or dropped part of Del_S(E).
+        decisions: usize,
+    },
 }
 
 impl fmt::Display for Unmet {
@@ -125,6 +131,11 @@ impl fmt::Display for Unmet {
             Unmet::ControlPoints { missing } => {
                 write!(f, "control points: {missing} not on the mesh")
             }
+            Unmet::Repaired { decisions } => write!(
+                f,
+                "manifold: {decisions} topological decision(s) where Del_S(E) was not a manifold \
+                 (see topology_decisions)"
+            ),
         }
     }
 }
@@ -195,6 +206,9 @@ pub struct Stats {
     pub nonmanifold_edges: usize,
     /// Vertices with other than one umbrella (0 for a closed 2-manifold).
     pub nonmanifold_vertices: usize,
+    /// Topological decisions taken on the output (images, `--min-component`): kind, where,
+    /// size (see `MeshOptions::resolution`).
+    pub topology_decisions: Vec<crate::TopologyDecision>,
 }
 
 impl Stats {

@@ -36,25 +36,7 @@ pub(crate) fn nonmanifold_elements_with(
         .map(|&v| v as usize + 1)
         .max()
         .unwrap_or(0);
-    let mut start = vec![0u32; n + 1];
-    for t in tris {
-        for &v in t {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut link = vec![[0 as VertexId; 2]; tris.len() * 3];
-    for t in tris {
-        for i in 0..3 {
-            let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
-            let k = &mut fill[a as usize];
-            link[*k as usize] = [b, c];
-            *k += 1;
-        }
-    }
+    let (start, link) = link_buckets(tris, n);
     let check = |range: std::ops::Range<usize>| {
         let mut bad_edges = Vec::new();
         let mut bad_vertices = Vec::new();
@@ -102,6 +84,32 @@ pub(crate) fn nonmanifold_elements_with(
     }
     // Bad edges with both endpoints seen from the smaller one come out sorted.
     (bad_edges, bad_vertices)
+}
+
+/// The link edges of vertices `0..n` (every index of `tris` below `n`), bucketed by vertex in
+/// triangle order: the triangle (a, b, c) puts (b, c) in a's bucket, (c, a) in b's, (a, b) in
+/// c's. Bucket v is `link[start[v]..start[v + 1]]`.
+pub(crate) fn link_buckets(tris: &[[VertexId; 3]], n: usize) -> (Vec<u32>, Vec<[VertexId; 2]>) {
+    let mut start = vec![0u32; n + 1];
+    for t in tris {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut link = vec![[0 as VertexId; 2]; tris.len() * 3];
+    for t in tris {
+        for i in 0..3 {
+            let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+            let k = &mut fill[a as usize];
+            link[*k as usize] = [b, c];
+            *k += 1;
+        }
+    }
+    (start, link)
 }
 
 /// The link edges `link` of one vertex: whether they form exactly one cycle, and whether

@@ -111,6 +111,10 @@ pub struct MeshArgs {
     /// fails or a criterion is unmet: for scripts and regression suites.
     #[arg(long)]
     pub strict: bool,
+    /// Drop closed components of the output enclosing less than this volume (the surface's
+    /// units cubed, e.g. mm^3), each listed in the report's topology_decisions.
+    #[arg(long, value_name = "VOLUME", allow_hyphen_values = true, value_parser = parse_volume)]
+    pub min_component: Option<f64>,
     /// Requested epsilon for the certificate, in (0, 1) (default: sigma / d_M^inf when known).
     #[arg(long, allow_hyphen_values = true, value_parser = epsilon("--certify-epsilon"))]
     pub certify_epsilon: Option<f64>,
@@ -123,6 +127,16 @@ pub struct MeshArgs {
     /// (`NAME_label<L>.ply`, or -o's stem with `_label<L>`).
     #[arg(long, conflicts_with = "label")]
     pub labels: Option<String>,
+}
+
+/// `--min-component`: a positive, finite volume.
+fn parse_volume(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "--min-component {s}: give a positive, finite volume in the surface's units cubed, e.g. --min-component 8"
+        )),
+    }
 }
 
 /// `--labels all`: one run (and one output file) per label of the image.
@@ -198,6 +212,7 @@ fn request(a: &MeshArgs) -> Result<Request> {
         },
         verify: !a.no_verify,
         certify_epsilon: a.certify_epsilon,
+        min_component: a.min_component,
     })
 }
 

@@ -2,5 +2,7 @@
 //! over many surfaces.
 
 pub mod bench;
+mod hard_volumes;
 pub mod paper_table;
 pub mod regress;
+pub mod regress_images;

@@ -533,12 +533,25 @@ pub fn run(a: &RegressArgs) -> Result<()> {
     for c in &cross {
         outln!("FAIL oracles disagree: {c}");
     }
+    // The image cases (issue 14): closed manifolds on real and hard volumes.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let images = super::regress_images::run(&root, a.quick, a.filter.as_deref())?;
+    for r in images.iter().filter(|r| !r.failures.is_empty()) {
+        outln!(
+            "FAIL {} size {}: {}",
+            r.case,
+            r.size_voxels,
+            r.failures.join("; ")
+        );
+    }
+    let image_fails = images.iter().filter(|r| !r.failures.is_empty()).count();
     if let Some(p) = &a.json {
-        let j = serde_json::json!({ "rows": rows, "oracle_disagreements": cross });
+        let j =
+            serde_json::json!({ "rows": rows, "oracle_disagreements": cross, "images": images });
         std::fs::write(p, serde_json::to_string_pretty(&j)?)
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
-    let nfail = failed.len() + cross.len();
+    let nfail = failed.len() + cross.len() + image_fails;
     outln!(
         "regress{}: {} cases, {} passed, {} failed{} in {:.1} s{}",
         if a.quick { " --quick" } else { "" },

@@ -25,6 +25,12 @@ impl ImageSurface {
         })
     }
 
+    /// The voxel-scan component (index into [`Topology::component_seeds`]) of a point `p` of
+    /// S (world space): see [`Topology::component_at`].
+    pub fn component_of(&self, p: DVec3) -> Option<usize> {
+        self.topology().component_at(self.inv.transform_point3(p))
+    }
+
     /// Number of connected components of the surface found by the voxel scan
     /// ([`Topology::surface_components`]). The mesh should have exactly this many.
     pub fn component_count(&self) -> usize {

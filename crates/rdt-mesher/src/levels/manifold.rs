@@ -73,6 +73,12 @@ impl Mesher<'_> {
             Some(s) => 0.1 * s,
             None => 1e-3 * self.ball.radius,
         };
+        // A sampled surface: down to an eighth of its resolution (a bounded refinement of
+        // sub-voxel features before the topological repair decides).
+        let base = match self.opts.resolution {
+            Some(h) => base.min(h / 8.0),
+            None => base,
+        };
         base.max(100.0 * self.s.tolerance())
     }
 

@@ -96,6 +96,10 @@ pub fn plan<'p, 's>(
         control_points: input.control_points.clone(),
         initialization: request.initialization,
         max_control_points: input.max_control_points,
+        // Images: the voxel size (four crossing steps, see `ImageSurface::crossing_step`).
+        resolution: (input.kind == super::InputKind::Image)
+            .then(|| 4.0 * input.surface().crossing_step()),
+        min_component: request.min_component,
     };
     Ok(Plan {
         input,

@@ -80,6 +80,8 @@ pub struct Request {
     /// Requested epsilon of the certificate (default: sigma / d_M^inf when known; the
     /// requested epsilon in two-pass mode).
     pub certify_epsilon: Option<f64>,
+    /// Drop closed components enclosing less than this volume (units cubed), each reported.
+    pub min_component: Option<f64>,
 }
 
 impl Default for Request {
@@ -99,6 +101,7 @@ impl Default for Request {
             initial_points: Vec::new(),
             verify: true,
             certify_epsilon: None,
+            min_component: None,
         }
     }
 }

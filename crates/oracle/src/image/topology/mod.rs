@@ -34,6 +34,7 @@
 //! sequential in index order, so the result does not depend on the thread count.
 
 mod dsu;
+mod labels;
 mod pairs;
 #[cfg(test)]
 mod reference;
@@ -75,6 +76,55 @@ mod tests {
             assert!(crate::Surface::value(&s, *p).abs() < 1e-9);
         }
         a.surface_components
+    }
+
+    #[test]
+    fn every_seed_is_labelled_with_its_own_component() {
+        // Five balls, one of them hollow (a cavity: two components), on 40 x 24 x 24 voxels.
+        let dims = [40, 24, 24];
+        let centres = [
+            (6.0, 6.0),
+            (6.0, 17.0),
+            (17.0, 6.0),
+            (17.0, 17.0),
+            (30.0, 12.0),
+        ];
+        let mut data = Vec::new();
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let p = glam::DVec3::new(i as f64, j as f64, k as f64);
+                    let v = centres
+                        .iter()
+                        .map(|&(x, y)| {
+                            let r = p.distance(glam::DVec3::new(x, y, 12.0));
+                            if x > 25.0 {
+                                1.0 - (r - 6.0).abs() / 3.0
+                            } else {
+                                1.0 - r / 4.0
+                            }
+                        })
+                        .fold(f64::MIN, f64::max);
+                    data.push(v as f32);
+                }
+            }
+        }
+        let vol = Volume::new(dims, Voxels::F32(data), DAffine3::IDENTITY).unwrap();
+        let opts = ImageOptions {
+            iso: Some(0.0),
+            ..Default::default()
+        };
+        let s = ImageSurface::new(vol, &opts).unwrap();
+        let t = s.topology();
+        assert_eq!(t.surface_components, 6);
+        let labels: Vec<Option<usize>> = t
+            .component_seeds
+            .iter()
+            .map(|p| s.component_of(*p))
+            .collect();
+        assert_eq!(labels, (0..6).map(Some).collect::<Vec<_>>());
+        // Far from S: no component.
+        assert_eq!(s.component_of(glam::DVec3::new(12.0, 12.0, 12.0)), None);
     }
 
     #[test]

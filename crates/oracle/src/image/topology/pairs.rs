@@ -23,9 +23,6 @@ pub(super) const DIRS: [[i64; 3]; 7] = [
     [-1, 1, 1],
 ];
 
-/// Seed tetrahedra are built for at most this many components (the smallest).
-pub(super) const MAX_TETS: usize = 256;
-
 /// Components whose crossing edges span at most this many voxels along every axis are
 /// *small*: their seed tetrahedron ([`Topology::component_tets`]) is chosen around the whole
 /// component, else around its first crossing edge.
@@ -51,6 +48,11 @@ pub(super) struct Pairs {
 }
 
 impl Pairs {
+    /// The pairs' keys, sorted (the order of [`Topology::component_seeds`]).
+    pub fn keys(&self) -> Vec<(u32, u32)> {
+        self.index.keys().copied().collect()
+    }
+
     /// Record the crossing edge `e` (from node `c`, voxel coordinates) of the pair `key`.
     #[inline]
     pub fn add(&mut self, key: (u32, u32), e: Edge, c: [usize; 3]) {
@@ -124,14 +126,11 @@ impl Pairs {
             .map(|(k, &i)| (*k, &self.info[i]))
             .collect();
         let depth = region_depths(pairs.iter().map(|p| p.0), exterior);
-        // Tetrahedra for the smallest components, as many as the seed budget can take.
-        let mut order: Vec<usize> = (0..pairs.len()).collect();
-        order.sort_by_key(|&i| (pairs[i].1.edges, i));
-        // Tetrahedra for the smallest components (bounded cost: up to a few thousand
-        // circumcentres each).
-        let room = MAX_TETS;
+        // A tetrahedron for every component, whatever their number (bounded cost: up to a
+        // few thousand circumcentres each, local to the first crossing edge on large ones).
+        let order: Vec<usize> = (0..pairs.len()).collect();
         let mut tets: Vec<Option<[DVec3; 4]>> = vec![None; pairs.len()];
-        for &i in order.iter().take(room) {
+        for &i in order.iter() {
             let (key, info) = pairs[i];
             tets[i] = component_tet(s, aff, [nx, ny], key, info, &depth, &point);
         }
@@ -144,6 +143,7 @@ impl Pairs {
             component_edges: Vec::with_capacity(pairs.len()),
             component_tets: Vec::with_capacity(pairs.len()),
             extra_seeds: extra_edges.into_iter().map(point).collect(),
+            labels: None,
         };
         for ((_, info), tet) in pairs.iter().zip(tets) {
             topo.component_edges.push(info.edges);

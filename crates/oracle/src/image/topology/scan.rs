@@ -341,12 +341,23 @@ pub(crate) fn compute(s: &ImageSurface, bits: &[u64]) -> Topology {
         count += 1;
     });
     let exterior = dsu.find(ext);
-    pairs.finish(
+    let labels = super::labels::Labels {
+        dims: [runs.nx, runs.ny, runs.nz],
+        row_first: runs.row_first.clone(),
+        run_x: runs.run_x.clone(),
+        run_root: (0..nruns as u32).map(|t| dsu.find(t)).collect(),
+        run_ins: runs.run_ins.clone(),
+        exterior,
+        pairs: pairs.keys(),
+    };
+    let mut topo = pairs.finish(
         s,
         exterior,
         inside_components,
         outside_components,
         edges,
         extra_edges,
-    )
+    );
+    topo.labels = Some(std::sync::Arc::new(labels));
+    topo
 }

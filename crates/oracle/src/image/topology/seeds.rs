@@ -22,15 +22,25 @@ pub struct Topology {
     pub component_edges: Vec<usize>,
     /// For each of `component_seeds`: empty, or three more points of its component that form
     /// with the seed a tetrahedron whose circumcentre lies in the region the component
-    /// encloses, near the seed (see [`Topology::seed_points_within`]). Built for the 256
-    /// components with the fewest crossing edges: around the whole component if it spans at
-    /// most 8 voxels, else around its seed.
+    /// encloses, near the seed (see [`Topology::seed_points_within`]). Built for every
+    /// component: around the whole component if it spans at most 8 voxels, else around its
+    /// seed.
     pub component_tets: Vec<Vec<DVec3>>,
     /// Further crossing points (world space), at a regular stride over the grid.
     pub extra_seeds: Vec<DVec3>,
+    /// The scan's regions, for [`Topology::component_at`] (`None` from the reference scan).
+    pub(crate) labels: Option<std::sync::Arc<super::labels::Labels>>,
 }
 
 impl Topology {
+    /// The component (index into [`Topology::component_seeds`]) of a point of S at voxel
+    /// coordinates `v`, from the regions of its cell's corners: exact where the cell's corners
+    /// meet one inside and one outside region, the nearest such pair otherwise. `None` if the
+    /// labels are not kept or no pair of the cell's corners touches.
+    pub fn component_at(&self, v: DVec3) -> Option<usize> {
+        self.labels.as_ref()?.component_at(v)
+    }
+
     /// [`Topology::seed_points_within`] the default budget [`Topology::SEED_BUDGET`] (64, the
     /// mesher's default number of control points).
     pub fn seed_points(&self, seed: u64) -> Vec<DVec3> {

@@ -1,0 +1,164 @@
+use super::*;
+
+/// A closed, outward-oriented tetrahedron on vertices `o..o + 4` at `at`.
+fn tet(at: DVec3, o: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let v = vec![at, at + DVec3::X, at + DVec3::Y, at + DVec3::Z];
+    let t = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+    (
+        v,
+        t.into_iter().map(|f: [u32; 3]| f.map(|x| x + o)).collect(),
+    )
+}
+
+fn closed_oriented(m: &TriMesh) -> bool {
+    let l = Links::new(&m.triangles, m.vertices.len());
+    (0..m.vertices.len() as u32).all(|v| l.kind(v) == Link::Cycle)
+}
+
+fn run(mut m: TriMesh, min_volume: Option<f64>) -> (TriMesh, Vec<TopologyDecision>) {
+    let mut balls = vec![
+        SurfaceBall {
+            center: DVec3::ZERO,
+            radius: 1.0
+        };
+        m.triangles.len()
+    ];
+    let d = repair(&mut m, &mut balls, min_volume);
+    assert_eq!(balls.len(), m.triangles.len());
+    (m, d)
+}
+
+#[test]
+fn a_closed_manifold_is_left_alone() {
+    let (vertices, triangles) = tet(DVec3::ZERO, 0);
+    let m = TriMesh {
+        vertices,
+        triangles,
+    };
+    let (out, d) = run(m.clone(), None);
+    assert!(d.is_empty());
+    assert_eq!(out, m);
+}
+
+#[test]
+fn a_hole_is_closed() {
+    let (vertices, mut triangles) = tet(DVec3::ZERO, 0);
+    triangles.remove(3);
+    let (out, d) = run(
+        TriMesh {
+            vertices,
+            triangles,
+        },
+        None,
+    );
+    assert!(closed_oriented(&out));
+    assert_eq!(out.triangles.len(), 4);
+    assert_eq!(d.len(), 1);
+    assert_eq!(
+        (d[0].kind.clone(), d[0].facets_added),
+        (DecisionKind::Close, 1)
+    );
+}
+
+/// Two closed octahedra-like cones glued at one vertex (a pinched neck): cut, two caps.
+#[test]
+fn a_pinch_is_cut_into_two_closed_pieces() {
+    // Two square pyramids sharing the apex 0, each closed by its base, made of two
+    // octahedra sharing vertex 0.
+    let oct = |c: DVec3, apex_at_origin: bool| -> Vec<DVec3> {
+        let mut v = vec![
+            c + DVec3::X,
+            c - DVec3::X,
+            c + DVec3::Y,
+            c - DVec3::Y,
+            c + DVec3::Z,
+            c - DVec3::Z,
+        ];
+        if apex_at_origin {
+            v[5] = DVec3::ZERO;
+        }
+        v
+    };
+    let faces = [
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    let mut vertices = oct(DVec3::Z, true); // its -Z vertex (5) at the origin
+    let mut lower = oct(-DVec3::Z, false);
+    lower[4] = DVec3::ZERO; // its +Z vertex at the origin: shared with vertex 5
+    vertices.extend(lower);
+    let mut triangles: Vec<[u32; 3]> = faces.to_vec();
+    triangles.extend(
+        faces
+            .iter()
+            .map(|f| f.map(|v| if v == 4 { 5 } else { v + 6 })),
+    );
+    let (out, d) = run(
+        TriMesh {
+            vertices,
+            triangles,
+        },
+        None,
+    );
+    assert!(closed_oriented(&out));
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert_eq!(d[0].kind, DecisionKind::Cut { loops: 2 });
+    assert_eq!(d[0].facets_removed, 8);
+    // Two closed pieces, each of the 4 upper (lower) faces and a 2-triangle cap.
+    assert_eq!(out.triangles.len(), 12);
+    assert_eq!(out.vertices.len(), 10);
+}
+
+#[test]
+fn two_tetrahedra_on_an_edge_and_a_lone_triangle() {
+    let (mut vertices, mut triangles) = tet(DVec3::ZERO, 0);
+    // A second tetrahedron sharing the edge (0, 1), on the other side.
+    vertices.extend([-DVec3::Y, -DVec3::Z]);
+    triangles.extend([[0, 1, 4], [0, 5, 1], [0, 4, 5], [1, 5, 4]]);
+    // A lone triangle far away: a sliver.
+    vertices.extend([
+        DVec3::splat(5.0),
+        DVec3::new(6.0, 5.0, 5.0),
+        DVec3::new(5.0, 6.0, 5.0),
+    ]);
+    triangles.push([6, 7, 8]);
+    let (out, d) = run(
+        TriMesh {
+            vertices,
+            triangles,
+        },
+        None,
+    );
+    assert!(closed_oriented(&out), "{d:?}");
+    assert!(d.iter().any(|x| x.kind == DecisionKind::DropSliver));
+    assert!(!out.vertices.contains(&DVec3::splat(5.0)));
+}
+
+#[test]
+fn small_components_are_dropped_on_request() {
+    let (mut vertices, mut triangles) = tet(DVec3::ZERO, 0);
+    let (v2, t2) = tet(DVec3::splat(3.0), 4);
+    vertices.extend(
+        v2.iter()
+            .map(|p| DVec3::splat(3.0) + (*p - DVec3::splat(3.0)) * 0.1),
+    );
+    triangles.extend(t2);
+    let m = TriMesh {
+        vertices,
+        triangles,
+    };
+    let (out, d) = run(m.clone(), Some(0.01));
+    assert_eq!(out.triangles.len(), 4);
+    assert!(matches!(
+        d[0].kind,
+        DecisionKind::DropSmallComponent { volume } if (volume - 1e-3 / 6.0).abs() < 1e-12
+    ));
+    let (out, d) = run(m, Some(1e-6));
+    assert!(d.is_empty() && out.triangles.len() == 8);
+}

@@ -1,0 +1,350 @@
+//! The image part of `cargo xtask regress` (section 6.6.2's images, issue 14): real and hard
+//! volumes at sizes of 1, 2 and 4 voxels, each meshed with the image pipeline's options (seed
+//! tetrahedra, the voxel size as the resolution, hence the topological repair) and checked.
+//!
+//! Failures (the case fails):
+//! - `verify`'s closed, edge-manifold, vertex-manifold, oriented and self-intersections checks
+//!   do not PASS.
+//!
+//! Gaps (measured and printed as `GAP`, not yet failures: issue 14 is open on them):
+//! - the mesh's components differ from the voxel scan's (the project's reference for the
+//!   trilinear level set; marching cubes agrees with it only approximately) minus the
+//!   components the report lists as dropped (a neck thinner than sigma can split a component,
+//!   a component can be missed);
+//! - two-sided distance above one voxel plus sigma: a triangle not shown within it of S
+//!   (within its ball's radius of the ball's center on S, or its longest edge of a vertex),
+//!   or a crossing point the voxel scan keeps (seeds and up to 4096 grid-edge crossings,
+//!   exact points of S) farther from the mesh.
+//!
+//! Cases: `fixtures/images/mni_t1_crop56.nii.gz` (iso 171.2 and 190.5), `mni_t1_half.nii.gz`
+//! (171.2), `nilearn_motor_10426.nii.gz` (t = 3), and the generated volumes of
+//! `hard_volumes`. `--quick` runs a subset in a few seconds.
+
+use super::hard_volumes;
+use anyhow::{Context, Result};
+use glam::DVec3;
+use oracle::Surface;
+use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
+use rdt_mesher::{Criteria, DecisionKind, MeshOptions, MeshResult};
+use std::path::Path;
+
+/// One row of the image suite.
+#[derive(Debug, serde::Serialize)]
+pub struct ImageRow {
+    pub case: String,
+    pub size_voxels: f64,
+    pub vertices: usize,
+    pub seconds: f64,
+    pub components: usize,
+    pub reference: usize,
+    pub dropped: usize,
+    pub decisions: usize,
+    pub failures: Vec<String>,
+    pub gaps: Vec<String>,
+}
+
+/// (case name, fixture file or generated, iso, sizes in voxels, in the quick subset at
+/// which size).
+type Case = (String, ImageSurface, Vec<f64>);
+
+fn open_fixture(root: &Path, file: &str, iso: f64) -> Result<ImageSurface> {
+    let p = root.join("fixtures/images").join(file);
+    let opts = ImageOptions {
+        iso: Some(iso),
+        ..Default::default()
+    };
+    ImageSurface::open(&p, &LoadOptions::default(), &opts)
+        .with_context(|| format!("opening {}", p.display()))
+}
+
+/// The cases (all sizes, or the quick subset).
+fn cases(root: &Path, quick: bool) -> Result<Vec<Case>> {
+    let all = vec![1.0, 2.0, 4.0];
+    let mut out: Vec<Case> = Vec::new();
+    let fixtures: [(&str, &str, f64, f64); 4] = [
+        ("mni-crop", "mni_t1_crop56.nii.gz", 171.2, 2.0),
+        ("mni-crop", "mni_t1_crop56.nii.gz", 190.5, 0.0),
+        ("mni-half", "mni_t1_half.nii.gz", 171.2, 0.0),
+        ("motor", "nilearn_motor_10426.nii.gz", 3.0, 0.0),
+    ];
+    for (name, file, iso, q) in fixtures {
+        if quick && q == 0.0 {
+            continue;
+        }
+        let s = open_fixture(root, file, iso)?;
+        let sizes = if quick { vec![q] } else { all.clone() };
+        out.push((format!("{name}@{iso}"), s, sizes));
+    }
+    for h in hard_volumes::all() {
+        let q = match h.name {
+            "blobs" | "checker" | "noise" => 2.0,
+            _ => 0.0,
+        };
+        if quick && q == 0.0 {
+            continue;
+        }
+        let opts = ImageOptions {
+            iso: Some(h.iso),
+            ..Default::default()
+        };
+        let s = ImageSurface::new(h.volume, &opts)
+            .with_context(|| format!("generated volume {}", h.name))?;
+        let sizes = if quick { vec![q] } else { all.clone() };
+        out.push((format!("{}@{}", h.name, h.iso), s, sizes));
+    }
+    Ok(out)
+}
+
+/// Components of a triangle mesh (by shared vertices).
+fn mesh_components(tris: &[[u32; 3]], n: usize) -> usize {
+    let roots = component_roots(tris, n);
+    (0..n).filter(|&v| roots[v] == v as u32).count()
+}
+
+/// The component root of every vertex of a triangle mesh (`u32::MAX` for unused vertices).
+fn component_roots(tris: &[[u32; 3]], n: usize) -> Vec<u32> {
+    let mut p: Vec<u32> = (0..n as u32).collect();
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    for t in tris {
+        for k in 1..3 {
+            let (a, b) = (find(&mut p, t[0]), find(&mut p, t[k]));
+            if a != b {
+                p[a.max(b) as usize] = a.min(b);
+            }
+        }
+    }
+    let mut used = vec![false; n];
+    tris.iter().flatten().for_each(|&v| used[v as usize] = true);
+    (0..n as u32)
+        .map(|v| {
+            if used[v as usize] {
+                find(&mut p, v)
+            } else {
+                u32::MAX
+            }
+        })
+        .collect()
+}
+
+/// Which voxel-scan components the mesh has: per scan component, the mesh components lying
+/// on it (the label most of their vertices get, [`ImageSurface::component_of`]); and the
+/// mesh components none of whose vertices gets a label.
+fn account(s: &ImageSurface, r: &MeshResult) -> (Vec<usize>, usize) {
+    use std::collections::BTreeMap;
+    let roots = component_roots(&r.mesh.triangles, r.mesh.vertices.len());
+    let mut votes: BTreeMap<u32, BTreeMap<usize, usize>> = BTreeMap::new();
+    for (v, &root) in roots.iter().enumerate() {
+        if root == u32::MAX {
+            continue;
+        }
+        let e = votes.entry(root).or_default();
+        if let Some(l) = s.component_of(r.mesh.vertices[v]) {
+            *e.entry(l).or_default() += 1;
+        }
+    }
+    let mut per = vec![0usize; s.topology().component_seeds.len()];
+    let mut unlabelled = 0;
+    for (_, v) in votes {
+        match v.iter().max_by_key(|(l, c)| (**c, std::cmp::Reverse(**l))) {
+            Some((&l, _)) => per[l] += 1,
+            None => unlabelled += 1,
+        }
+    }
+    (per, unlabelled)
+}
+
+/// The checks of the module docs on one result; failures and gaps as text.
+fn checks(
+    s: &ImageSurface,
+    r: &MeshResult,
+    d: f64,
+    reference: usize,
+    dropped: usize,
+) -> (Vec<String>, Vec<String>) {
+    let mut fails = Vec::new();
+    let mut gaps = Vec::new();
+    let rep = verify::check(&r.mesh, &verify::Options::default());
+    for name in [
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "self-intersections",
+    ] {
+        if rep.status(name) != Some(verify::Status::Pass) {
+            let detail = rep
+                .check(name)
+                .map_or("not run".into(), |c| c.detail.clone());
+            fails.push(format!("{name}: {detail}"));
+        }
+    }
+    let comps = mesh_components(&r.mesh.triangles, r.mesh.vertices.len());
+    if comps + dropped != reference {
+        let (per, unlabelled) = account(s, r);
+        let missing: Vec<usize> = (0..per.len()).filter(|&i| per[i] == 0).collect();
+        let split = per.iter().filter(|&&c| c > 1).count();
+        let topo = s.topology();
+        let list: Vec<String> = missing
+            .iter()
+            .take(4)
+            .map(|&i| {
+                let p = topo.component_seeds[i];
+                let e = topo.component_edges[i];
+                format!("({:.1}, {:.1}, {:.1}) {e} crossing edges", p.x, p.y, p.z)
+            })
+            .collect();
+        gaps.push(format!(
+            "components: {comps} in the mesh + {dropped} dropped != {reference} (voxel scan): \
+             {} scan components missing [{}], {split} split in several pieces, \
+             {unlabelled} mesh pieces unlabelled",
+            missing.len(),
+            list.join(", ")
+        ));
+    }
+    // Mesh -> S: every point of a triangle is within its ball's radius of the ball's center
+    // when that center is on S (a restricted facet), and within its longest edge of a vertex
+    // (the vertices are on S) in any case.
+    let e = 1e-3 * d;
+    let on_s = |c: DVec3| {
+        let g = s.gradient(c).normalize_or_zero();
+        (s.value(c - g * e) < 0.0) != (s.value(c + g * e) < 0.0)
+    };
+    let far = r
+        .mesh
+        .triangles
+        .iter()
+        .zip(&r.balls)
+        .filter(|(t, b)| {
+            let [a, p, q] = t.map(|v| r.mesh.vertices[v as usize]);
+            let edge = a.distance(p).max(p.distance(q)).max(q.distance(a));
+            let ball = if on_s(b.center) {
+                b.radius
+            } else {
+                f64::INFINITY
+            };
+            edge.min(ball) > d
+        })
+        .count();
+    if far > 0 {
+        gaps.push(format!(
+            "mesh->S: {far} triangles not shown within {d:.3} of S"
+        ));
+    }
+    // S -> mesh: the scan's crossing points.
+    let bvh = verify::intersect::triangle_bvh(&r.mesh);
+    let dist = verify::distance::MeshDistance::new(&r.mesh, &bvh);
+    let topo = s.topology();
+    let pts: Vec<DVec3> = topo
+        .component_seeds
+        .iter()
+        .chain(&topo.extra_seeds)
+        .copied()
+        .collect();
+    let far = pts
+        .iter()
+        .filter(|p| dist.nearest(**p).is_none_or(|(_, e)| e > d))
+        .count();
+    if far > 0 {
+        gaps.push(format!(
+            "S->mesh: {far} of {} scan crossings farther than {d:.3}",
+            pts.len()
+        ));
+    }
+    (fails, gaps)
+}
+
+/// Mesh one case at `k` voxels and check it.
+fn run_one(name: &str, s: &ImageSurface, k: f64) -> Result<ImageRow> {
+    let sp = s.volume().spacing();
+    let h = sp.x.min(sp.y).min(sp.z);
+    let sigma = k * h;
+    let opts = MeshOptions {
+        criteria: Criteria::uniform(sigma),
+        resolution: Some(h),
+        max_control_points: s.seed_budget(),
+        ..Default::default()
+    };
+    let t = std::time::Instant::now();
+    let r = rdt_mesher::mesh(s, &opts).with_context(|| format!("meshing {name}"))?;
+    let seconds = t.elapsed().as_secs_f64();
+    let dec = &r.stats.topology_decisions;
+    let dropped = dec
+        .iter()
+        .filter(|d| {
+            matches!(
+                d.kind,
+                DecisionKind::DropSliver | DecisionKind::DropSmallComponent { .. }
+            )
+        })
+        .count();
+    let reference = s.component_count();
+    let (failures, gaps) = checks(s, &r, h + sigma, reference, dropped);
+    Ok(ImageRow {
+        case: name.to_string(),
+        size_voxels: k,
+        vertices: r.mesh.vertices.len(),
+        seconds,
+        components: mesh_components(&r.mesh.triangles, r.mesh.vertices.len()),
+        reference,
+        dropped,
+        decisions: dec.len(),
+        failures,
+        gaps,
+    })
+}
+
+/// Run the image cases (`filter`: only names containing it) and print their table.
+pub fn run(root: &Path, quick: bool, filter: Option<&str>) -> Result<Vec<ImageRow>> {
+    let mut rows = Vec::new();
+    for (name, s, sizes) in cases(root, quick)? {
+        if filter.is_some_and(|f| !name.contains(f)) {
+            continue;
+        }
+        let s = s.with_seed_budget(None);
+        for k in sizes {
+            rows.push(run_one(&name, &s, k)?);
+        }
+    }
+    outln!(
+        "{:<18} {:>4} {:>8} {:>7} {:>12} {:>5} status",
+        "image case",
+        "size",
+        "verts",
+        "s",
+        "comps/scan",
+        "decis"
+    );
+    for r in &rows {
+        outln!(
+            "{:<18} {:>4} {:>8} {:>7.2} {:>5}+{}/{:<4} {:>5} {}",
+            r.case,
+            r.size_voxels,
+            r.vertices,
+            r.seconds,
+            r.components,
+            r.dropped,
+            r.reference,
+            r.decisions,
+            match (r.failures.is_empty(), r.gaps.is_empty()) {
+                (false, _) => "FAIL",
+                (true, false) => "ok (gaps)",
+                (true, true) => "ok",
+            }
+        );
+    }
+    for r in rows.iter().filter(|r| !r.gaps.is_empty()) {
+        outln!(
+            "GAP {} size {}: {}",
+            r.case,
+            r.size_voxels,
+            r.gaps.join("; ")
+        );
+    }
+    Ok(rows)
+}
