@@ -94,8 +94,10 @@ pub enum MeshIoError {
         source: std::io::Error,
     },
     #[error(
-        "{path}: unknown mesh file extension {ext:?}; use .ply, .off, .obj or .stl \
-         (or call read_with/write_with with an explicit Format)"
+        "{path}: {}; the mesh formats are .ply, .off, .obj and .stl (any case): rename the \
+         file, or from Rust call meshio::read_with / meshio::write_with with an explicit \
+         meshio::Format",
+        if ext.is_empty() { "no file extension".to_string() } else { format!("unknown mesh file extension {ext:?}") }
     )]
     UnknownExtension { path: PathBuf, ext: String },
     #[error("{path}: the file is empty; expected a {format} mesh: re-export or re-download it")]
