@@ -65,11 +65,12 @@ fn normalized(p: &Path) -> PathBuf {
 }
 
 /// Refuse a run whose outputs would overwrite its input or each other, or whose mesh
-/// output (`-o`) has no mesh extension (checked before any work, not after meshing).
+/// output (flag `-o`, as `mesh` passes it) has no mesh extension: checked before any work,
+/// not after meshing.
 /// `outputs` are (flag, path) pairs, e.g. `("-o", mesh)`, `("--report", report)`.
 pub fn check_outputs(input: Option<&Path>, outputs: &[(&str, &Path)]) -> Result<()> {
     for &(flag, p) in outputs {
-        if (flag == "-o" || flag == "--output") && meshio::Format::from_path(p).is_err() {
+        if flag == "-o" && meshio::Format::from_path(p).is_err() {
             let ext = p.extension().map(|e| e.to_string_lossy().into_owned());
             bail!(
                 "{flag} {}: {}; the mesh formats are .ply, .off, .obj and .stl \
