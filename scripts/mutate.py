@@ -40,7 +40,8 @@ import warnings
 import zlib
 
 warnings.simplefilter("ignore")
-logging.getLogger("nibabel").setLevel(logging.CRITICAL)
+for _name in ("nibabel", "trimesh"):
+    logging.getLogger(_name).setLevel(logging.CRITICAL + 1)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -239,11 +240,25 @@ def text(data):
         raise Reject("not UTF-8")
 
 
+# The readers' definitions: lines end at "\n" (a trailing "\r" dropped); tokens are split at
+# Unicode white space (Rust's `char::is_whitespace`; Python's str.split() also splits at
+# \x1c-\x1f, and str.splitlines() at a lone "\r").
+RS_WS = re.compile("[\t\n\x0b\x0c\r \x85\xa0\u1680\u2000-\u200a\u2028\u2029\u202f\u205f\u3000]+")
+
+
+def rs_lines(s):
+    return [ln[:-1] if ln.endswith("\r") else ln for ln in s.split("\n")]
+
+
+def rs_split(s):
+    return [t for t in RS_WS.split(s) if t]
+
+
 def lines_nc(s, comment="#"):
     """Non-blank lines with comments stripped, as token lists."""
     out = []
-    for ln in s.splitlines():
-        t = ln.split(comment)[0].split() if comment else ln.split()
+    for ln in rs_lines(s):
+        t = rs_split(ln.split(comment)[0]) if comment else rs_split(ln)
         if t:
             out.append(t)
     return out
@@ -281,13 +296,13 @@ def check_ply(data):
         hl.append(ln)
     if not hl or hl[0].strip() != "ply":
         raise Reject("no ply magic")
-    fmt = hl[1].split() if len(hl) > 1 else []
+    fmt = rs_split(hl[1]) if len(hl) > 1 else []
     if len(fmt) != 3 or fmt[0] != "format" or fmt[2] not in ("1.0", "1") or \
             fmt[1] not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise Reject("bad format line")
     els = []
     for ln in hl[2:]:
-        t = ln.split()
+        t = rs_split(ln)
         if not t or t[0] in ("comment", "obj_info"):
             continue
         if t[0] == "element" and len(t) == 3:
@@ -311,7 +326,7 @@ def check_ply(data):
     body = data[pos:]
     values = {}
     if fmt[1] == "ascii":
-        rows = [r.split() for r in text(body).splitlines() if r.strip()]
+        rows = [rs_split(r) for r in rs_lines(text(body)) if rs_split(r)]
         k = 0
         for name, count, props in els:
             vals = []
@@ -496,7 +511,7 @@ def check_stl(data):
         s = data.decode("ascii")
     except UnicodeDecodeError:
         raise Reject("not ASCII")
-    rows = [ln.split() for ln in s.splitlines() if ln.strip()]
+    rows = [rs_split(ln) for ln in rs_lines(s) if rs_split(ln)]
     state, facets, k = "solid", 0, 0
     for r in rows:
         w = r[0]
@@ -528,11 +543,11 @@ def check_stl(data):
 
 def check_xyz(data):
     cols, n = 0, 0
-    for ln in text(data).splitlines():
-        t = ln.strip()
+    for ln in rs_lines(text(data)):
+        t = " ".join(rs_split(ln))
         if not t or t.startswith("#") or t.startswith("//"):
             continue
-        toks = [x for x in re.split(r"[\s,]+", t) if x]
+        toks = [x for x in re.split(r"[ ,]+", t) if x]
         [num(x) for x in toks]
         if len(toks) not in (3, 6) or (cols and len(toks) != cols):
             raise Reject("bad column count")

@@ -1,5 +1,6 @@
 //! Wavefront OBJ (ours: file format support): `v` and `f` lines; polygons are
-//! fan-triangulated; other statements are ignored.
+//! fan-triangulated; the specification's other statements are ignored, unknown ones (a
+//! garbled keyword) are errors.
 //!
 //! - `v x y z`, `v x y z w` (the weight `w` of rational curves, read and ignored: polygon
 //!   vertices are not divided by it), and the common colour extension `v x y z r g b` (and
@@ -8,6 +9,7 @@
 //! - `f` corners `i`, `i/t`, `i//n` or `i/t/n`: every present index an integer other than 0,
 //!   negative ones relative to the elements read so far; texture and normal indices must
 //!   refer to existing `vt` / `vn` lines.
+//! - `vt u [v [w]]` and `vn x y z`: finite numbers (checked, then ignored).
 
 use std::io::{BufRead, Write};
 use std::path::Path;
@@ -67,7 +69,30 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
                 vertices.push(DVec3::new(c[0], c[1], c[2]));
                 saw_statement = true;
             }
-            Some(kw @ ("vt" | "vn")) => counts[usize::from(kw == "vn")] += 1,
+            Some(kw @ ("vt" | "vn")) => {
+                let toks: Vec<&str> = it.collect();
+                let ok = toks
+                    .iter()
+                    .all(|t| crate::parse_f64(t).is_some_and(f64::is_finite));
+                let n_ok = if kw == "vn" {
+                    toks.len() == 3
+                } else {
+                    (1..=3).contains(&toks.len())
+                };
+                if !ok || !n_ok {
+                    let want = if kw == "vn" {
+                        "'vn x y z'"
+                    } else {
+                        "'vt u [v [w]]'"
+                    };
+                    return Err(bad(
+                        line_no,
+                        format!("expected {want} (finite numbers), found {s:?}"),
+                    ));
+                }
+                counts[usize::from(kw == "vn")] += 1;
+                saw_statement = true;
+            }
             Some("f") => {
                 let mut poly = Vec::new();
                 for tok in it {
@@ -91,12 +116,13 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
                 saw_statement = true;
             }
             Some(kw) => {
-                const KNOWN: [&str; 12] = [
-                    "vp", "g", "o", "s", "usemtl", "mtllib", "l", "p", "mg", "cstype", "deg",
-                    "curv",
-                ];
-                if !KNOWN.contains(&kw) && !saw_statement {
-                    return Err(bad(line_no, format!("unknown OBJ statement {kw:?}")));
+                if !OTHER_STATEMENTS.contains(&kw) {
+                    let what = if saw_statement {
+                        "; a garbled line would silently drop its data: fix or remove it"
+                    } else {
+                        ""
+                    };
+                    return Err(bad(line_no, format!("unknown OBJ statement {kw:?}{what}")));
                 }
             }
             None => {}
@@ -134,6 +160,47 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
 
 /// Check that every texture / normal reference `(line, index as written, 0-based index)`
 /// names an existing `vt` / `vn` line; on failure, the line and the message.
+/// The statements of the OBJ specification other than `v`, `vt`, `vn` and `f` (free-form
+/// geometry, grouping, display attributes): read and ignored. Anything else is an error, so
+/// that a garbled `f` or `v` line cannot silently drop its data.
+const OTHER_STATEMENTS: [&str; 35] = [
+    "vp",
+    "g",
+    "o",
+    "s",
+    "mg",
+    "usemtl",
+    "mtllib",
+    "usemap",
+    "maplib",
+    "l",
+    "p",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "call",
+    "csh",
+];
+
 fn check_refs(
     refs: &[Vec<(usize, i64, i64)>; 2],
     counts: [usize; 2],

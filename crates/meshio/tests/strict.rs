@@ -405,3 +405,41 @@ fn off_counts_and_tokens_are_checked() {
         assert_eq!(m.vertices[1], glam::DVec3::X, "{text}");
     }
 }
+
+/// scripts/mutate.py found these accepted with exit 0: a garbled keyword after the first
+/// statement was ignored (`f/ 1 2 3`, `1//1 2//2 3//3`, `vertex 1 2 3`: a face or vertex
+/// silently dropped), and `vt` / `vn` lines were not read (`vn 0 0 double`).
+#[test]
+fn obj_unknown_statements_and_bad_vt_vn_are_rejected() {
+    for line in [
+        "f/ 1 2 3",
+        "f// 1 2 3",
+        "1//1 2//2 3//3",
+        "vertex 1 2 3",
+        "OFF",
+        "11865475",
+    ] {
+        let text = format!("{OBJ_V}{line}\nf 1 2 3\n");
+        let s = err("kw.obj", text.as_bytes());
+        assert!(s.contains("line 6: unknown OBJ statement"), "{line}: {s}");
+    }
+    for line in [
+        "vn 0 0 double",
+        "vn 0 0",
+        "vn 0 0 1 1",
+        "vn 0 nan 1",
+        "vt",
+        "vt 0 0 0 0",
+        "vt x",
+    ] {
+        let text = format!("{OBJ_V}{line}\nf 1 2 3\n");
+        let s = err("vtvn.obj", text.as_bytes());
+        assert!(s.contains("line 6: expected 'v"), "{line}: {s}");
+    }
+    // The specification's other statements and well-formed vt / vn lines still read.
+    let text = format!(
+        "{OBJ_V}vt 0.5\nvt 0 1\nvn 0 0 1\ng a\ns off\nusemtl m\nlod 1\nbevel off\n\
+         f 1/1/1 2/2/1 3/1/1\n"
+    );
+    assert_eq!(ok("spec.obj", text.as_bytes()).triangles, vec![[0, 1, 2]]);
+}
