@@ -115,17 +115,15 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
                 polygons.push(poly);
                 saw_statement = true;
             }
-            Some(kw) => {
-                if !OTHER_STATEMENTS.contains(&kw) {
-                    let what = if saw_statement {
-                        "; a garbled line would silently drop its data: fix or remove it"
-                    } else {
-                        ""
-                    };
-                    return Err(bad(line_no, format!("unknown OBJ statement {kw:?}{what}")));
-                }
+            Some(kw) if !OTHER_STATEMENTS.contains(&kw) => {
+                let what = if saw_statement {
+                    "; a garbled line would silently drop its data: fix or remove it"
+                } else {
+                    ""
+                };
+                return Err(bad(line_no, format!("unknown OBJ statement {kw:?}{what}")));
             }
-            None => {}
+            Some(_) | None => {}
         }
     }
     crate::check_vertex_coords(path, &vertices)?;
