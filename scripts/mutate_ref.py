@@ -5,6 +5,7 @@ the vertex/triangle or point counts it read) or raises Reject with the reason.
 """
 
 import gzip
+import io
 import logging
 import math
 import re
@@ -64,10 +65,14 @@ def rs_split(s):
 
 
 def lines_nc(s, comment="#"):
-    """Non-blank lines with comments stripped, as token lists."""
+    """Non-blank lines with comments stripped (a `#` at the start of a token), as token
+    lists."""
     out = []
     for ln in rs_lines(s):
-        t = rs_split(ln.split(comment)[0]) if comment else rs_split(ln)
+        t = rs_split(ln)
+        if comment:
+            cut = [k for k, tok in enumerate(t) if tok.startswith(comment)]
+            t = t[:cut[0]] if cut else t
         if t:
             out.append(t)
     return out
@@ -468,13 +473,27 @@ def raw_checker(args):
 
 
 def trimesh_rejects(path, kind):
-    """trimesh as a second reference for meshes (None when it is missing or agrees)."""
+    """trimesh as a second reference for meshes (None when it is missing or agrees). Its
+    ASCII PLY reader fails on blank lines, which PLY allows, and its text readers split at
+    spaces only: it reads a copy without blank PLY lines and with \\v, \\f as spaces."""
     try:
         import trimesh
     except ImportError:
         return None
+    with open(path, "rb") as fh:
+        data = fh.read()
+    if not path.endswith((".ply", ".stl")) or b"format ascii" in data[:200] or \
+            data.lstrip().startswith(b"solid"):
+        data = data.replace(b"\x0b", b" ").replace(b"\x0c", b" ").replace(b"\t", b" ")
+    if path.endswith(".ply") and b"format ascii" in data[:200]:
+        cut = data.find(b"end_header")
+        if cut > 0:
+            body = data[cut:].split(b"\n")
+            keep = [ln for k, ln in enumerate(body) if ln.strip() or k == len(body) - 1]
+            data = data[:cut] + b"\n".join(keep)
     try:
-        m = trimesh.load(path, force="mesh" if kind == "mesh" else None, process=False)
+        m = trimesh.load(io.BytesIO(data), file_type=path.rsplit(".", 1)[-1],
+                         force="mesh" if kind == "mesh" else None, process=False)
     except Exception as ex:
         return "trimesh: %s" % type(ex).__name__
     if kind == "mesh" and len(getattr(m, "faces", [])) == 0:

@@ -431,6 +431,20 @@ pub(crate) fn fmt_coord(x: f64, double: bool) -> String {
     }
 }
 
+/// `line` without its comment: a `#` at the start of the line or after white space starts
+/// one. A `#` inside a token (`0.707#65`) does not, so the token is reported as bad instead of
+/// being silently cut to `0.707`.
+pub(crate) fn strip_comment(line: &str) -> &str {
+    let mut prev_ws = true;
+    for (i, c) in line.char_indices() {
+        if c == '#' && prev_ws {
+            return &line[..i];
+        }
+        prev_ws = c.is_whitespace();
+    }
+    line
+}
+
 /// Parse a decimal coordinate token.
 pub(crate) fn parse_f64(tok: &str) -> Option<f64> {
     tok.parse::<f64>().ok()

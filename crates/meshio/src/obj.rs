@@ -45,7 +45,7 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
             break;
         }
         line_no += 1;
-        let s = buf.split('#').next().unwrap_or("").trim();
+        let s = crate::strip_comment(&buf).trim();
         let mut it = s.split_whitespace();
         match it.next() {
             Some("v") => {

@@ -443,3 +443,27 @@ fn obj_unknown_statements_and_bad_vt_vn_are_rejected() {
     );
     assert_eq!(ok("spec.obj", text.as_bytes()).triangles, vec![[0, 1, 2]]);
 }
+
+/// scripts/mutate.py: `v 0 -0.70 0.70710678118#65475` read as z = 0.70710678118 (the `#`
+/// inside the number started a comment). A `#` starts a comment only at the start of a line
+/// or after white space; inside a token it makes the token bad.
+#[test]
+fn obj_and_off_hash_inside_a_number_is_not_a_comment() {
+    let text = OBJ_V.replace("v 0 1 0", "v 0 1 0.70710678118#65475") + "f 1 2 3\n";
+    let s = err("hash.obj", text.as_bytes());
+    assert!(
+        s.contains("line 3: ") && s.contains("0.70710678118#65475"),
+        "{s}"
+    );
+    let off = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0.5#5\n3 0 1 2\n";
+    let s = err("hash.off", off.as_bytes());
+    assert!(s.contains("line 5: ") && s.contains("0.5#5"), "{s}");
+    // Comments after white space, and whole-line comments, still work.
+    let text = format!("# c\n{OBJ_V}f 1 2 3 # a face\n#\n");
+    assert_eq!(
+        ok("hash_ok.obj", text.as_bytes()).triangles,
+        vec![[0, 1, 2]]
+    );
+    let off = "OFF # header\n3 1 0\n0 0 0\t# a\n1 0 0\n0 1 0\n3 0 1 2 #\n";
+    assert_eq!(ok("hash_ok.off", off.as_bytes()).triangles, vec![[0, 1, 2]]);
+}
