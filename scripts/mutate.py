@@ -15,7 +15,9 @@ with a wall-clock timeout. Each run is classified:
   structural checks below, plus trimesh / nibabel / gzip where they are installed);
 - misread: exit 0, but the input note's vertex/triangle (or point) counts differ from the
   reference reader's;
-- bad-message: a non-zero exit whose stderr is not one `error:` line naming the file.
+- bad-message: a non-zero exit whose stderr is not one `error:` line naming the file;
+- refused-readable (not a failure, listed for review): a non-zero exit on a file the
+  reference reads, e.g. a reader stricter than the reference or a mesh the mesher refuses.
 
 Python 3 standard library only; numpy, trimesh and nibabel add reference readers when present.
 Usage: scripts/mutate.py [--bin target/release/xtask] [--per-format 300] [--seed 0]
@@ -485,7 +487,7 @@ def main():
         r = random.Random("%s-%d" % (fmt, a.seed))
         muts = mutators(fmt)
         row = {"format": fmt, "mutations": 0, "panics": 0, "timeouts": 0, "accepted_bad": 0,
-               "misread": 0, "bad_messages": 0, "exit0": 0, "rejected_by_reference": 0, "seconds": 0.0}
+               "misread": 0, "bad_messages": 0, "refused_readable": 0, "exit0": 0, "rejected_by_reference": 0, "seconds": 0.0}
         t_fmt = time.time()
         for k in range(a.per_format):
             name, data, args, size = base_list[k % len(base_list)]
@@ -540,6 +542,14 @@ def main():
             elif not message_ok(err, path):
                 verdict = "bad-message"
                 row["bad_messages"] += 1
+            elif why is None:
+                # Not a failure: the reference reads it but the CLI refuses it (a reader
+                # stricter than the reference, or an input the mesher cannot use). Listed in
+                # the JSON for review.
+                row["refused_readable"] += 1
+                findings.append({"format": fmt, "verdict": "refused-readable", "args": args,
+                                 "mutations": desc, "exit": rc,
+                                 "stderr": err.strip().splitlines()[-1:]})
             if verdict:
                 kept = os.path.join(a.keep, os.path.basename(path))
                 shutil.copy(path, kept)
@@ -555,6 +565,7 @@ def main():
         print(json.dumps(row), flush=True)
     shutil.rmtree(work, ignore_errors=True)
     cols = ["format", "mutations", "panics", "timeouts", "accepted_bad", "misread", "bad_messages",
+            "refused_readable",
             "exit0", "rejected_by_reference", "seconds"]
     print("\n| " + " | ".join(cols) + " |\n|" + "---|" * len(cols))
     for row in table:

@@ -95,6 +95,11 @@ PLY_T = {"char": "b", "int8": "b", "uchar": "B", "uint8": "B", "short": "h", "in
          "float": "f", "float32": "f", "double": "d", "float64": "d"}
 
 
+RANGE = {c: (-2 ** (8 * struct.calcsize(c) - 1), 2 ** (8 * struct.calcsize(c) - 1) - 1)
+         for c in "bhi"}
+RANGE.update({c: (0, 2 ** (8 * struct.calcsize(c)) - 1) for c in "BHI"})
+
+
 def check_ply(data):
     pos, hl = 0, []
     while True:
@@ -153,16 +158,18 @@ def check_ply(data):
                     if lcode:
                         if pos >= len(row):
                             raise Reject("short row")
-                        n = integer(row[pos], 0)
+                        n = integer(row[pos], 0, RANGE[lcode][1])
                         items = row[pos + 1:pos + 1 + n]
                         if len(items) != n:
                             raise Reject("short list")
-                        rec.append([num(x, False) if code in "fd" else integer(x) for x in items])
+                        rec.append([num(x, False) if code in "fd" else integer(x, *RANGE[code])
+                                    for x in items])
                         pos += 1 + n
                     else:
                         if pos >= len(row):
                             raise Reject("short row")
-                        rec.append(num(row[pos], False) if code in "fd" else integer(row[pos]))
+                        rec.append(num(row[pos], False) if code in "fd"
+                                   else integer(row[pos], *RANGE[code]))
                         pos += 1
                 if pos != len(row):
                     raise Reject("extra tokens on a row")
