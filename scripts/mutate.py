@@ -354,8 +354,10 @@ def m_nifti_field(d, r):
 
 def m_gzip(d, r):
     """Corrupt a gzip stream: a byte in the deflate data, the CRC, the length, a cut, junk."""
+    if len(d) < 20:  # cut by an earlier mutation: no stream left to corrupt
+        return m_flip(d, r)
     op = r.randrange(6)
-    if op == 0 and len(d) > 20:
+    if op == 0:
         i = r.randrange(10, len(d) - 8)
         return d[:i] + bytes([d[i] ^ (1 << r.randrange(8))]) + d[i + 1:]
     if op == 1:
