@@ -49,47 +49,11 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
         let mut it = s.split_whitespace();
         match it.next() {
             Some("v") => {
-                let toks: Vec<&str> = it.collect();
-                let c: Vec<f64> = toks.iter().filter_map(|t| crate::parse_f64(t)).collect();
-                if c.len() != toks.len() || !matches!(c.len(), 3 | 4 | 6 | 7) {
-                    return Err(bad(
-                        line_no,
-                        format!(
-                            "expected 'v x y z', 'v x y z w' or 'v x y z r g b' (numbers), \
-                             found {s:?}"
-                        ),
-                    ));
-                }
-                if c[3..].iter().any(|x| !x.is_finite()) {
-                    return Err(bad(
-                        line_no,
-                        format!("non-finite weight or colour in {s:?}"),
-                    ));
-                }
-                vertices.push(DVec3::new(c[0], c[1], c[2]));
+                vertices.push(parse_v(it, s).map_err(|w| bad(line_no, w))?);
                 saw_statement = true;
             }
             Some(kw @ ("vt" | "vn")) => {
-                let toks: Vec<&str> = it.collect();
-                let ok = toks
-                    .iter()
-                    .all(|t| crate::parse_f64(t).is_some_and(f64::is_finite));
-                let n_ok = if kw == "vn" {
-                    toks.len() == 3
-                } else {
-                    (1..=3).contains(&toks.len())
-                };
-                if !ok || !n_ok {
-                    let want = if kw == "vn" {
-                        "'vn x y z'"
-                    } else {
-                        "'vt u [v [w]]'"
-                    };
-                    return Err(bad(
-                        line_no,
-                        format!("expected {want} (finite numbers), found {s:?}"),
-                    ));
-                }
+                check_vt_vn(kw == "vn", it, s).map_err(|w| bad(line_no, w))?;
                 counts[usize::from(kw == "vn")] += 1;
                 saw_statement = true;
             }
@@ -219,6 +183,44 @@ fn check_refs(
         }
     }
     Ok(())
+}
+
+/// The position of a `v` line (`s` is the whole line, for the message): 3, 4 (weight) or
+/// 6 / 7 (colour) numbers, the extra ones finite.
+fn parse_v<'a>(toks: impl Iterator<Item = &'a str>, s: &str) -> Result<DVec3, String> {
+    let toks: Vec<&str> = toks.collect();
+    let c: Vec<f64> = toks.iter().filter_map(|t| crate::parse_f64(t)).collect();
+    if c.len() != toks.len() || !matches!(c.len(), 3 | 4 | 6 | 7) {
+        return Err(format!(
+            "expected 'v x y z', 'v x y z w' or 'v x y z r g b' (numbers), found {s:?}"
+        ));
+    }
+    if c[3..].iter().any(|x| !x.is_finite()) {
+        return Err(format!("non-finite weight or colour in {s:?}"));
+    }
+    Ok(DVec3::new(c[0], c[1], c[2]))
+}
+
+/// A `vn x y z` (`normal`) or `vt u [v [w]]` line: finite numbers, checked then ignored.
+fn check_vt_vn<'a>(
+    normal: bool,
+    toks: impl Iterator<Item = &'a str>,
+    s: &str,
+) -> Result<(), String> {
+    let toks: Vec<&str> = toks.collect();
+    let finite = toks
+        .iter()
+        .all(|t| crate::parse_f64(t).is_some_and(f64::is_finite));
+    let (n_ok, want) = if normal {
+        (toks.len() == 3, "'vn x y z'")
+    } else {
+        ((1..=3).contains(&toks.len()), "'vt u [v [w]]'")
+    };
+    if finite && n_ok {
+        Ok(())
+    } else {
+        Err(format!("expected {want} (finite numbers), found {s:?}"))
+    }
 }
 
 /// `i`, `i/t`, `i//n` or `i/t/n` as (i, t, n), every index a non-zero integer.

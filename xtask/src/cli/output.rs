@@ -131,13 +131,13 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) ->
         .extension()
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_default();
-    // No dot after the name when it has no extension: the temporary has none either.
-    let stem = if ext.is_empty() {
-        format!("{name}-")
+    // `.NAME.PID.tmp.EXT`, or `.NAME-PID-tmp` (no dot after the name) when it has no
+    // extension: the temporary has the same extension as `path`, or none.
+    let tmp = if ext.is_empty() {
+        dir.join(format!(".{name}-{}-tmp", std::process::id()))
     } else {
-        format!("{name}.")
+        dir.join(format!(".{name}.{}.tmp{ext}", std::process::id()))
     };
-    let tmp = dir.join(format!(".{stem}{}-tmp{ext}", std::process::id()));
     let result = write(&tmp)
         .map_err(|e| naming(e, &tmp, path))
         .and_then(|()| {
