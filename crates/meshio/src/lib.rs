@@ -94,8 +94,10 @@ pub enum MeshIoError {
         source: std::io::Error,
     },
     #[error(
-        "{path}: unknown mesh file extension {ext:?}; use .ply, .off, .obj or .stl \
-         (or call read_with/write_with with an explicit Format)"
+        "{path}: {}; the mesh formats are .ply, .off, .obj and .stl (any case): rename the \
+         file, or from Rust call meshio::read_with / meshio::write_with with an explicit \
+         meshio::Format",
+        if ext.is_empty() { "no file extension".to_string() } else { format!("unknown mesh file extension {ext:?}") }
     )]
     UnknownExtension { path: PathBuf, ext: String },
     #[error("{path}: the file is empty; expected a {format} mesh: re-export or re-download it")]
@@ -427,6 +429,20 @@ pub(crate) fn fmt_coord(x: f64, double: bool) -> String {
     } else {
         format!("{}", x as f32)
     }
+}
+
+/// `line` without its comment: a `#` at the start of the line or after white space starts
+/// one. A `#` inside a token (`0.707#65`) does not, so the token is reported as bad instead of
+/// being silently cut to `0.707`.
+pub(crate) fn strip_comment(line: &str) -> &str {
+    let mut prev_ws = true;
+    for (i, c) in line.char_indices() {
+        if c == '#' && prev_ws {
+            return &line[..i];
+        }
+        prev_ws = c.is_whitespace();
+    }
+    line
 }
 
 /// Parse a decimal coordinate token.

@@ -1,5 +1,6 @@
 //! Wavefront OBJ (ours: file format support): `v` and `f` lines; polygons are
-//! fan-triangulated; other statements are ignored.
+//! fan-triangulated; the specification's other statements are ignored, unknown ones (a
+//! garbled keyword) are errors.
 //!
 //! - `v x y z`, `v x y z w` (the weight `w` of rational curves, read and ignored: polygon
 //!   vertices are not divided by it), and the common colour extension `v x y z r g b` (and
@@ -8,6 +9,7 @@
 //! - `f` corners `i`, `i/t`, `i//n` or `i/t/n`: every present index an integer other than 0,
 //!   negative ones relative to the elements read so far; texture and normal indices must
 //!   refer to existing `vt` / `vn` lines.
+//! - `vt u [v [w]]` and `vn x y z`: finite numbers (checked, then ignored).
 
 use std::io::{BufRead, Write};
 use std::path::Path;
@@ -43,31 +45,18 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
             break;
         }
         line_no += 1;
-        let s = buf.split('#').next().unwrap_or("").trim();
+        let s = crate::strip_comment(&buf).trim();
         let mut it = s.split_whitespace();
         match it.next() {
             Some("v") => {
-                let toks: Vec<&str> = it.collect();
-                let c: Vec<f64> = toks.iter().filter_map(|t| crate::parse_f64(t)).collect();
-                if c.len() != toks.len() || !matches!(c.len(), 3 | 4 | 6 | 7) {
-                    return Err(bad(
-                        line_no,
-                        format!(
-                            "expected 'v x y z', 'v x y z w' or 'v x y z r g b' (numbers), \
-                             found {s:?}"
-                        ),
-                    ));
-                }
-                if c[3..].iter().any(|x| !x.is_finite()) {
-                    return Err(bad(
-                        line_no,
-                        format!("non-finite weight or colour in {s:?}"),
-                    ));
-                }
-                vertices.push(DVec3::new(c[0], c[1], c[2]));
+                vertices.push(parse_v(it, s).map_err(|w| bad(line_no, w))?);
                 saw_statement = true;
             }
-            Some(kw @ ("vt" | "vn")) => counts[usize::from(kw == "vn")] += 1,
+            Some(kw @ ("vt" | "vn")) => {
+                check_vt_vn(kw == "vn", it, s).map_err(|w| bad(line_no, w))?;
+                counts[usize::from(kw == "vn")] += 1;
+                saw_statement = true;
+            }
             Some("f") => {
                 let mut poly = Vec::new();
                 for tok in it {
@@ -90,16 +79,15 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
                 polygons.push(poly);
                 saw_statement = true;
             }
-            Some(kw) => {
-                const KNOWN: [&str; 12] = [
-                    "vp", "g", "o", "s", "usemtl", "mtllib", "l", "p", "mg", "cstype", "deg",
-                    "curv",
-                ];
-                if !KNOWN.contains(&kw) && !saw_statement {
-                    return Err(bad(line_no, format!("unknown OBJ statement {kw:?}")));
-                }
+            Some(kw) if !OTHER_STATEMENTS.contains(&kw) => {
+                let what = if saw_statement {
+                    "; a garbled line would silently drop its data: fix or remove it"
+                } else {
+                    ""
+                };
+                return Err(bad(line_no, format!("unknown OBJ statement {kw:?}{what}")));
             }
-            None => {}
+            Some(_) | None => {}
         }
     }
     crate::check_vertex_coords(path, &vertices)?;
@@ -134,6 +122,47 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
 
 /// Check that every texture / normal reference `(line, index as written, 0-based index)`
 /// names an existing `vt` / `vn` line; on failure, the line and the message.
+/// The statements of the OBJ specification other than `v`, `vt`, `vn` and `f` (free-form
+/// geometry, grouping, display attributes): read and ignored. Anything else is an error, so
+/// that a garbled `f` or `v` line cannot silently drop its data.
+const OTHER_STATEMENTS: [&str; 35] = [
+    "vp",
+    "g",
+    "o",
+    "s",
+    "mg",
+    "usemtl",
+    "mtllib",
+    "usemap",
+    "maplib",
+    "l",
+    "p",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "call",
+    "csh",
+];
+
 fn check_refs(
     refs: &[Vec<(usize, i64, i64)>; 2],
     counts: [usize; 2],
@@ -154,6 +183,44 @@ fn check_refs(
         }
     }
     Ok(())
+}
+
+/// The position of a `v` line (`s` is the whole line, for the message): 3, 4 (weight) or
+/// 6 / 7 (colour) numbers, the extra ones finite.
+fn parse_v<'a>(toks: impl Iterator<Item = &'a str>, s: &str) -> Result<DVec3, String> {
+    let toks: Vec<&str> = toks.collect();
+    let c: Vec<f64> = toks.iter().filter_map(|t| crate::parse_f64(t)).collect();
+    if c.len() != toks.len() || !matches!(c.len(), 3 | 4 | 6 | 7) {
+        return Err(format!(
+            "expected 'v x y z', 'v x y z w' or 'v x y z r g b' (numbers), found {s:?}"
+        ));
+    }
+    if c[3..].iter().any(|x| !x.is_finite()) {
+        return Err(format!("non-finite weight or colour in {s:?}"));
+    }
+    Ok(DVec3::new(c[0], c[1], c[2]))
+}
+
+/// A `vn x y z` (`normal`) or `vt u [v [w]]` line: finite numbers, checked then ignored.
+fn check_vt_vn<'a>(
+    normal: bool,
+    toks: impl Iterator<Item = &'a str>,
+    s: &str,
+) -> Result<(), String> {
+    let toks: Vec<&str> = toks.collect();
+    let finite = toks
+        .iter()
+        .all(|t| crate::parse_f64(t).is_some_and(f64::is_finite));
+    let (n_ok, want) = if normal {
+        (toks.len() == 3, "'vn x y z'")
+    } else {
+        ((1..=3).contains(&toks.len()), "'vt u [v [w]]'")
+    };
+    if finite && n_ok {
+        Ok(())
+    } else {
+        Err(format!("expected {want} (finite numbers), found {s:?}"))
+    }
 }
 
 /// `i`, `i/t`, `i//n` or `i/t/n` as (i, t, n), every index a non-zero integer.

@@ -36,7 +36,7 @@ impl<R: BufRead> Lines<'_, R> {
                 return Ok(None);
             }
             self.line_no += 1;
-            let s = self.buf.split('#').next().unwrap_or("").trim();
+            let s = crate::strip_comment(&self.buf).trim();
             if !s.is_empty() {
                 return Ok(Some((self.line_no, s.to_owned())));
             }

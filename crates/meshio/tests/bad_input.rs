@@ -23,8 +23,23 @@ fn unknown_extension() {
         s.contains(".ply"),
         "the message lists the known extensions: {s}"
     );
+    for ext in [
+        ".ply",
+        ".off",
+        ".obj",
+        ".stl",
+        "read_with",
+        "write_with",
+        "meshio::Format",
+    ] {
+        assert!(s.contains(ext), "the message names {ext}: {s}");
+    }
     assert!(Format::from_path("a/b.Stl").is_ok());
-    assert!(Format::from_path("noext").is_err());
+    let e = Format::from_path("dir/noext").unwrap_err().to_string();
+    assert!(
+        e.starts_with("dir/noext: no file extension;") && e.contains(".stl"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -405,3 +405,65 @@ fn off_counts_and_tokens_are_checked() {
         assert_eq!(m.vertices[1], glam::DVec3::X, "{text}");
     }
 }
+
+/// scripts/mutate.py found these accepted with exit 0: a garbled keyword after the first
+/// statement was ignored (`f/ 1 2 3`, `1//1 2//2 3//3`, `vertex 1 2 3`: a face or vertex
+/// silently dropped), and `vt` / `vn` lines were not read (`vn 0 0 double`).
+#[test]
+fn obj_unknown_statements_and_bad_vt_vn_are_rejected() {
+    for line in [
+        "f/ 1 2 3",
+        "f// 1 2 3",
+        "1//1 2//2 3//3",
+        "vertex 1 2 3",
+        "OFF",
+        "11865475",
+    ] {
+        let text = format!("{OBJ_V}{line}\nf 1 2 3\n");
+        let s = err("kw.obj", text.as_bytes());
+        assert!(s.contains("line 6: unknown OBJ statement"), "{line}: {s}");
+    }
+    for line in [
+        "vn 0 0 double",
+        "vn 0 0",
+        "vn 0 0 1 1",
+        "vn 0 nan 1",
+        "vt",
+        "vt 0 0 0 0",
+        "vt x",
+    ] {
+        let text = format!("{OBJ_V}{line}\nf 1 2 3\n");
+        let s = err("vtvn.obj", text.as_bytes());
+        assert!(s.contains("line 6: expected 'v"), "{line}: {s}");
+    }
+    // The specification's other statements and well-formed vt / vn lines still read.
+    let text = format!(
+        "{OBJ_V}vt 0.5\nvt 0 1\nvn 0 0 1\ng a\ns off\nusemtl m\nlod 1\nbevel off\n\
+         f 1/1/1 2/2/1 3/1/1\n"
+    );
+    assert_eq!(ok("spec.obj", text.as_bytes()).triangles, vec![[0, 1, 2]]);
+}
+
+/// scripts/mutate.py: `v 0 -0.70 0.70710678118#65475` read as z = 0.70710678118 (the `#`
+/// inside the number started a comment). A `#` starts a comment only at the start of a line
+/// or after white space; inside a token it makes the token bad.
+#[test]
+fn obj_and_off_hash_inside_a_number_is_not_a_comment() {
+    let text = OBJ_V.replace("v 0 1 0", "v 0 1 0.70710678118#65475") + "f 1 2 3\n";
+    let s = err("hash.obj", text.as_bytes());
+    assert!(
+        s.contains("line 3: ") && s.contains("0.70710678118#65475"),
+        "{s}"
+    );
+    let off = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0.5#5\n3 0 1 2\n";
+    let s = err("hash.off", off.as_bytes());
+    assert!(s.contains("line 5: ") && s.contains("0.5#5"), "{s}");
+    // Comments after white space, and whole-line comments, still work.
+    let text = format!("# c\n{OBJ_V}f 1 2 3 # a face\n#\n");
+    assert_eq!(
+        ok("hash_ok.obj", text.as_bytes()).triangles,
+        vec![[0, 1, 2]]
+    );
+    let off = "OFF # header\n3 1 0\n0 0 0\t# a\n1 0 0\n0 1 0\n3 0 1 2 #\n";
+    assert_eq!(ok("hash_ok.off", off.as_bytes()).triangles, vec![[0, 1, 2]]);
+}

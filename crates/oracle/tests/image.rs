@@ -1593,6 +1593,18 @@ mod strict_nifti {
         assert!(e.to_string().contains("only NIfTI-1 is supported"), "{e}");
     }
 
+    /// scripts/mutate.py found these (exit 0 before): bitpix (bytes 72-73) not matching the
+    /// datatype, e.g. a u8 file with bitpix 0 or 512, an f32 file with bitpix 16 or -32768.
+    #[test]
+    fn bitpix_must_match_the_datatype() {
+        for v in [0i16, 16, 512, -32768] {
+            let mut b = ball_bytes();
+            b[72..74].copy_from_slice(&v.to_le_bytes());
+            let s = bad_field(&format!("bitpix{v}.nii"), &b, "bitpix");
+            assert!(s.contains(&format!("= {v} but datatype")), "{s}");
+        }
+    }
+
     #[test]
     fn infinite_scaling_is_rejected_and_slope_0_or_nan_means_none() {
         let mut b = ball_bytes();

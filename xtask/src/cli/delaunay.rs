@@ -8,6 +8,9 @@
 //! - `--random N --seed S --distribution cube|sphere|grid`: prints one JSON object with
 //!   `points`, `finite_cells`, `seconds` (insertion time) and `valid` (`is_valid()` result,
 //!   run when N <= 200000 or with `--validate`, else `null`).
+//! - An input with no tetrahedron (no points, fewer than 4 distinct ones, or all on one line
+//!   or plane) is an error naming the reason (exit 1, no output file), not a `"valid": true`
+//!   triangulation with 0 cells. The output is written atomically and never over the input.
 
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
@@ -95,12 +98,19 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
         let text = std::fs::read_to_string(input)
             .with_context(|| format!("cannot read {name} (a UTF-8 text file of `x y z` lines)"))?;
         let pts = parse_xyz(&text, &name)?;
+        crate::cli::output::check_outputs(Some(input), &[("--output", output)])?;
         let t0 = Instant::now();
         let mut t = Triangulation::new();
         let ids = t
             .insert_bulk(&pts)
             .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
         let seconds = t0.elapsed().as_secs_f64();
+        if let Some(why) = degenerate(&t, pts.len()) {
+            bail!(
+                "{name}: {why}; no tetrahedra, {} not written",
+                output.display()
+            );
+        }
         let mut first = vec![u32::MAX; t.num_vertices()];
         for (i, &v) in ids.iter().enumerate() {
             let f = &mut first[v.index()];
@@ -108,15 +118,17 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
                 *f = i as u32;
             }
         }
-        let out = std::fs::File::create(output)
-            .with_context(|| format!("cannot create {}", output.display()))?;
-        let mut w = BufWriter::new(out);
-        for c in t.finite_cells() {
-            let [a, b, c, d] = t.cell_vertices(c).map(|v| first[v.index()]);
-            writeln!(w, "{a} {b} {c} {d}")?;
-        }
-        w.flush()
-            .with_context(|| format!("cannot write {}", output.display()))?;
+        crate::cli::output::write_atomically(output, |tmp| {
+            let out = std::fs::File::create(tmp)
+                .with_context(|| format!("cannot create {}", tmp.display()))?;
+            let mut w = BufWriter::new(out);
+            for c in t.finite_cells() {
+                let [a, b, c, d] = t.cell_vertices(c).map(|v| first[v.index()]);
+                writeln!(w, "{a} {b} {c} {d}")?;
+            }
+            w.flush()
+                .with_context(|| format!("cannot write {}", tmp.display()))
+        })?;
         let valid = if pts.len() <= 200_000 || args.validate {
             Some(t.is_valid().is_ok())
         } else {
@@ -143,6 +155,9 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
     t.insert_bulk(&pts)
         .map_err(|e| anyhow::anyhow!("random points: {e}"))?;
     let seconds = t0.elapsed().as_secs_f64();
+    if let Some(why) = degenerate(&t, n) {
+        bail!("--random {n}: {why}; give --random 4 or more");
+    }
     let valid = if n <= 200_000 || args.validate {
         Some(match t.is_valid() {
             Ok(()) => true,
@@ -169,6 +184,26 @@ pub fn run(args: &DelaunayArgs) -> Result<()> {
         })
     );
     Ok(())
+}
+
+/// Why `t` (built from `n` input points) has no tetrahedron, or `None` if it has some: fewer
+/// than 4 distinct points, or all of them on one line or one plane. Such an input is an
+/// error, not a `"valid": true` triangulation with 0 cells.
+pub fn degenerate(t: &Triangulation, n: usize) -> Option<String> {
+    let distinct = t.num_vertices();
+    let what = match t.dimension() {
+        3 => return None,
+        _ if n == 0 => "there are no points".to_string(),
+        0 if n == 1 => "there is only 1 point".to_string(),
+        0 => format!("all {n} points are the same point"),
+        1 if distinct == 2 => format!("the {n} points have only 2 distinct positions"),
+        1 => format!("the {n} points ({distinct} distinct) all lie on one line"),
+        _ if distinct == 3 => format!("the {n} points have only 3 distinct positions"),
+        _ => format!("the {n} points ({distinct} distinct) all lie on one plane"),
+    };
+    Some(format!(
+        "{what}: a 3D Delaunay triangulation needs at least 4 points not on one plane"
+    ))
 }
 
 /// The most random points `--random` accepts (the triangulation takes about 280 bytes a

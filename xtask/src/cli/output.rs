@@ -127,9 +127,25 @@ fn normalized(p: &Path) -> PathBuf {
     }
 }
 
-/// Refuse a run whose outputs would overwrite its input or each other. `outputs` are
-/// (flag, path) pairs, e.g. `("-o", mesh)`, `("--report", report)`.
+/// Refuse a run whose outputs would overwrite its input or each other, or whose mesh
+/// output (flag `-o`, as `mesh` passes it) has no mesh extension: checked before any work,
+/// not after meshing.
+/// `outputs` are (flag, path) pairs, e.g. `("-o", mesh)`, `("--report", report)`.
 pub fn check_outputs(input: Option<&Path>, outputs: &[(&str, &Path)]) -> Result<()> {
+    for &(flag, p) in outputs {
+        if flag == "-o" && meshio::Format::from_path(p).is_err() {
+            let ext = p.extension().map(|e| e.to_string_lossy().into_owned());
+            bail!(
+                "{flag} {}: {}; the mesh formats are .ply, .off, .obj and .stl \
+                 (e.g. {flag} {}.ply)",
+                p.display(),
+                ext.map_or("no file extension".to_string(), |e| format!(
+                    "unknown mesh file extension \"{e}\""
+                )),
+                p.with_extension("").display()
+            );
+        }
+    }
     let norm: Vec<(&str, &Path, PathBuf)> = outputs
         .iter()
         .map(|&(f, p)| (f, p, normalized(p)))
@@ -161,7 +177,8 @@ pub fn check_outputs(input: Option<&Path>, outputs: &[(&str, &Path)]) -> Result<
 }
 
 /// Write `path` through `write(tmp)`: `tmp` is a new file beside `path` with the same
-/// extension; it is renamed over `path` once `write` succeeded, and removed if it failed.
+/// extension (none if `path` has none); it is renamed over `path` once `write` succeeded,
+/// and removed if it failed. Errors name `path`, not the temporary.
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -177,15 +194,39 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) ->
         .extension()
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp{ext}", std::process::id()));
-    let result = write(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, path)
-            .with_context(|| format!("cannot move {} to {}", tmp.display(), path.display()))
-    });
+    // `.NAME.PID.tmp.EXT`, or `.NAME-PID-tmp` (no dot after the name) when it has no
+    // extension: the temporary has the same extension as `path`, or none.
+    let tmp = if ext.is_empty() {
+        dir.join(format!(".{name}-{}-tmp", std::process::id()))
+    } else {
+        dir.join(format!(".{name}.{}.tmp{ext}", std::process::id()))
+    };
+    let result = write(&tmp)
+        .map_err(|e| naming(e, &tmp, path))
+        .and_then(|()| {
+            std::fs::rename(&tmp, path)
+                .with_context(|| format!("cannot move {} to {}", tmp.display(), path.display()))
+        });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// `e` as one line (each cause once, as `main` prints it) with `tmp` replaced by `path`.
+fn naming(e: anyhow::Error, tmp: &Path, path: &Path) -> anyhow::Error {
+    let (t, p) = (tmp.display().to_string(), path.display().to_string());
+    let mut msg = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string().replace(&t, &p);
+        if !msg.contains(&c) {
+            if !msg.is_empty() {
+                msg.push_str(": ");
+            }
+            msg.push_str(&c);
+        }
+    }
+    anyhow::anyhow!(msg)
 }
 
 #[cfg(test)]
@@ -253,6 +294,36 @@ mod tests {
         );
         write_atomically(&out, |tmp| Ok(std::fs::write(tmp, "new")?)).unwrap();
         assert_eq!(std::fs::read_to_string(&out).unwrap(), "new");
+        // The temporary keeps the extension (or the lack of one); errors name the final path.
+        for (name, ext) in [("m.ply", Some("ply")), ("noext", None)] {
+            let p = d.join(name);
+            let e = write_atomically(&p, |tmp| {
+                assert_eq!(
+                    tmp.extension().and_then(|e| e.to_str()),
+                    ext,
+                    "{}",
+                    tmp.display()
+                );
+                meshio::read(tmp)?; // no such file: an error naming `tmp`
+                Ok(())
+            })
+            .unwrap_err()
+            .to_string();
+            assert!(
+                e.contains(&p.display().to_string()) && !e.contains("-tmp"),
+                "{e}"
+            );
+        }
+        // A mesh output without a mesh extension is refused before any work.
+        for bad in ["out/m.abc", "out/m"] {
+            let e = check_outputs(None, &[("-o", Path::new(bad))]).unwrap_err();
+            let e = e.to_string();
+            assert!(
+                e.starts_with(&format!("-o {bad}: ")) && e.contains(".stl"),
+                "{e}"
+            );
+        }
+        check_outputs(None, &[("--report", Path::new("r.json"))]).unwrap();
         std::fs::remove_dir_all(&d).unwrap();
     }
 }

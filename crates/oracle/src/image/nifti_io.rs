@@ -310,6 +310,20 @@ fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageErr
         });
     }
     let dtype = dtype_of(path, h)?;
+    if h.bitpix as i64 != 8 * dtype.size() as i64 {
+        return Err(bad_header(
+            path,
+            "bitpix",
+            format!(
+                "= {} but datatype {} ({dtype:?}) has {} bits a voxel: the header is damaged \
+                 (rewrite it with bitpix = {})",
+                h.bitpix,
+                h.datatype,
+                8 * dtype.size(),
+                8 * dtype.size()
+            ),
+        ));
+    }
     let off = h.vox_offset as f64;
     let min = if single { MIN_SINGLE_OFFSET } else { 0.0 };
     if !(off.is_finite() && off.fract() == 0.0 && off >= min && off <= 1e15) {

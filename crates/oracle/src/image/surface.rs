@@ -428,7 +428,8 @@ impl ImageSurface {
         bg: f64,
     ) -> [f64; 8] {
         let [nx, ny, nz] = self.n;
-        if i >= 0 && j >= 0 && k >= 0 && i + 1 < nx && j + 1 < ny && k + 1 < nz {
+        // `i < nx - 1`, not `i + 1 < nx`: no overflow for any `i` (every `n` is >= 1).
+        if i >= 0 && j >= 0 && k >= 0 && i < nx - 1 && j < ny - 1 && k < nz - 1 {
             let sx = 1usize;
             let sy = nx as usize;
             let sz = (nx * ny) as usize;
@@ -470,7 +471,24 @@ impl ImageSurface {
     /// coordinates, background outside the grid), x fastest.
     #[inline]
     pub(super) fn cell_corners(&self, cell: DVec3) -> [f64; 8] {
-        let cell = [cell.x as isize, cell.y as isize, cell.z as isize];
+        if cell.is_nan() {
+            return [f64::NAN; 8];
+        }
+        // A cell whose lowest corner is outside [-1, n - 1] on some axis touches no voxel:
+        // map it to -2 (all background) before the cast, so that no huge coordinate (a huge
+        // sform scale puts world points at 1e30 voxels) reaches the index arithmetic.
+        let axis = |x: f64, n: isize| {
+            if x >= -1.0 && x <= (n - 1) as f64 {
+                x as isize
+            } else {
+                -2
+            }
+        };
+        let cell = [
+            axis(cell.x, self.n[0]),
+            axis(cell.y, self.n[1]),
+            axis(cell.z, self.n[2]),
+        ];
         match self.mode {
             Mode::Intensity { a, b } => {
                 let r = with_voxels!(self.vol.voxels(), d => self.corners(d, cell, |x| x.to_f64(), self.bg_raw));
@@ -530,7 +548,95 @@ pub(super) fn trilinear(c: &[f64; 8], t: DVec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::floor3;
-    use glam::DVec3;
+    use crate::image::{ImageOptions, ImageSurface, Volume, Voxels};
+    use glam::{DAffine3, DVec3};
+
+    /// A volume of the given dimensions whose voxel `(i, j, k)` holds `1 + i + 2j + 4k`,
+    /// meshed at iso 1.5 with background 0.
+    fn ramp(dims: [usize; 3]) -> ImageSurface {
+        let n = dims[0] * dims[1] * dims[2];
+        let v = (0..n)
+            .map(|t| {
+                let (i, j, k) = (t % dims[0], t / dims[0] % dims[1], t / (dims[0] * dims[1]));
+                (1 + i + 2 * j + 4 * k) as u8
+            })
+            .collect();
+        let vol = Volume::new(dims, Voxels::U8(v), DAffine3::IDENTITY).unwrap();
+        let opts = ImageOptions {
+            iso: Some(1.5),
+            background: Some(0.0),
+            ..Default::default()
+        };
+        ImageSurface::new(vol, &opts).unwrap()
+    }
+
+    /// The raw values at the corners of `cell` in `ramp(dims)`, 0 (the background) outside
+    /// the grid; x fastest.
+    fn expected(dims: [usize; 3], cell: [i64; 3]) -> [f64; 8] {
+        let mut out = [0.0; 8];
+        for (c, o) in out.iter_mut().enumerate() {
+            let p = [
+                cell[0] + (c & 1) as i64,
+                cell[1] + (c >> 1 & 1) as i64,
+                cell[2] + (c >> 2) as i64,
+            ];
+            let inside = (0..3).all(|a| p[a] >= 0 && p[a] < dims[a] as i64);
+            *o = if inside {
+                (1 + p[0] + 2 * p[1] + 4 * p[2]) as f64
+            } else {
+                0.0
+            };
+        }
+        out
+    }
+
+    #[test]
+    fn cell_corners_on_thin_and_tiny_volumes() {
+        for dims in [[1, 3, 4], [2, 2, 2], [3, 1, 2]] {
+            let s = ramp(dims);
+            for i in -3i64..=3 {
+                for j in -3i64..=4 {
+                    for k in -3i64..=5 {
+                        let got = s.cell_corners(DVec3::new(i as f64, j as f64, k as f64));
+                        let want = expected(dims, [i, j, k]).map(|raw| s.map_raw(raw));
+                        assert_eq!(got, want, "{dims:?} cell ({i},{j},{k})");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn cell_corners_far_outside_are_background() {
+        let s = ramp([2, 2, 2]);
+        let bg = s.cell_corners(DVec3::splat(-5.0));
+        assert_eq!(bg, [s.map_raw(0.0); 8]);
+        assert!(bg[0] > 0.0, "the background is outside (positive): {bg:?}");
+        for x in [
+            1e30,
+            -1e30,
+            3.4e38,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            9.3e18,
+            -9.3e18,
+        ] {
+            for cell in [
+                DVec3::new(x, 0.0, 0.0),
+                DVec3::new(0.0, x, 0.0),
+                DVec3::new(0.0, 0.0, x),
+                DVec3::splat(x),
+            ] {
+                assert_eq!(s.cell_corners(cell), bg, "{cell}");
+            }
+        }
+        assert!(
+            s.cell_corners(DVec3::new(0.0, f64::NAN, 0.0))
+                .iter()
+                .all(|v| v.is_nan())
+        );
+    }
 
     #[test]
     fn floor3_matches_floor() {

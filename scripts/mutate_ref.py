@@ -1,0 +1,513 @@
+"""Strict reference readers for scripts/mutate.py: each format's structure checked the way
+the format defines it (every count, token, index and header field), plus trimesh, nibabel and
+Python's gzip where they are installed. A checker returns the kind of input it accepts (with
+the vertex/triangle or point counts it read) or raises Reject with the reason.
+"""
+
+import gzip
+import io
+import logging
+import math
+import re
+import struct
+import warnings
+import zlib
+
+warnings.simplefilter("ignore")
+for _name in ("nibabel", "trimesh"):
+    logging.getLogger(_name).setLevel(logging.CRITICAL + 1)
+
+class Reject(Exception):
+    pass
+
+
+NUM = re.compile(r"^[+-]?((\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|inf|infinity|nan)$", re.I)
+INT = re.compile(r"^[+-]?\d+$")
+
+
+def num(tok, finite=True):
+    if not NUM.match(tok):
+        raise Reject("not a number: %r" % tok)
+    x = float(tok)
+    if finite and not math.isfinite(x):
+        raise Reject("non-finite %r" % tok)
+    return x
+
+
+def integer(tok, lo=None, hi=None):
+    if not INT.match(tok):
+        raise Reject("not an integer: %r" % tok)
+    i = int(tok)
+    if (lo is not None and i < lo) or (hi is not None and i > hi):
+        raise Reject("integer %d out of range" % i)
+    return i
+
+
+def text(data):
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise Reject("not UTF-8")
+
+
+# The readers' definitions: lines end at "\n" (a trailing "\r" dropped); tokens are split at
+# Unicode white space (Rust's `char::is_whitespace`; Python's str.split() also splits at
+# \x1c-\x1f, and str.splitlines() at a lone "\r").
+RS_WS = re.compile("[\t\n\x0b\x0c\r \x85\xa0\u1680\u2000-\u200a\u2028\u2029\u202f\u205f\u3000]+")
+
+
+def rs_lines(s):
+    return [ln[:-1] if ln.endswith("\r") else ln for ln in s.split("\n")]
+
+
+def rs_split(s):
+    return [t for t in RS_WS.split(s) if t]
+
+
+def lines_nc(s, comment="#"):
+    """Non-blank lines with comments stripped (a `#` at the start of a token), as token
+    lists."""
+    out = []
+    for ln in rs_lines(s):
+        t = rs_split(ln)
+        if comment:
+            cut = [k for k, tok in enumerate(t) if tok.startswith(comment)]
+            t = t[:cut[0]] if cut else t
+        if t:
+            out.append(t)
+    return out
+
+
+def faces_ok(faces, nv):
+    if not faces:
+        raise Reject("no faces")
+    for p in faces:
+        if len(p) < 3:
+            raise Reject("face with %d corners" % len(p))
+        for i in p:
+            if not 0 <= i < nv:
+                raise Reject("index %d out of range" % i)
+    return sum(len(p) - 2 for p in faces)
+
+
+PLY_T = {"char": "b", "int8": "b", "uchar": "B", "uint8": "B", "short": "h", "int16": "h",
+         "ushort": "H", "uint16": "H", "int": "i", "int32": "i", "uint": "I", "uint32": "I",
+         "float": "f", "float32": "f", "double": "d", "float64": "d"}
+
+
+RANGE = {c: (-2 ** (8 * struct.calcsize(c) - 1), 2 ** (8 * struct.calcsize(c) - 1) - 1)
+         for c in "bhi"}
+RANGE.update({c: (0, 2 ** (8 * struct.calcsize(c)) - 1) for c in "BHI"})
+
+
+def check_ply(data):
+    pos, hl = 0, []
+    while True:
+        nl = data.find(b"\n", pos)
+        if nl < 0:
+            raise Reject("no end_header line")
+        try:
+            ln = data[pos:nl].decode("ascii")
+        except UnicodeDecodeError:
+            raise Reject("header not ASCII")
+        pos = nl + 1
+        if ln.strip() == "end_header":
+            break
+        hl.append(ln)
+    if not hl or hl[0].strip() != "ply":
+        raise Reject("no ply magic")
+    fmt = rs_split(hl[1]) if len(hl) > 1 else []
+    if len(fmt) != 3 or fmt[0] != "format" or fmt[2] not in ("1.0", "1") or \
+            fmt[1] not in ("ascii", "binary_little_endian", "binary_big_endian"):
+        raise Reject("bad format line")
+    els = []
+    for ln in hl[2:]:
+        t = rs_split(ln)
+        if not t or t[0] in ("comment", "obj_info"):
+            continue
+        if t[0] == "element" and len(t) == 3:
+            if any(e[0] == t[1] for e in els):
+                raise Reject("duplicate element")
+            els.append((t[1], integer(t[2], 0), []))
+        elif t[0] == "property" and els:
+            props = els[-1][2]
+            if len(t) == 3 and t[1] in PLY_T:
+                prop = (t[2], PLY_T[t[1]], None)
+            elif len(t) == 5 and t[1] == "list" and t[2] in PLY_T and t[3] in PLY_T \
+                    and PLY_T[t[2]] not in "fd":
+                prop = (t[4], PLY_T[t[3]], PLY_T[t[2]])
+            else:
+                raise Reject("bad property line")
+            if any(p[0] == prop[0] for p in props):
+                raise Reject("duplicate property")
+            props.append(prop)
+        else:
+            raise Reject("bad header line %r" % ln)
+    body = data[pos:]
+    values = {}
+    if fmt[1] == "ascii":
+        rows = [rs_split(r) for r in rs_lines(text(body)) if rs_split(r)]
+        k = 0
+        for name, count, props in els:
+            vals = []
+            for _ in range(count):
+                if k >= len(rows):
+                    raise Reject("truncated")
+                row, k, pos, rec = rows[k], k + 1, 0, []
+                for pname, code, lcode in props:
+                    if lcode:
+                        if pos >= len(row):
+                            raise Reject("short row")
+                        n = integer(row[pos], 0, RANGE[lcode][1])
+                        items = row[pos + 1:pos + 1 + n]
+                        if len(items) != n:
+                            raise Reject("short list")
+                        rec.append([num(x, False) if code in "fd" else integer(x, *RANGE[code])
+                                    for x in items])
+                        pos += 1 + n
+                    else:
+                        if pos >= len(row):
+                            raise Reject("short row")
+                        rec.append(num(row[pos], False) if code in "fd"
+                                   else integer(row[pos], *RANGE[code]))
+                        pos += 1
+                if pos != len(row):
+                    raise Reject("extra tokens on a row")
+                vals.append(rec)
+            values[name] = (props, vals)
+        if k != len(rows):
+            raise Reject("data after the last element")
+    else:
+        e = "<" if fmt[1] == "binary_little_endian" else ">"
+        pos = 0
+        for name, count, props in els:
+            vals = []
+            for _ in range(count):
+                rec = []
+                for pname, code, lcode in props:
+                    if lcode:
+                        sz = struct.calcsize(lcode)
+                        if pos + sz > len(body):
+                            raise Reject("truncated")
+                        (n,) = struct.unpack_from(e + lcode, body, pos)
+                        if n < 0:
+                            raise Reject("negative list count")
+                        pos += sz
+                        sz = struct.calcsize(code) * n
+                        if pos + sz > len(body):
+                            raise Reject("truncated")
+                        rec.append(list(struct.unpack_from(e + code * n, body, pos)))
+                        pos += sz
+                    else:
+                        sz = struct.calcsize(code)
+                        if pos + sz > len(body):
+                            raise Reject("truncated")
+                        rec.append(struct.unpack_from(e + code, body, pos)[0])
+                        pos += sz
+                vals.append(rec)
+                if count > 10 ** 6:
+                    raise Reject("count too large for this checker")
+            values[name] = (props, vals)
+        if pos != len(body):
+            raise Reject("%d bytes after the last element" % (len(body) - pos))
+    if "vertex" not in values:
+        raise Reject("no vertex element")
+    props, vals = values["vertex"]
+    names = [p[0] for p in props]
+    if not all(c in names and props[names.index(c)][2] is None for c in "xyz"):
+        raise Reject("vertex without x y z")
+    ix = [names.index(c) for c in "xyz"]
+    for rec in vals:
+        if not all(math.isfinite(rec[i]) for i in ix):
+            raise Reject("non-finite vertex")
+    if "face" in values and values["face"][1]:
+        fprops, fvals = values["face"]
+        fn = [p[0] for p in fprops]
+        li = [i for i, p in enumerate(fprops) if p[2] and p[0] in ("vertex_indices", "vertex_index")]
+        if not li:
+            raise Reject("face without vertex_indices")
+        if fprops[li[0]][1] in "fd":
+            raise Reject("float face indices")
+        return "mesh", len(vals), faces_ok([rec[li[0]] for rec in fvals], len(vals))
+    if not vals:
+        raise Reject("no vertices")
+    return "points", len(vals), None
+
+
+def check_off(data):
+    rows = lines_nc(text(data))
+    if not rows:
+        raise Reject("empty")
+    head = rows[0]
+    kw = head[0]
+    if kw not in ("OFF", "COFF", "NOFF", "CNOFF"):
+        raise Reject("bad OFF keyword")
+    normals, colours = "N" in kw, "C" in kw
+    rest = head[1:]
+    k = 1
+    if not rest:
+        if len(rows) < 2:
+            raise Reject("no counts")
+        rest, k = rows[1], 2
+    if len(rest) not in (2, 3):
+        raise Reject("bad counts")
+    nv, nf = integer(rest[0], 0), integer(rest[1], 0)
+    if len(rest) == 3:
+        integer(rest[2], 0)
+    if len(rows) != k + nv + nf:
+        raise Reject("%d rows for %d vertices and %d faces" % (len(rows) - k, nv, nf))
+    per = 6 if normals else 3
+    for r in rows[k:k + nv]:
+        if not (len(r) == per or (colours and len(r) - per in (3, 4))):
+            raise Reject("bad vertex row")
+        [num(x, i >= 3 or True) for i, x in enumerate(r)]
+    faces = []
+    for r in rows[k + nv:]:
+        n = integer(r[0], 0)
+        if len(r) - 1 - n not in (0, 1, 3, 4):
+            raise Reject("bad face row")
+        faces.append([integer(x) for x in r[1:1 + n]])
+        [num(x) for x in r[1 + n:]]
+    return "mesh", nv, faces_ok(faces, nv)
+
+
+OBJ_KNOWN = {"vp", "g", "o", "s", "usemtl", "mtllib", "l", "p", "mg", "cstype", "deg", "curv"}
+
+
+def check_obj(data):
+    v, faces, nt, nn, refs = 0, [], 0, 0, []
+    for r in lines_nc(text(data)):
+        kw = r[0]
+        if kw == "v":
+            if len(r) - 1 not in (3, 4, 6, 7):
+                raise Reject("bad v line")
+            [num(x) for x in r[1:]]
+            v += 1
+        elif kw == "vt":
+            nt += 1
+        elif kw == "vn":
+            nn += 1
+        elif kw == "f":
+            poly = []
+            for c in r[1:]:
+                parts = c.split("/")
+                if len(parts) > 3 or parts[0] == "" or (len(parts) == 3 and parts[2] == "") \
+                        or (len(parts) == 2 and parts[1] == ""):
+                    raise Reject("bad corner %r" % c)
+                ids = [integer(p) if p else None for p in parts]
+                if any(i == 0 for i in ids):
+                    raise Reject("index 0")
+                i = ids[0]
+                poly.append(i - 1 if i > 0 else v + i)
+                for j, cnt in ((1, nt), (2, nn)):
+                    if j < len(ids) and ids[j] is not None:
+                        t = ids[j]
+                        refs.append((t - 1 if t > 0 else cnt + t, cnt, j))
+            faces.append(poly)
+        elif kw not in OBJ_KNOWN:
+            raise Reject("unknown statement %r" % kw)
+    for idx, _cnt, j in refs:
+        total = nt if j == 1 else nn
+        if not 0 <= idx < total:
+            raise Reject("bad vt/vn reference")
+    return "mesh", v, faces_ok(faces, v)
+
+
+def check_stl(data):
+    if len(data) >= 84:
+        (n,) = struct.unpack_from("<I", data, 80)
+        if len(data) == 84 + 50 * n:
+            if n == 0:
+                raise Reject("no facets")
+            for k in range(n):
+                c = struct.unpack_from("<9f", data, 84 + 50 * k + 12)
+                if not all(math.isfinite(x) for x in c):
+                    raise Reject("non-finite")
+            return "mesh", None, n
+    if not data.lstrip().startswith(b"solid"):
+        raise Reject("not ASCII STL and wrong binary size")
+    try:
+        s = data.decode("ascii")
+    except UnicodeDecodeError:
+        raise Reject("not ASCII")
+    # Keywords are case-insensitive, as several exporters write them in capitals.
+    rows = [rs_split(ln.lower()) for ln in rs_lines(s) if rs_split(ln)]
+    state, facets, k = "solid", 0, 0
+    for r in rows:
+        w = r[0]
+        if state == "solid" and w == "solid":
+            state = "facet"
+        elif state == "facet" and w == "endsolid":
+            state = "solid"
+        elif state == "facet" and w == "facet" and len(r) == 5 and r[1] == "normal":
+            [num(x, False) for x in r[2:]]
+            state = "outer"
+        elif state == "outer" and r == ["outer", "loop"]:
+            state, k = "vertex", 0
+        elif state == "vertex" and w == "vertex" and len(r) == 4:
+            [num(x) for x in r[1:]]
+            k += 1
+            state = "vertex" if k < 3 else "endloop"
+        elif state == "endloop" and r == ["endloop"]:
+            state = "endfacet"
+        elif state == "endfacet" and r == ["endfacet"]:
+            state, facets = "facet", facets + 1
+        else:
+            raise Reject("unexpected %r in state %s" % (r[0], state))
+    if state != "solid":
+        raise Reject("ends in state %s" % state)
+    if facets == 0:
+        raise Reject("no facets")
+    return "mesh", None, facets
+
+
+def check_xyz(data):
+    cols, n = 0, 0
+    for ln in rs_lines(text(data)):
+        t = " ".join(rs_split(ln))
+        if not t or t.startswith("#") or t.startswith("//"):
+            continue
+        toks = [x for x in re.split(r"[ ,]+", t) if x]
+        [num(x) for x in toks]
+        if len(toks) not in (3, 6) or (cols and len(toks) != cols):
+            raise Reject("bad column count")
+        cols, n = len(toks), n + 1
+    if n == 0:
+        raise Reject("no points")
+    return "points", n, None
+
+
+NIFTI_SIZES = {2: 1, 4: 2, 8: 4, 16: 4, 64: 8, 256: 1, 512: 2, 768: 4}
+
+
+def check_nifti(data):
+    if len(data) < 348:
+        raise Reject("short header")
+    for e in "<>":
+        if struct.unpack_from(e + "i", data, 0)[0] == 348:
+            break
+    else:
+        raise Reject("sizeof_hdr != 348")
+    if data[344:348] not in (b"n+1\0", b"ni1\0"):
+        raise Reject("bad magic")
+    dim = struct.unpack_from(e + "8h", data, 40)
+    if not 1 <= dim[0] <= 7 or any(d < 1 for d in dim[1:1 + dim[0]]):
+        raise Reject("bad dim")
+    if dim[0] < 3 or any(d != 1 for d in dim[4:1 + dim[0]]):
+        raise Reject("not a 3D volume")
+    code, bits = struct.unpack_from(e + "hh", data, 70)
+    if code not in NIFTI_SIZES or bits != 8 * NIFTI_SIZES[code]:
+        raise Reject("bad datatype/bitpix")
+    pix = struct.unpack_from(e + "8f", data, 76)
+    qcode, scode = struct.unpack_from(e + "hh", data, 252)
+    if scode <= 0 and not all(math.isfinite(p) and p > 0 for p in pix[1:4]):
+        raise Reject("bad pixdim (and no sform)")
+    (off,) = struct.unpack_from(e + "f", data, 108)
+    if not math.isfinite(off) or off < 352 or off != int(off):
+        raise Reject("bad vox_offset")
+    slope, inter = struct.unpack_from(e + "ff", data, 112)
+    # nibabel: a slope of 0 or NaN means no scaling (the intercept is then unused).
+    if math.isinf(slope) or (slope != 0 and not math.isnan(slope) and not math.isfinite(inter)):
+        raise Reject("non-finite scaling")
+    need = int(off) + dim[1] * dim[2] * dim[3] * NIFTI_SIZES[code]
+    if len(data) < need:
+        raise Reject("truncated voxels")
+    sform = struct.unpack_from(e + "12f", data, 280)
+    if scode > 0 and not all(math.isfinite(x) for x in sform):
+        raise Reject("non-finite sform")
+    try:  # nibabel as the reference for everything it checks
+        import nibabel
+        import numpy as np
+        img = nibabel.Nifti1Image.from_bytes(data)
+        vox = np.asanyarray(img.dataobj)
+        if not np.all(np.isfinite(img.affine)) or abs(np.linalg.det(img.affine[:3, :3])) == 0:
+            raise Reject("nibabel: singular or non-finite affine")
+        if vox.dtype.kind == "f" and not np.all(np.isfinite(vox)):
+            raise Reject("non-finite voxels")
+    except Reject:
+        raise
+    except ImportError:
+        pass
+    except Exception as ex:  # nibabel rejects it
+        raise Reject("nibabel: %s" % str(ex).splitlines()[0][:80] if str(ex) else type(ex))
+    return "image"
+
+
+def check_nii_gz(data):
+    try:
+        raw = gzip.decompress(data)  # checks every member's CRC-32 and length
+    except (OSError, EOFError, zlib.error) as ex:
+        raise Reject("gzip: %s" % ex)
+    return check_nifti(raw)
+
+
+def raw_checker(args):
+    try:
+        dims = [int(x) for x in args[args.index("--dims") + 1].split(",")]
+    except ValueError:
+        dims = []
+    dtype = args[args.index("--dtype") + 1]
+    sizes = {"u8": 1, "i8": 1, "u16": 2, "i16": 2, "u32": 4, "i32": 4, "f32": 4, "f64": 8}
+    alias = {"uint8": "u8", "int8": "i8", "uint16": "u16", "int16": "i16", "uint32": "u32",
+             "int32": "i32", "float32": "f32", "float": "f32", "float64": "f64", "double": "f64"}
+    dtype = alias.get(dtype.lower(), dtype.lower())
+    if dtype not in sizes:
+        return lambda data: (_ for _ in ()).throw(Reject("bad --dtype"))
+    size = sizes[dtype]
+
+    def check(data):
+        try:
+            if len(dims) != 3 or min(dims) < 1 or \
+                    len(set(a for a in args if a.startswith("--"))) != \
+                    len([a for a in args if a.startswith("--")]):
+                raise Reject("bad --dims")
+            if "--spacing" in args:
+                sp = [float(x) for x in args[args.index("--spacing") + 1].split(",")]
+                if len(sp) != 3 or not all(math.isfinite(x) and x > 0 for x in sp):
+                    raise Reject("bad --spacing")
+        except ValueError:
+            raise Reject("bad flag")
+        if len(data) != dims[0] * dims[1] * dims[2] * size:
+            raise Reject("size != nx*ny*nz*%d" % size)
+        if dtype in ("f32", "f64"):
+            code = "f" if dtype == "f32" else "d"
+            n = len(data) // size
+            be = "--big-endian" in args
+            if not all(math.isfinite(x) for x in struct.unpack((">" if be else "<") + code * n, data)):
+                raise Reject("non-finite voxels")
+        return "image"
+    return check
+
+
+def trimesh_rejects(path, kind):
+    """trimesh as a second reference for meshes (None when it is missing or agrees). Its
+    ASCII PLY reader fails on blank lines, which PLY allows, and its text readers split at
+    spaces only: it reads a copy without blank PLY lines and with \\v, \\f as spaces."""
+    try:
+        import trimesh
+    except ImportError:
+        return None
+    with open(path, "rb") as fh:
+        data = fh.read()
+    if not path.endswith((".ply", ".stl")) or b"format ascii" in data[:200] or \
+            data.lstrip().startswith(b"solid"):
+        data = data.replace(b"\x0b", b" ").replace(b"\x0c", b" ").replace(b"\t", b" ")
+    if path.endswith(".ply") and b"format ascii" in data[:200]:
+        cut = data.find(b"end_header")
+        if cut > 0:
+            body = data[cut:].split(b"\n")
+            keep = [ln for k, ln in enumerate(body) if ln.strip() or k == len(body) - 1]
+            data = data[:cut] + b"\n".join(keep)
+    try:
+        m = trimesh.load(io.BytesIO(data), file_type=path.rsplit(".", 1)[-1],
+                         force="mesh" if kind == "mesh" else None, process=False)
+    except Exception as ex:
+        return "trimesh: %s" % type(ex).__name__
+    if kind == "mesh" and len(getattr(m, "faces", [])) == 0:
+        return "trimesh: no faces"
+    return None
+
+
+CHECKS = {"ply_ascii": check_ply, "ply_binary": check_ply, "off": check_off, "obj": check_obj,
+          "stl_ascii": check_stl, "stl_binary": check_stl, "xyz": check_xyz, "nii": check_nifti,
+          "nii_gz": check_nii_gz}
