@@ -44,6 +44,7 @@ pub mod bvh;
 pub mod certificate;
 pub mod distance;
 pub mod intersect;
+pub mod level_set;
 pub mod medial;
 pub mod quality;
 mod surface_checks;
@@ -120,8 +121,9 @@ pub struct Options {
     /// Default: `surface.seed_points(seed)`.
     pub component_seeds: Option<Vec<DVec3>>,
     pub seed: u64,
-    /// A seed is covered if the mesh is within this distance. Default:
-    /// max(2 x measured Hausdorff, 1e-3 x bounding radius).
+    /// A seed is covered if the mesh is within this distance. Default: twice the surface
+    /// Delaunay ball radius of the facet nearest to the seed (the mesh's own scale there; see
+    /// the `components-sampled` check).
     pub seed_tolerance: Option<f64>,
 }
 
