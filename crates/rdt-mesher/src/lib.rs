@@ -69,4 +69,4 @@ pub use criteria::{Criteria, Sizing};
 pub use error::MeshError;
 pub use mesher::{mesh, mesh_with_progress};
 pub use options::{Initialization, MeshOptions, OracleKind};
-pub use stats::{MeshResult, Progress, Stats, StopReason, SurfaceBall, Unmet};
+pub use stats::{MeshResult, Progress, Stats, StopReason, SurfaceBall, Unmet, UnmetFacet};

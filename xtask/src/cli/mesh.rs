@@ -293,12 +293,8 @@ fn print_single(spec: &str, opened: &Input<'_>, out: &Outcome, out_path: &Path) 
             t.components.len()
         );
     }
-    if let Some(c) = &out.report {
-        if !c.passed() {
-            outln!("verify: FAIL: {}", c.failures().join(", "));
-        } else {
-            outln!("verify: PASS ({} checks)", c.checks.len());
-        }
+    if let Some(line) = out.verify_line() {
+        outln!("{line}");
     }
     if let Some(s) = &st.stopped_by {
         outln!("stopped by {s}; unmet: {}", unmet(st));
