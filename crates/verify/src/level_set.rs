@@ -158,7 +158,11 @@ impl<'a> LevelSet<'a> {
             .collect();
         self.levels.push((base, nb));
         let mut l = STORED_FROM;
-        while self.levels.last().is_some_and(|(_, d)| d.iter().any(|&x| x > 1)) {
+        while self
+            .levels
+            .last()
+            .is_some_and(|(_, d)| d.iter().any(|&x| x > 1))
+        {
             let (prev, pd) = self.levels.last().expect("a level");
             let nd = pd.map(|x| x.div_ceil(2));
             let mut f = vec![0u8; nd[0] * nd[1] * nd[2]];

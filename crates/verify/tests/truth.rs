@@ -86,10 +86,7 @@ fn dense_level_set(s: &ImageSurface, dims: [usize; 3]) -> Vec<DVec3> {
 #[test]
 fn image_with_a_gap_hausdorff_matches_dense_sampling() {
     let (s, c) = two_blobs();
-    let mesh = union(&[
-        uv_sphere(c[0], 5.0, 12, 24),
-        uv_sphere(c[1], 5.0, 12, 24),
-    ]);
+    let mesh = union(&[uv_sphere(c[0], 5.0, 12, 24), uv_sphere(c[1], 5.0, 12, 24)]);
     let opts = Options {
         self_intersections: false,
         samples_per_edge: 2,
@@ -272,7 +269,12 @@ fn loose_epsilon_never_passes_above_its_range() {
             assert_ne!(st, Status::Pass, "{:?} {epsilon:?}: {}", dm, r.summary());
             assert_ne!(r.status("theorem-4.7"), Some(Status::Pass));
             if st == Status::Info {
-                assert!(r.check("loose-epsilon").unwrap().detail.contains("no guarantee at eps"));
+                assert!(
+                    r.check("loose-epsilon")
+                        .unwrap()
+                        .detail
+                        .contains("no guarantee at eps")
+                );
             }
         }
     }
@@ -287,8 +289,18 @@ fn loose_epsilon_never_passes_above_its_range() {
         },
     );
     assert!(r.certificate.as_ref().unwrap().eps_achieved < verify::certificate::EPSILON_1);
-    assert_eq!(r.status("loose-epsilon"), Some(Status::Pass), "{}", r.summary());
-    assert_eq!(r.status("theorem-4.7"), Some(Status::Pass), "{}", r.summary());
+    assert_eq!(
+        r.status("loose-epsilon"),
+        Some(Status::Pass),
+        "{}",
+        r.summary()
+    );
+    assert_eq!(
+        r.status("theorem-4.7"),
+        Some(Status::Pass),
+        "{}",
+        r.summary()
+    );
 }
 
 #[test]
@@ -340,5 +352,8 @@ fn skip_hint_names_each_commands_flag() {
     let r = check_against(&m, &NoHint, &Options::default());
     let d = &r.check("loose-epsilon").unwrap().detail;
     assert_eq!(r.status("loose-epsilon"), Some(Status::Skipped));
-    assert!(d.contains("verify: --dm poles") && d.contains("mesh: --epsilon"), "{d}");
+    assert!(
+        d.contains("verify: --dm poles") && d.contains("mesh: --epsilon"),
+        "{d}"
+    );
 }

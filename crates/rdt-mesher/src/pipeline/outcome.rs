@@ -410,7 +410,9 @@ impl Outcome {
         bad.sort_by(|x, y| x.3.total_cmp(&y.3).then(x.1.cmp(&y.1)));
         let context = match (&st.stopped_by, st.manifold_insertions) {
             (Some(s), _) => format!("the run was stopped by {s}"),
-            (None, 0) => "the refinement ended with this ball in place (no budget stopped it)".into(),
+            (None, 0) => {
+                "the refinement ended with this ball in place (no budget stopped it)".into()
+            }
             (None, n) => format!(
                 "the refinement ended with this ball in place (no budget stopped it; the \
                  manifold patch inserted {n} points)"
