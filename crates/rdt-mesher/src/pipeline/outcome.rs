@@ -308,12 +308,16 @@ impl Outcome {
                 });
             }
         }
+        let where_ = if self.stats.unmet_facets.is_empty() {
+            ""
+        } else {
+            "; where: the report's stats.unmet_facets"
+        };
         Some(if unmet.is_empty() {
             format!("verify: PASS ({} checks)", r.checks.len())
         } else {
             format!(
-                "verify: PASS with unmet criteria ({}) ({} checks; where: the report's \
-                 stats.unmet_facets)",
+                "verify: PASS with unmet criteria ({}) ({} checks{where_})",
                 unmet.join("; "),
                 r.checks.len()
             )
