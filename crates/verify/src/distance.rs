@@ -372,6 +372,18 @@ pub fn geometry(
     per_edge: usize,
     surface_samples: Option<&[DVec3]>,
 ) -> Geometry {
+    geometry_labelled(mesh, bvh, surface, per_edge, surface_samples, None)
+}
+
+/// [`geometry`] with a description of the given samples for the report.
+pub(crate) fn geometry_labelled(
+    mesh: &TriMesh,
+    bvh: &TriangleBvh,
+    surface: &dyn Surface,
+    per_edge: usize,
+    surface_samples: Option<&[DVec3]>,
+    label: Option<&str>,
+) -> Geometry {
     let dist = MeshDistance::new(mesh, bvh);
     let measure = Measure::new(surface);
     let own = match (&measure, surface_samples) {
@@ -393,7 +405,10 @@ pub fn geometry(
         ),
         (Some(s), _) => (
             surface_to_mesh(&dist, s),
-            format!("{} given samples", s.len()),
+            match label {
+                Some(l) => format!("{} {l}", s.len()),
+                None => format!("{} given samples", s.len()),
+            },
             None,
         ),
         (None, _) => (

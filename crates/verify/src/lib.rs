@@ -109,6 +109,10 @@ pub struct Options {
     /// Dense samples of S for the S -> mesh distance (e.g. vertices of a much finer mesh).
     /// Default: projections of the mesh samples onto S (they miss unmeshed components).
     pub surface_samples: Option<Vec<DVec3>>,
+    /// What `surface_samples` are, for the report (default: "N given samples"). Labelled
+    /// samples serve the S -> mesh distances only: [`DmSource::Poles`] then estimates d_M
+    /// from the mesh vertices.
+    pub surface_samples_source: Option<String>,
     /// FAIL the Hausdorff check above this distance (default: report only).
     pub max_hausdorff: Option<f64>,
     /// Requested epsilon of the loose epsilon-sample certificate.
@@ -136,6 +140,7 @@ impl Default for Options {
             max_listed: 20,
             samples_per_edge: 4,
             surface_samples: None,
+            surface_samples_source: None,
             max_hausdorff: None,
             epsilon: None,
             dm: DmSource::Auto,

@@ -44,12 +44,13 @@ fn hausdorff_check(
     surface: &dyn Surface,
     opts: &Options,
 ) -> (NormalDeviation, f64) {
-    let g = distance::geometry(
+    let g = distance::geometry_labelled(
         mesh,
         bvh,
         surface,
         opts.samples_per_edge,
         opts.surface_samples.as_deref(),
+        opts.surface_samples_source.as_deref(),
     );
     let detail = hausdorff_detail(&g);
     // A sample with no point of S found has no distance: the figure would leave it out
@@ -93,7 +94,12 @@ fn dm_source(
         }
         DmSource::Function { dm, sup } => Some((dm.clone(), *sup, "given function".into())),
         DmSource::Poles => {
-            let samples = opts.surface_samples.as_deref().unwrap_or(&mesh.vertices);
+            // Labelled samples (input triangles, noisy points) serve the distances only.
+            let samples = opts
+                .surface_samples
+                .as_deref()
+                .filter(|_| opts.surface_samples_source.is_none())
+                .unwrap_or(&mesh.vertices);
             match MedialAxisEstimate::new(samples, None) {
                 Ok(m) => {
                     let sup = samples.iter().map(|&p| m.dm(p)).fold(0.0, f64::max);
