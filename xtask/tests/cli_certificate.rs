@@ -158,7 +158,7 @@ fn image_hausdorff_is_measured_exactly() {
         .and_then(|x| x.parse().ok())
         .unwrap();
     assert!(
-        two_sided <= 1.1 * 6.109 && two_sided >= 0.9 * 6.109,
+        (0.9 * 6.109..=1.1 * 6.109).contains(&two_sided),
         "{line}"
     );
 }

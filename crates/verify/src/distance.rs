@@ -152,7 +152,7 @@ pub fn triangle_samples(a: DVec3, b: DVec3, c: DVec3, n: usize, out: &mut Vec<DV
 /// How mesh samples are measured against S.
 pub(crate) enum Measure<'a> {
     /// An image: exact distance to the trilinear level set ([`LevelSet::nearest`]).
-    LevelSet(LevelSet<'a>),
+    LevelSet(Box<LevelSet<'a>>),
     /// Any other surface: [`Surface::project`], checked by rays where it lands farther than
     /// half the sample's triangle's longest edge (a projection that ran to a far sheet).
     Project(&'a dyn Surface),
@@ -161,7 +161,7 @@ pub(crate) enum Measure<'a> {
 impl<'a> Measure<'a> {
     pub(crate) fn new(surface: &'a dyn Surface) -> Measure<'a> {
         match surface.as_image() {
-            Some(img) => Measure::LevelSet(LevelSet::new(img)),
+            Some(img) => Measure::LevelSet(Box::new(LevelSet::new(img))),
             None => Measure::Project(surface),
         }
     }
