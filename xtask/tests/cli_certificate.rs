@@ -157,8 +157,5 @@ fn image_hausdorff_is_measured_exactly() {
         .and_then(|x| x.split(' ').next())
         .and_then(|x| x.parse().ok())
         .unwrap();
-    assert!(
-        (0.9 * 6.109..=1.1 * 6.109).contains(&two_sided),
-        "{line}"
-    );
+    assert!((0.9 * 6.109..=1.1 * 6.109).contains(&two_sided), "{line}");
 }

@@ -10,6 +10,14 @@ use oracle::Surface;
 use oracle::image::{ImageOptions, ImageSurface, Volume, Voxels};
 use verify::{DmSource, Options, Status, check_against};
 
+/// Options without the (slow, irrelevant here) self-intersection test.
+fn quiet() -> Options {
+    Options {
+        self_intersections: false,
+        ..Default::default()
+    }
+}
+
 /// Exact distance from `p` to the mesh (brute force).
 fn mesh_distance(m: &TriMesh, p: DVec3) -> f64 {
     m.triangles
@@ -88,10 +96,9 @@ fn image_with_a_gap_hausdorff_matches_dense_sampling() {
     let (s, c) = two_blobs();
     let mesh = union(&[uv_sphere(c[0], 5.0, 12, 24), uv_sphere(c[1], 5.0, 12, 24)]);
     let opts = Options {
-        self_intersections: false,
         samples_per_edge: 2,
         max_hausdorff: Some(0.5),
-        ..Default::default()
+        ..quiet()
     };
     let r = check_against(&mesh, &s, &opts);
     let g = r.geometry.as_ref().unwrap();
@@ -141,10 +148,9 @@ fn image_missing_blob_is_seen_from_the_surface_side() {
         &mesh,
         &s,
         &Options {
-            self_intersections: false,
             samples_per_edge: 2,
             max_hausdorff: Some(0.5),
-            ..Default::default()
+            ..quiet()
         },
     );
     let g = r.geometry.as_ref().unwrap();
@@ -165,14 +171,7 @@ fn displaced_vertex_gives_its_displacement() {
     // sample of its triangles), everything else is within the chord error.
     let i = m.vertices.len() / 2;
     m.vertices[i] *= 1.3;
-    let r = check_against(
-        &m,
-        &UnitSphere,
-        &Options {
-            self_intersections: false,
-            ..Default::default()
-        },
-    );
+    let r = check_against(&m, &UnitSphere, &Options { ..quiet() });
     let g = r.geometry.as_ref().unwrap();
     assert!(
         (g.mesh_to_surface.max - 0.3).abs() < 1e-9,
@@ -213,10 +212,9 @@ fn one_sphere_of_two_nested_fails_the_coverage_of_the_other() {
         &m,
         &Nested,
         &Options {
-            self_intersections: false,
             component_seeds: Some(seeds.clone()),
             surface_samples: Some([outer.clone(), inner].concat()),
-            ..Default::default()
+            ..quiet()
         },
     );
     assert_eq!(r.status("components-sampled"), Some(Status::Fail));
@@ -233,10 +231,9 @@ fn one_sphere_of_two_nested_fails_the_coverage_of_the_other() {
         &both,
         &Nested,
         &Options {
-            self_intersections: false,
             component_seeds: Some(seeds),
             surface_samples: Some(outer),
-            ..Default::default()
+            ..quiet()
         },
     );
     assert_eq!(
@@ -257,10 +254,9 @@ fn loose_epsilon_never_passes_above_its_range() {
                 &coarse,
                 &UnitSphere,
                 &Options {
-                    self_intersections: false,
                     dm: dm.clone(),
                     epsilon,
-                    ..Default::default()
+                    ..quiet()
                 },
             );
             let c = r.certificate.as_ref().unwrap();
@@ -280,14 +276,7 @@ fn loose_epsilon_never_passes_above_its_range() {
     }
     // A fine sphere (eps < epsilon_1 with d_M = 1): PASS, theorem 4.7 checked.
     let fine = uv_sphere(DVec3::ZERO, 1.0, 48, 96);
-    let r = check_against(
-        &fine,
-        &UnitSphere,
-        &Options {
-            self_intersections: false,
-            ..Default::default()
-        },
-    );
+    let r = check_against(&fine, &UnitSphere, &Options { ..quiet() });
     assert!(r.certificate.as_ref().unwrap().eps_achieved < verify::certificate::EPSILON_1);
     assert_eq!(
         r.status("loose-epsilon"),
@@ -308,14 +297,7 @@ fn components_threshold_is_the_local_scale() {
     // A sphere meshed coarsely: the threshold is twice the nearest facet's ball radius, not
     // a fraction of the bounding radius or of a Hausdorff estimate.
     let m = uv_sphere(DVec3::ZERO, 1.0, 12, 24);
-    let r = check_against(
-        &m,
-        &UnitSphere,
-        &Options {
-            self_intersections: false,
-            ..Default::default()
-        },
-    );
+    let r = check_against(&m, &UnitSphere, &Options { ..quiet() });
     let cov = r.components_sampled.as_ref().unwrap();
     let max_r = r
         .certificate
@@ -329,9 +311,8 @@ fn components_threshold_is_the_local_scale() {
         &m,
         &UnitSphere,
         &Options {
-            self_intersections: false,
             component_seeds: Some(vec![DVec3::X, DVec3::X * 1.5]),
-            ..Default::default()
+            ..quiet()
         },
     );
     assert_eq!(r.status("components-sampled"), Some(Status::Fail));

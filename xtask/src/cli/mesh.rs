@@ -374,11 +374,9 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
             );
         }
         if c.passed() {
-            outln!(
-                "verify: PASS ({} checks); wrote {}",
-                c.checks.len(),
-                out_path.display()
-            );
+            // `PASS with unmet criteria (...)` when a pass left one unmet.
+            let line = out.verify_line().unwrap_or_default();
+            outln!("{line}; wrote {}", out_path.display());
         } else {
             outln!("verify: FAIL: {}", c.failures().join(", "));
         }
