@@ -59,8 +59,28 @@ enum Cmd {
     PaperTable(paper_table::PaperTableArgs),
 }
 
+/// The flags, or exit: a bad value of a numeric flag is one `error:` line (the parser's
+/// when it names the flag, as ours do with a valid example; else clap's first line) and
+/// status 2; other usage errors are clap's.
+fn parse() -> Cli {
+    match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use std::error::Error as _;
+            if e.kind() == clap::error::ErrorKind::ValueValidation {
+                match e.source().map(|s| s.to_string()) {
+                    Some(src) if src.starts_with("--") => eprintln!("error: {src}"),
+                    _ => eprintln!("{}", e.to_string().lines().next().unwrap_or("error")),
+                }
+                std::process::exit(2);
+            }
+            e.exit()
+        }
+    }
+}
+
 fn main() {
-    let cli = Cli::parse();
+    let cli = parse();
     if let Some(n) = cli.threads {
         let max = cli::output::MAX_THREADS;
         let built = if n == 0 {

@@ -176,6 +176,13 @@ pub fn cli_error(e: PipelineError, spec: &str) -> anyhow::Error {
             "--epsilon needs d_M^inf, which {spec} does not provide: pass --dm-inf VALUE \
              (`cargo xtask paper-table` prints estimates) or use --size"
         ),
+        PipelineError::OverBudget {
+            forecast,
+            budget,
+            fits,
+            dm_inf,
+            ..
+        } => over_budget(&forecast, budget, fits, dm_inf),
         PipelineError::Mesh {
             two_pass, source, ..
         } => anyhow::Error::new(source).context(format!(
@@ -184,4 +191,42 @@ pub fn cli_error(e: PipelineError, spec: &str) -> anyhow::Error {
         )),
         e => anyhow::Error::new(e),
     }
+}
+
+/// A size refused before meshing, in flags: the forecast, the size that fits, and the budgets
+/// that would let the size run.
+fn over_budget(
+    f: &pipeline::Forecast,
+    budget: pipeline::Budget,
+    fits: f64,
+    dm_inf: Option<f64>,
+) -> anyhow::Error {
+    let raise_v = round_up_2(f.vertices as f64 * 1.25) as u64;
+    let raise_m = (f.memory_bytes as f64 * 1.25 / (1u64 << 30) as f64)
+        .ceil()
+        .max(1.0);
+    let (asked, fitting) = match dm_inf {
+        None => (format!("--size {}", f.sigma), format!("--size {fits}")),
+        Some(dm) => (
+            format!(
+                "--epsilon {} (first pass at sigma_0 = epsilon * d_M^inf {dm})",
+                f.sigma / dm
+            ),
+            format!("--epsilon {}", pipeline::round_up_3(fits / dm)),
+        ),
+    };
+    anyhow::anyhow!(
+        "{asked}: refused before meshing: the forecast is {f}, over {budget}; {fitting} fits. \
+         To mesh at this size anyway, raise the budgets: --max-vertices {raise_v} \
+         --max-memory {raise_m}G"
+    )
+}
+
+/// `x` rounded up to two significant digits.
+fn round_up_2(x: f64) -> f64 {
+    if !(x > 0.0 && x.is_finite()) {
+        return x;
+    }
+    let e = 10f64.powi(x.log10().floor() as i32 - 1);
+    (x / e).ceil() * e
 }

@@ -1,12 +1,15 @@
 //! `cargo xtask mesh`: mesh a surface, write the mesh, print a summary, write a JSON report.
 //! The policy (default size, two passes, verification, verdict) is `rdt_mesher::pipeline`'s.
 
+use super::output::{epsilon, parse_angle, positive};
 use crate::cli::input::{self, SurfaceOptions, cli_error};
+use crate::cli::mesh_report;
 use anyhow::{Context, Result, bail};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use indicatif::{ProgressBar, ProgressStyle};
 use rdt_mesher::pipeline::{self, Event, Failure, Input, Outcome, Request, SizeRequest, Verdict};
 use rdt_mesher::{Initialization, OracleKind};
+use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -20,31 +23,47 @@ fn names<T: std::str::FromStr + Clone + Send + Sync + 'static>(
     })
 }
 
+/// Shown after the flags of `mesh --help`.
+const AFTER_HELP: &str = "The three size and shape criteria are CGAL's and pygalmesh's: --size is \
+CGAL's radius_bound (Mesh_3: facet_size), pygalmesh's max_radius_surface_delaunay_ball; --angle \
+is angular_bound / facet_angle, pygalmesh's min_facet_angle; --distance is distance_bound / \
+facet_distance, pygalmesh's max_facet_distance. The full table: docs/GUIDE.md, \"CGAL / pygalmesh \
+parameter names\". Without --size, the size and the forecast printed before meshing are \
+explained in docs/GUIDE.md, \"Default size, forecast and budgets\".";
+
 #[derive(clap::Args, Debug, Clone)]
-#[command(allow_negative_numbers = true)]
+#[command(allow_negative_numbers = true, after_help = AFTER_HELP)]
 pub struct MeshArgs {
     /// Surface to mesh: `implicit:NAME` (catalog), `implicit:"EXPR"` (with --bounding-sphere),
     /// an image (.nii, .nii.gz, a folder of slices, .raw), a mesh (.ply .off .obj .stl) or a
     /// point set (.xyz, .ply without faces). Default: implicit:torus.
     pub input: Option<String>,
-    /// Size bound sigma (constant), in the surface's units.
-    #[arg(long, conflicts_with = "epsilon")]
+    /// Target facet size: the largest radius of a facet's surface Delaunay ball (about the
+    /// edge length), in the surface's units; smaller is finer, vertices grow as 1 / size^2.
+    /// CGAL: radius_bound (facet_size); pygalmesh: max_radius_surface_delaunay_ball; the
+    /// paper's sigma. Default: chosen from a forecast (docs/GUIDE.md).
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "epsilon", value_parser = positive("--size", "the size bound", "0.05"))]
     pub size: Option<f64>,
-    /// Target epsilon: two-pass sizing (section 6.5): a uniform pass at sigma_0 = epsilon *
-    /// d_M^inf, then an adaptive pass at sigma = 0.9 epsilon d_M (lambda-medial axis estimate).
-    #[arg(long)]
+    /// Adaptive size in (0, 1): finer where the surface is curved or close to itself, in two
+    /// passes (a uniform pass at epsilon times the smallest feature size, then sizes of 0.9
+    /// epsilon times the local feature size; the paper's section 6.5, d_M^inf and d_M).
+    #[arg(long, allow_hyphen_values = true, value_parser = epsilon("--epsilon"))]
     pub epsilon: Option<f64>,
-    /// d_M^inf for --epsilon (default: the catalog's or the backend's value).
-    #[arg(long)]
+    /// The smallest feature size (the paper's d_M^inf: the least distance from the surface to
+    /// its medial axis), for --epsilon (default: the catalog's or the backend's value).
+    #[arg(long, allow_hyphen_values = true, value_parser = positive("--dm-inf", "d_M^inf", "0.3"))]
     pub dm_inf: Option<f64>,
     /// Initial sample: control points (6.4.3) or persistent facets (6.2).
     #[arg(long, default_value = "control-points", value_parser = names::<Initialization>(Initialization::ALL.map(Initialization::name)))]
     pub initialization: Initialization,
-    /// Facet angle bound in degrees (0 = off).
-    #[arg(long, default_value_t = 30.0)]
+    /// Smallest facet angle in degrees, in [0, 35) (0 = off; 30, the default, has a
+    /// termination proof). CGAL: angular_bound (facet_angle); pygalmesh: min_facet_angle.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 30.0, value_parser = parse_angle)]
     pub angle: f64,
-    /// Distance bound between a facet's circumcenter and its ball center (CGAL's distance_bound).
-    #[arg(long)]
+    /// Largest distance from a facet's circumcenter to the surface (to its surface Delaunay
+    /// ball's center), in the surface's units. CGAL: distance_bound (facet_distance);
+    /// pygalmesh: max_facet_distance.
+    #[arg(long, allow_hyphen_values = true, value_parser = positive("--distance", "the distance bound", "0.01"))]
     pub distance: Option<f64>,
     /// Oracle: bipolar (sign change + one point) or intersection (all points).
     #[arg(long, default_value = "bipolar", value_parser = names::<OracleKind>(OracleKind::ALL.map(OracleKind::name)))]
@@ -59,10 +78,17 @@ pub struct MeshArgs {
     /// Seed for every random choice.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Stop at this many sample points (the mesh so far is written, unmet criteria reported).
-    #[arg(long)]
+    /// Vertex budget: stop at this many sample points (the mesh so far is written, unmet
+    /// criteria reported). Default 2,000,000, and then a --size or --epsilon forecasting more
+    /// is refused before meshing.
+    #[arg(long, allow_hyphen_values = true, value_parser = super::output::parse_max_vertices)]
     pub max_vertices: Option<usize>,
-    /// Stop after this many seconds (likewise).
+    /// Memory budget, e.g. 2G or 500M (binary units; default 4G): a --size or --epsilon
+    /// whose forecast needs more is refused before meshing, and the run stops at the vertex
+    /// count it affords.
+    #[arg(long, allow_hyphen_values = true, value_parser = super::output::parse_memory)]
+    pub max_memory: Option<u64>,
+    /// Stop after this many seconds (the mesh so far is written, unmet criteria reported).
     #[arg(long, value_parser = super::output::parse_seconds)]
     pub time_limit: Option<f64>,
     /// Output mesh (.ply, .off, .obj, .stl). Default: out/NAME.ply.
@@ -85,8 +111,8 @@ pub struct MeshArgs {
     /// fails or a criterion is unmet: for scripts and regression suites.
     #[arg(long)]
     pub strict: bool,
-    /// Requested epsilon for the certificate (default: sigma / d_M^inf when known).
-    #[arg(long)]
+    /// Requested epsilon for the certificate, in (0, 1) (default: sigma / d_M^inf when known).
+    #[arg(long, allow_hyphen_values = true, value_parser = epsilon("--certify-epsilon"))]
     pub certify_epsilon: Option<f64>,
     /// No progress bar.
     #[arg(long, short)]
@@ -109,7 +135,12 @@ fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
     if labels.is_empty() {
         bail!("--labels all: {spec} has no label other than the background 0: nothing to mesh");
     }
-    eprintln!("note: {} label(s) to mesh: {labels:?}", labels.len());
+    let list: Vec<String> = labels.iter().map(|l| l.to_string()).collect();
+    eprintln!(
+        "note: {} label(s) to mesh: {}",
+        labels.len(),
+        list.join(", ")
+    );
     let mut failures = Vec::new();
     for l in labels {
         let mut b = a.clone();
@@ -159,6 +190,7 @@ fn request(a: &MeshArgs) -> Result<Request> {
         initialization: a.initialization,
         seed: a.seed,
         max_vertices: a.max_vertices,
+        max_memory: a.max_memory,
         time_limit: a.time_limit.map(Duration::from_secs_f64),
         initial_points: match &a.initial_points {
             Some(p) => crate::cli::points::read_xyz(p)?,
@@ -193,6 +225,11 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
     for n in plan.notes() {
         eprintln!("note: {n}");
     }
+    let forecast = plan.forecast().copied();
+    let budgets = *plan.budgets();
+    if let Some(f) = &forecast {
+        eprintln!("forecast: {f}");
+    }
     let bar = if a.quiet || plan.two_pass().is_some() {
         ProgressBar::hidden()
     } else {
@@ -223,12 +260,13 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         print_two_pass(&spec, &out);
     }
     write_mesh(&out_path, &out)?;
+    let base = || mesh_report::common(&spec, &out_path, &opened, forecast.as_ref(), &budgets, &out);
     if out.two_pass.is_some() {
         print_two_pass_verdict(&out, &out_path);
-        write_two_pass_report(a, &spec, &out_path, &out)?;
+        write_two_pass_report(a, base(), &out)?;
     } else {
         print_single(&spec, &opened, &out, &out_path);
-        write_report(a, &spec, &out_path, &out)?;
+        write_report(a, base(), &out)?;
     }
     Ok(out.verdict)
 }
@@ -260,16 +298,15 @@ fn print_single(spec: &str, opened: &Input<'_>, out: &Outcome, out_path: &Path) 
             && t.non_manifold_vertices_total == 0
             && t.inconsistent_edges_total == 0
     });
-    let genus: Vec<String> = topo
-        .map(|t| {
-            t.components
-                .iter()
-                .map(|c| c.genus.map_or("?".into(), |g| g.to_string()))
-                .collect()
-        })
-        .unwrap_or_default();
+    let genus = topo.map_or("genus not measured (--no-verify)".into(), |t| {
+        let g = mesh_report::genus_summary(&t.genera());
+        match t.components.len() {
+            1 => format!("genus {g}"),
+            n => format!("{n} components, genus {g}"),
+        }
+    });
     outln!(
-        "{spec}: {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, oracle {:.3} s); min angle {:.2} deg; max r/sigma {:.3}; {}; genus [{}]; wrote {}",
+        "{spec}: {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, oracle {:.3} s); min angle {:.2} deg; max r/sigma {:.3}; {}; {genus}; wrote {}",
         st.vertices,
         st.facets,
         st.time_total_s,
@@ -282,7 +319,6 @@ fn print_single(spec: &str, opened: &Input<'_>, out: &Outcome, out_path: &Path) 
             Some(false) => "NOT a closed manifold",
             None => "not verified",
         },
-        genus.join(", "),
         out_path.display()
     );
     if let (Some(scan), Some(t)) = (opened.components, topo)
@@ -312,23 +348,24 @@ fn unmet(st: &rdt_mesher::Stats) -> String {
         .join("; ")
 }
 
-fn write_report(a: &MeshArgs, spec: &str, out_path: &Path, out: &Outcome) -> Result<()> {
+fn write_report(a: &MeshArgs, base: serde_json::Map<String, Value>, out: &Outcome) -> Result<()> {
     let Some(r) = &a.report else { return Ok(()) };
-    let report = serde_json::json!({
-        "input": spec,
-        "output": out_path,
-        "sigma": out.sigma,
-        "angle": a.angle,
-        "distance": a.distance,
-        "oracle": a.oracle.name(),
-        "manifold": !a.no_manifold,
-        "scaffold": !a.no_scaffold,
-        "initialization": a.initialization.name(),
-        "seed": a.seed,
-        "notes": out.notes,
-        "stats": out.stats,
-        "verify": out.report,
-    });
+    let report = mesh_report::finish(
+        base,
+        json!({
+            "sigma": out.sigma,
+            "angle": a.angle,
+            "distance": a.distance,
+            "oracle": a.oracle.name(),
+            "manifold": !a.no_manifold,
+            "scaffold": !a.no_scaffold,
+            "initialization": a.initialization.name(),
+            "seed": a.seed,
+            "notes": out.notes,
+            "stats": out.stats,
+            "verify": out.report,
+        }),
+    );
     write_json(r, &report)
 }
 
@@ -398,14 +435,21 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
     }
 }
 
-fn write_two_pass_report(a: &MeshArgs, spec: &str, out_path: &Path, out: &Outcome) -> Result<()> {
+fn write_two_pass_report(
+    a: &MeshArgs,
+    base: serde_json::Map<String, Value>,
+    out: &Outcome,
+) -> Result<()> {
     let Some(r) = &a.report else { return Ok(()) };
     let tp = out.two_pass.as_ref().expect("a two-pass outcome");
-    let report = serde_json::json!({
-        "input": spec, "output": out_path, "epsilon": tp.epsilon, "dm_inf": tp.dm_inf,
-        "initialization": a.initialization.name(),
-        "sigma0": tp.sigma0, "eps_prime": tp.eps_prime,
-        "first": tp.first.stats, "second": out.stats, "verify": out.report,
-    });
+    let report = mesh_report::finish(
+        base,
+        json!({
+            "epsilon": tp.epsilon, "dm_inf": tp.dm_inf,
+            "initialization": a.initialization.name(),
+            "sigma0": tp.sigma0, "eps_prime": tp.eps_prime, "notes": out.notes,
+            "first": tp.first.stats, "second": out.stats, "verify": out.report,
+        }),
+    );
     write_json(r, &report)
 }

@@ -4,6 +4,7 @@
 pub mod delaunay;
 pub mod input;
 pub mod mesh;
+pub mod mesh_report;
 pub mod output;
 pub mod points;
 pub mod verify;

@@ -3,8 +3,9 @@
 //! while writing leaves either the previous file or the new one, never a truncated one; and
 //! no output may be the input or another output of the same run.
 //!
-//! Also the value parser of `--time-limit` (the library cannot take every float as a
-//! duration), so clap reports a bad value as a usage error naming the flag.
+//! Also the value parsers of the numeric flags (`--time-limit`, `--size`, `--angle`,
+//! `--epsilon`, `--max-memory`, ...), so clap reports a bad value as a usage error naming the
+//! flag and a valid example.
 
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
@@ -17,16 +18,78 @@ pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
 
 /// `--time-limit S`: a finite number of seconds in (0, a year].
 pub fn parse_seconds(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{s}` is not a number of seconds (e.g. 60 or 2.5)"))?;
+    let v: f64 = s.trim().parse().map_err(|_| {
+        format!("--time-limit {s}: not a number of seconds (e.g. --time-limit 60 or 2.5)")
+    })?;
     if !(v.is_finite() && v > 0.0 && v <= MAX_SECONDS) {
         return Err(format!(
-            "{s} seconds: give a positive, finite number of seconds, at most {MAX_SECONDS} (a year)"
+            "--time-limit {s}: give a positive, finite number of seconds, at most {MAX_SECONDS} (a year), e.g. --time-limit 60"
         ));
     }
     Ok(v)
+}
+
+/// A parser of a positive, finite number for `flag` (`example`: a valid value).
+pub fn positive(
+    flag: &'static str,
+    what: &'static str,
+    example: &'static str,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |s: &str| {
+        let v: f64 = s.trim().parse().map_err(|_| {
+            format!(
+                "{flag} {s}: not a number; {what} must be a positive number, e.g. {flag} {example}"
+            )
+        })?;
+        if !(v.is_finite() && v > 0.0) {
+            return Err(format!(
+                "{flag} {s}: {what} must be a positive number, e.g. {flag} {example}"
+            ));
+        }
+        Ok(v)
+    }
+}
+
+/// `--angle DEG`: in [0, 35) (30 has a termination proof; 0 disables the criterion).
+pub fn parse_angle(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().unwrap_or(f64::NAN);
+    if !(0.0..35.0).contains(&v) {
+        return Err(format!(
+            "--angle {s}: the facet angle bound must be in [0, 35) degrees (30, the default, \
+             has a termination proof; 0 turns it off), e.g. --angle 30"
+        ));
+    }
+    Ok(v)
+}
+
+/// `--epsilon E` and `--certify-epsilon E`: in (0, 1).
+pub fn epsilon(
+    flag: &'static str,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |s: &str| {
+        let v: f64 = s.trim().parse().unwrap_or(f64::NAN);
+        if !(v > 0.0 && v < 1.0) {
+            return Err(format!(
+                "{flag} {s}: epsilon must be in (0, 1), e.g. {flag} 0.09"
+            ));
+        }
+        Ok(v)
+    }
+}
+
+/// `--max-memory SIZE`: `2G`, `500M`, ... (binary units), see `rdt_mesher::pipeline::parse_bytes`.
+pub fn parse_memory(s: &str) -> Result<u64, String> {
+    rdt_mesher::pipeline::parse_bytes(s).map_err(|e| format!("--max-memory {s}: {e}"))
+}
+
+/// `--max-vertices N`: at least 1.
+pub fn parse_max_vertices(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n > 0 => Ok(n),
+        _ => Err(format!(
+            "--max-vertices {s}: give a positive whole number of vertices, e.g. --max-vertices 200000"
+        )),
+    }
 }
 
 /// The absolute, normalized form of a path that may not exist yet (its folder may not
@@ -135,6 +198,30 @@ mod tests {
             assert!(parse_seconds(bad).is_err(), "{bad}");
         }
         assert_eq!(parse_seconds("2.5"), Ok(2.5));
+        let size = positive("--size", "the size bound", "0.05");
+        for bad in ["-inf", "nan", "0", "-1", "x"] {
+            let e = size(bad).unwrap_err();
+            assert!(
+                e.starts_with(&format!("--size {bad}:")) && e.contains("--size 0.05"),
+                "{e}"
+            );
+        }
+        assert_eq!(size("0.2"), Ok(0.2));
+        for bad in ["100", "35", "-1", "nan"] {
+            assert!(
+                parse_angle(bad).unwrap_err().contains("e.g. --angle 30"),
+                "{bad}"
+            );
+        }
+        assert_eq!(parse_angle("0"), Ok(0.0));
+        assert!(epsilon("--epsilon")("1.5").is_err() && epsilon("--epsilon")("0.2").is_ok());
+        assert_eq!(parse_memory("2G"), Ok(2 << 30));
+        assert!(
+            parse_memory("-2G")
+                .unwrap_err()
+                .starts_with("--max-memory -2G")
+        );
+        assert!(parse_max_vertices("0").is_err() && parse_max_vertices("10") == Ok(10));
     }
 
     #[test]

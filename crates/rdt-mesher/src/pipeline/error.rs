@@ -83,6 +83,24 @@ pub enum PipelineError {
         /// The input's name.
         input: String,
     },
+    /// The forecast of the requested size exceeds a budget: refused before meshing.
+    #[error(
+        "{input}: the forecast is {forecast}, over {budget}: sigma = {fits} fits (or raise \
+         Request::max_vertices / max_memory)"
+    )]
+    OverBudget {
+        /// The input's name.
+        input: String,
+        /// The forecast of the requested size (two-pass mode: of the first pass).
+        forecast: super::Forecast,
+        /// The budget it exceeds.
+        budget: super::Budget,
+        /// The smallest size (three significant digits) whose forecast fits every budget.
+        fits: f64,
+        /// Two-pass mode: the d_M^inf of sigma_0 = epsilon d_M^inf (epsilon = fits / dm_inf
+        /// fits).
+        dm_inf: Option<f64>,
+    },
     /// The mesher failed (`two_pass`: in the two-pass mode of section 6.5).
     #[error("meshing {input}{}", if *.two_pass { " (two passes)" } else { "" })]
     Mesh {

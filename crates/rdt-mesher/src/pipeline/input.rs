@@ -6,6 +6,7 @@
 //! for images, the surface's own `dm_inf_hint()`, computed on first use only.
 
 use super::error::PipelineError;
+use super::forecast::{AreaEstimate, AreaSource};
 use glam::DVec3;
 use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
 use oracle::{BoundingSphere, Surface};
@@ -80,6 +81,60 @@ pub enum InputKind {
     Custom,
 }
 
+/// What was measured on an input when opening it (the report's `input_stats`).
+///
+/// ```
+/// use rdt_mesher::pipeline::Input;
+/// let dir = env!("CARGO_MANIFEST_DIR");
+/// let cube = Input::open(&format!("{dir}/../../fixtures/meshes/cube.off"), &Default::default())
+///     .unwrap();
+/// let p = cube.stats.polyhedron.as_ref().unwrap();
+/// assert_eq!((p.vertices, p.triangles, cube.stats.sharp_edges), (8, 12, Some(12)));
+/// ```
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct InputStats {
+    /// `implicit`, `image`, `polyhedron`, `point-set` or `custom`.
+    pub kind: &'static str,
+    /// Images.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub image: Option<ImageStats>,
+    /// Meshes: what the polyhedron oracle found in the input.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub polyhedron: Option<oracle::polyhedron::PolyhedronStats>,
+    /// Meshes: edges whose normals are more than [`SHARP_DEG`] apart.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sharp_edges: Option<usize>,
+    /// Point sets.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub points: Option<PointStats>,
+}
+
+/// An image input's figures.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ImageStats {
+    /// Voxels along x, y, z.
+    pub dims: [usize; 3],
+    /// Voxel spacing along x, y, z, in world units.
+    pub spacing: [f64; 3],
+    /// The iso value in scaled units (0.5 for a label's indicator).
+    pub iso: f64,
+    /// Smallest and largest value (scaled).
+    pub range: [f64; 2],
+    /// Surface components found by the voxel scan.
+    pub components: usize,
+    /// Seed points given to the mesher.
+    pub seed_points: usize,
+}
+
+/// A point-set input's figures.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PointStats {
+    /// Points read.
+    pub points: usize,
+    /// Normals were in the file (else estimated).
+    pub normals_given: bool,
+}
+
 enum Held<'s> {
     Owned(Box<dyn Surface + 's>),
     Borrowed(&'s dyn Surface),
@@ -127,6 +182,13 @@ pub struct Input<'s> {
     pub notes: Vec<String>,
     /// Mesh input: its sharp edges (normals more than [`SHARP_DEG`] apart).
     pub sharp_edges: Vec<(DVec3, DVec3)>,
+    /// What was measured when opening.
+    pub stats: InputStats,
+    /// The surface's area when opening measured it (images, meshes); else the forecast
+    /// meshes coarsely.
+    pub area: Option<AreaEstimate>,
+    /// Images: the voxel spacing (geometric mean over the axes), in world units.
+    pub voxel_spacing: Option<f64>,
 }
 
 impl std::fmt::Debug for Input<'_> {
@@ -159,6 +221,18 @@ impl<'s> Input<'s> {
             max_control_points: crate::MeshOptions::default().max_control_points,
             notes: Vec::new(),
             sharp_edges: Vec::new(),
+            stats: InputStats {
+                kind: match kind {
+                    InputKind::Implicit => "implicit",
+                    InputKind::Image => "image",
+                    InputKind::Polyhedron => "polyhedron",
+                    InputKind::PointSet => "point-set",
+                    InputKind::Custom => "custom",
+                },
+                ..Default::default()
+            },
+            area: None,
+            voxel_spacing: None,
         }
     }
 
@@ -331,6 +405,17 @@ fn open_image(spec: &str, opts: &InputOptions) -> Result<Input<'static>, Pipelin
         comps,
         img.iso()
     );
+    let area = super::forecast::voxel_crossing_area(&img);
+    let h = img.volume().spacing();
+    let st = img.stats();
+    let image_stats = ImageStats {
+        dims: img.volume().dims(),
+        spacing: h.to_array(),
+        iso: img.iso(),
+        range: [st.min, st.max],
+        components: comps,
+        seed_points: budget,
+    };
     let mut input = Input::with(
         Held::Owned(Box::new(img)),
         stem(path),
@@ -340,6 +425,9 @@ fn open_image(spec: &str, opts: &InputOptions) -> Result<Input<'static>, Pipelin
     input.components = Some(comps as u32);
     input.max_control_points = budget;
     input.notes.push(note);
+    input.stats.image = Some(image_stats);
+    input.area = Some(area);
+    input.voxel_spacing = Some((h.x * h.y * h.z).cbrt());
     Ok(input)
 }
 
@@ -366,6 +454,10 @@ fn open_point_set(spec: &str, xyz: bool) -> Result<Input<'static>, PipelineError
         DmInf::Known(dm),
     );
     input.default_size = Some(size);
+    input.stats.points = Some(PointStats {
+        points: cloud.points.len(),
+        normals_given: had_normals,
+    });
     input.notes.push(format!(
         "point set: {} points, normals {}; suggested size {size:.5}",
         cloud.points.len(),
@@ -385,13 +477,18 @@ fn open_mesh(spec: &str, smooth: bool) -> Result<Input<'static>, PipelineError> 
         .map_err(|e| PipelineError::backend(format!("mesh {spec}"), e))?;
     let size = poly.suggested_size();
     let sharp_edges = poly.sharp_edges(SHARP_DEG);
+    let pstats = poly.stats().clone();
     let mut notes = vec![format!(
-        "polyhedron: {} vertices, {} triangles ({:?}); {} sharp edges (normals > {SHARP_DEG} deg apart); suggested size {size:.5} (bbox diagonal / 50)",
+        "polyhedron: {} vertices, {} triangles, {}; {} sharp edges (normals > {SHARP_DEG} deg apart); suggested size {size:.5} (bbox diagonal / 50)",
         mesh.vertices.len(),
         mesh.triangles.len(),
-        poly.stats(),
+        polyhedron_summary(&pstats),
         sharp_edges.len(),
     )];
+    let area = AreaEstimate {
+        area: super::forecast::triangle_area(&mesh),
+        source: AreaSource::InputTriangles,
+    };
     let surface: Box<dyn Surface> = if !smooth {
         notes.push("polyhedron: meshing the exact triangles (--smooth-polyhedron meshes a smooth approximation)".into());
         Box::new(poly)
@@ -414,8 +511,47 @@ fn open_mesh(spec: &str, smooth: bool) -> Result<Input<'static>, PipelineError> 
     );
     input.default_size = Some(size);
     input.notes = notes;
+    input.stats.sharp_edges = Some(sharp_edges.len());
+    input.stats.polyhedron = Some(pstats);
     input.sharp_edges = sharp_edges;
+    input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);
     Ok(input)
+}
+
+/// `1 component, closed, consistently oriented`, or the defects found, in words.
+///
+/// ```
+/// # use rdt_mesher::pipeline::Input;
+/// let dir = env!("CARGO_MANIFEST_DIR");
+/// let cube = Input::open(&format!("{dir}/../../fixtures/meshes/cube.off"), &Default::default())
+///     .unwrap();
+/// assert!(cube.notes[0].contains("12 triangles, 1 component, closed, consistently oriented;"));
+/// ```
+fn polyhedron_summary(s: &oracle::polyhedron::PolyhedronStats) -> String {
+    let mut parts = vec![format!(
+        "{} component{}",
+        s.components,
+        if s.components == 1 { "" } else { "s" }
+    )];
+    for (n, what) in [
+        (s.boundary_edges, "boundary edges (holes)"),
+        (s.nonmanifold_edges, "non-manifold edges"),
+        (s.misoriented_edges, "misoriented edges"),
+        (s.duplicate_vertices, "duplicate vertices (welded)"),
+        (s.degenerate_triangles, "degenerate triangles (ignored)"),
+        (s.unreferenced_vertices, "unreferenced vertices"),
+    ] {
+        if n > 0 {
+            parts.push(format!("{n} {what}"));
+        }
+    }
+    if s.boundary_edges == 0 && s.nonmanifold_edges == 0 {
+        parts.push("closed".into());
+    }
+    if s.misoriented_edges == 0 {
+        parts.push("consistently oriented".into());
+    }
+    parts.join(", ")
 }
 
 /// The file stem of a path without `.gz` and one extension (`brain.nii.gz` -> `brain`), or

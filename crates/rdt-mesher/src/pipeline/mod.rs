@@ -1,38 +1,52 @@
 //! The high-level API (ours) that every front end uses (the CLI, bindings): an [`Input`] (a
 //! surface opened by spec or given) and a [`Request`] in; the mesh, one surface Delaunay ball
 //! per facet, the statistics, the `verify` report and a typed [`Verdict`] out. It owns the
-//! policy: the default size (section 6.5's sigma = 0.09 d_M^inf, else R / 20), the two-pass
-//! mode of section 6.5, the verification options and the verdict.
+//! policy: the forecast and the budgets, the default size (section 6.5's sigma = 0.09
+//! d_M^inf when its forecast is affordable, else a size forecasting tens of thousands of
+//! vertices), the two-pass mode of section 6.5, the verification options and the verdict.
 //!
-//! A NIfTI file meshed as `cargo xtask mesh FILE --iso 300 --size 3` does (the same defaults
-//! for everything else, the same mesh, the same verdict; without a size, both take sigma =
-//! 0.09 d_M^inf, about 380k vertices on this phantom, too slow for a doc test):
+//! A NIfTI file meshed as `cargo xtask mesh FILE --iso 300` does (the same defaults, the
+//! same mesh, the same verdict; on this phantom sigma = 0.09 d_M^inf forecasts about 380k
+//! vertices, so the default is half its voxel spacing, 3.1):
 //!
 //! ```
-//! use rdt_mesher::pipeline::{run, Input, InputOptions, Request, SizeRequest};
+//! use rdt_mesher::pipeline::{run, Input, InputOptions, Request};
 //! use oracle::image::ImageOptions;
 //! let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/images/phantom_i16_32.nii.gz");
 //! let image = ImageOptions { iso: Some(300.0), ..Default::default() };
 //! let input = Input::open(file, &InputOptions { image, ..Default::default() }).unwrap();
-//! let out = run(&input, &Request { size: SizeRequest::Size(3.0), ..Default::default() }).unwrap();
+//! let out = run(&input, &Request::default()).unwrap();
 //! meshio::write(std::env::temp_dir().join("phantom.ply"), &out.mesh).unwrap();
-//! assert_eq!((out.stats.vertices, out.verdict.passed()), (12297, true)); // as the CLI's
+//! assert_eq!((out.stats.vertices, out.verdict.passed()), (11631, true)); // as the CLI's
 //! ```
 //!
 //! Steps, for front ends that print between them: [`Input::open`], [`plan`] (validates the
-//! request, chooses sigma, says why in [`Plan::notes`]), [`Plan::execute`]. Results do not
+//! request, chooses sigma, says why in [`Plan::notes`], forecasts the cost in
+//! [`Plan::forecast`] and refuses a size over budget), [`Plan::execute`]. Results do not
 //! depend on the number of threads of the rayon pool the run is called from.
 #![deny(missing_docs)]
 
+mod budget;
 mod error;
+mod forecast;
 mod input;
 mod outcome;
 mod plan;
 mod request;
 
+pub use budget::{
+    AUTO_MAX_VERTICES, AUTO_TARGET_VERTICES, Budget, Budgets, DEFAULT_MAX_MEMORY,
+    DEFAULT_MAX_VERTICES,
+};
 pub use error::{BoxError, PipelineError};
+pub use forecast::{
+    AreaEstimate, AreaSource, BASE_BYTES, BYTES_PER_VERTEX, Forecast, PROBE_MAX_VERTICES,
+    VERTICES_PER_AREA, bytes, count, memory_for, parse_bytes, probe_area, round_up_3,
+    triangle_area, vertices_for_memory, voxel_crossing_area,
+};
 pub use input::{
-    Input, InputKind, InputOptions, ReadAs, SHARP_DEG, image_labels, is_image_spec, stem,
+    ImageStats, Input, InputKind, InputOptions, InputStats, PointStats, ReadAs, SHARP_DEG,
+    image_labels, is_image_spec, stem,
 };
 pub use outcome::{Failure, Outcome, SharpEdges, Stage, TwoPassOutcome, Verdict, verify_balls};
 pub use plan::{Event, Plan, plan};

@@ -1,12 +1,15 @@
-//! The pipeline's policy (ours): the default size bound (sigma = 0.09 d_M^inf, else R / 20),
-//! the two-pass orchestration of section 6.5, the mesher's options, the verification options
-//! and the verdict.
+//! The pipeline's policy (ours): the size bound (requested, or the default of
+//! [`budget`](super::budget): sigma = 0.09 d_M^inf when affordable), the forecast and the
+//! budgets, the two-pass orchestration of section 6.5, the mesher's options, the verification
+//! options and the verdict.
 //!
 //! Invariant: a [`Plan`] holds a validated size choice (a positive finite constant sigma, or
-//! epsilon in (0, 1) with a positive finite d_M^inf); its mesher options are the ones the
-//! run uses.
+//! epsilon in (0, 1) with a positive finite d_M^inf) whose forecast, when there is one, fits
+//! the budgets; its mesher options are the ones the run uses.
 
+use super::budget::{self, Budgets};
 use super::error::PipelineError;
+use super::forecast::{AreaEstimate, Forecast};
 use super::input::Input;
 use super::outcome::{Outcome, SharpEdges, TwoPassOutcome};
 use super::request::{Request, SizeRequest};
@@ -55,6 +58,8 @@ pub struct Plan<'p, 's> {
     mode: Mode,
     options: MeshOptions,
     notes: Vec<String>,
+    forecast: Option<Forecast>,
+    budgets: Budgets,
 }
 
 /// Validate `request` on `input` and choose the size bound.
@@ -70,12 +75,55 @@ pub fn plan<'p, 's>(
     request: &'p Request,
 ) -> Result<Plan<'p, 's>, PipelineError> {
     let mut notes = input.notes.clone();
-    let mode = match request.size {
+    let budgets = Budgets::of(request);
+    let (mode, forecast) = size_mode(input, request, &budgets, &mut notes)?;
+    let options = MeshOptions {
+        criteria: Criteria {
+            size: match mode {
+                Mode::Constant(s) => Some(Sizing::Constant(s)),
+                Mode::TwoPass { .. } => None,
+            },
+            min_angle_deg: request.min_angle_deg,
+            max_distance: request.max_distance,
+        },
+        oracle: request.oracle,
+        manifold: request.manifold,
+        scaffold: request.scaffold,
+        seed: request.seed,
+        max_vertices: Some(budgets.mesher_cap()),
+        time_limit: request.time_limit,
+        initial_points: request.initial_points.clone(),
+        control_points: input.control_points.clone(),
+        initialization: request.initialization,
+        max_control_points: input.max_control_points,
+    };
+    Ok(Plan {
+        input,
+        request,
+        mode,
+        options,
+        notes,
+        forecast,
+        budgets,
+    })
+}
+
+/// The size mode of `request`, validated and checked against the budgets, and its forecast.
+fn size_mode(
+    input: &Input<'_>,
+    request: &Request,
+    budgets: &Budgets,
+    notes: &mut Vec<String>,
+) -> Result<(Mode, Option<Forecast>), PipelineError> {
+    let area = || area_of(input, request);
+    Ok(match request.size {
         SizeRequest::Size(s) => {
             if !(s > 0.0 && s.is_finite()) {
                 return Err(PipelineError::InvalidSize(s));
             }
-            Mode::Constant(s)
+            let (f, n) = budget::check(input, area(), s, budgets, None)?;
+            notes.extend(n);
+            (Mode::Constant(s), f)
         }
         SizeRequest::Epsilon { epsilon, dm_inf } => {
             if !(epsilon > 0.0 && epsilon < 1.0) {
@@ -91,65 +139,34 @@ pub fn plan<'p, 's>(
                     });
                 }
             };
-            Mode::TwoPass {
+            let (f, n) = budget::check(input, area(), epsilon * dm, budgets, Some(dm))?;
+            notes.extend(n);
+            let mode = Mode::TwoPass {
                 epsilon,
                 dm_inf: dm,
-            }
+            };
+            (mode, f)
         }
         SizeRequest::Auto => {
-            let (sigma, note) = default_size(input);
-            notes.push(note);
-            Mode::Constant(sigma)
+            let (sigma, f, n) = budget::auto_size(input, area(), budgets);
+            notes.extend(n);
+            (Mode::Constant(sigma), f)
         }
-    };
-    let options = MeshOptions {
-        criteria: Criteria {
-            size: match mode {
-                Mode::Constant(s) => Some(Sizing::Constant(s)),
-                Mode::TwoPass { .. } => None,
-            },
-            min_angle_deg: request.min_angle_deg,
-            max_distance: request.max_distance,
-        },
-        oracle: request.oracle,
-        manifold: request.manifold,
-        scaffold: request.scaffold,
-        seed: request.seed,
-        max_vertices: request.max_vertices,
-        time_limit: request.time_limit,
-        initial_points: request.initial_points.clone(),
-        control_points: input.control_points.clone(),
-        initialization: request.initialization,
-        max_control_points: input.max_control_points,
-    };
-    Ok(Plan {
-        input,
-        request,
-        mode,
-        options,
-        notes,
     })
 }
 
-/// The size of [`SizeRequest::Auto`] and the note saying which rule chose it.
-fn default_size(input: &Input<'_>) -> (f64, String) {
-    match (input.dm_inf(), input.default_size) {
-        (_, Some(d)) => (
-            d,
-            format!("no --size: using the input's suggested size {d:.5}"),
-        ),
-        (Some(dm), None) => (
-            0.09 * dm,
-            format!("no --size: using sigma = 0.09 * d_M^inf = {:.5}", 0.09 * dm),
-        ),
-        (None, None) => {
-            let r = input.surface().bounding_sphere().radius / 20.0;
-            (
-                r,
-                format!("no --size: using sigma = bounding radius / 20 = {r:.5}"),
-            )
-        }
-    }
+/// The input's area estimate (images, meshes), else the area of a coarse mesh.
+fn area_of(input: &Input<'_>, request: &Request) -> Option<AreaEstimate> {
+    input.area.or_else(|| {
+        let base = MeshOptions {
+            oracle: request.oracle,
+            seed: request.seed,
+            control_points: input.control_points.clone(),
+            max_control_points: input.max_control_points,
+            ..Default::default()
+        };
+        super::forecast::probe_area(input.surface(), &base)
+    })
 }
 
 impl Plan<'_, '_> {
@@ -194,6 +211,25 @@ impl Plan<'_, '_> {
     /// ```
     pub fn notes(&self) -> &[String] {
         &self.notes
+    }
+
+    /// The forecast of the run (two-pass mode: of its first pass), printed before meshing;
+    /// `None` when the area could not be estimated.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{plan, Input, Request};
+    /// let input = Input::open("implicit:torus", &Default::default()).unwrap();
+    /// let req = Request::default();
+    /// let f = *plan(&input, &req).unwrap().forecast().unwrap();
+    /// assert!((f.vertices as f64 / 10785.0 - 1.0).abs() < 0.1, "{f}"); // measured: 10785
+    /// ```
+    pub fn forecast(&self) -> Option<&Forecast> {
+        self.forecast.as_ref()
+    }
+
+    /// The budgets of the run, defaults applied.
+    pub fn budgets(&self) -> &Budgets {
+        &self.budgets
     }
 
     /// The mesher's options (two-pass mode: without a size; each pass sets its own).

@@ -1,6 +1,6 @@
 //! What to mesh for (ours): the size request (section 6.5's choices of sigma), the criteria of
-//! section 6.1, the oracle of section 6.4.2, the budgets, the seed; and the one spelling of
-//! the oracle and initialization names.
+//! section 6.1, the oracle of section 6.4.2, the budgets (vertices, memory, time), the seed;
+//! and the one spelling of the oracle and initialization names.
 
 use crate::{Criteria, Initialization, OracleKind, Sizing};
 use glam::DVec3;
@@ -62,7 +62,14 @@ pub struct Request {
     /// Seed for every random choice (the result does not depend on the thread count).
     pub seed: u64,
     /// Stop at this many sample points (the mesh so far is returned, unmet criteria reported).
+    /// `None`: [`DEFAULT_MAX_VERTICES`](super::DEFAULT_MAX_VERTICES), and a size whose
+    /// [`Forecast`](super::Forecast) exceeds it is refused before meshing (a requested budget
+    /// is not: the run stops there).
     pub max_vertices: Option<usize>,
+    /// Memory budget in bytes (`None`: [`DEFAULT_MAX_MEMORY`](super::DEFAULT_MAX_MEMORY)): a
+    /// size whose forecast exceeds it is refused before meshing, and the mesher stops at the
+    /// vertices it affords.
+    pub max_memory: Option<u64>,
     /// Stop after this long (likewise).
     pub time_limit: Option<Duration>,
     /// A sample E_0 inserted before refinement (section 6.4.1).
@@ -87,6 +94,7 @@ impl Default for Request {
             initialization: Initialization::ControlPoints,
             seed: 0,
             max_vertices: None,
+            max_memory: None,
             time_limit: None,
             initial_points: Vec::new(),
             verify: true,
