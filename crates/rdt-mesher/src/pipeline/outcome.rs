@@ -297,11 +297,11 @@ impl Outcome {
             for u in &st.unmet {
                 unmet.push(match u {
                     Unmet::Size { max_r_over_sigma } => format!(
-                        "size: {} facets, max r/sigma {max_r_over_sigma:.2}",
+                        "size: {}, max r/sigma {max_r_over_sigma:.2}",
                         count(st, "size")
                     ),
                     Unmet::Angle { min_angle_deg, .. } => format!(
-                        "angle: {} facets, min angle {min_angle_deg:.2} deg",
+                        "angle: {}, min angle {min_angle_deg:.2} deg",
                         count(st, "angle")
                     ),
                     other => other.to_string(),
@@ -359,23 +359,28 @@ impl Outcome {
     }
 }
 
-/// The facets of `st` listed for `criterion`, as "N" or "N (of which M listed)"; "some"
-/// when they were not located (two-pass runs).
+/// The facets of `st` failing `criterion`: "N facets", "N facets (M listed)", or "some
+/// facets" when they were not located (two-pass runs).
 fn count(st: &Stats, criterion: &str) -> String {
     let listed = st
         .unmet_facets
         .iter()
         .filter(|f| f.criterion == criterion)
         .count();
-    if listed == 0 {
-        "some".into()
-    } else {
-        let total = st.unmet_facets_total;
-        if total > listed {
-            format!("{total} (size or angle; {listed} listed)")
-        } else {
-            listed.to_string()
+    let both = st
+        .unmet
+        .iter()
+        .filter(|u| matches!(u, Unmet::Size { .. } | Unmet::Angle { .. }))
+        .count()
+        > 1;
+    let total = st.unmet_facets_total;
+    match listed {
+        0 => "some facets".into(),
+        _ if total > listed && both => {
+            format!("{total} facets fail size or angle ({listed} listed for {criterion})")
         }
+        _ if total > listed => format!("{total} facets ({listed} listed)"),
+        _ => format!("{listed} facets"),
     }
 }
 
