@@ -181,7 +181,8 @@ fn check_sphere_run(dir: &Path, stdout: &str, report: &serde_json::Value, certif
         assert_eq!(status_of(report, name), "PASS", "check {name}");
     }
     if certified {
-        assert_eq!(status_of(report, "loose-epsilon"), "PASS");
+        // eps 0.2 is above epsilon_1: the certificate holds without a guarantee (INFO).
+        assert_eq!(status_of(report, "loose-epsilon"), "INFO");
         let eps = report["verify"]["certificate"]["eps_achieved"]
             .as_f64()
             .unwrap();
@@ -410,7 +411,11 @@ fn verify_dm_source_for_expressions() {
     assert!(s.contains("SKIP loose-epsilon"), "{s}");
     for dm in [["--dm", "poles"], ["--dm", "1"]] {
         let s = ok(&run(&["--epsilon", "0.12", dm[0], dm[1]]));
-        assert!(s.contains("PASS loose-epsilon"), "{dm:?}: {s}");
+        // Met; PASS below epsilon_1, INFO "no guarantee" above.
+        assert!(
+            s.contains("PASS loose-epsilon") || s.contains("INFO loose-epsilon"),
+            "{dm:?}: {s}"
+        );
     }
     // A d_M far below the truth: the balls are too big for it.
     let out = run(&["--epsilon", "0.12", "--dm", "0.1"]);

@@ -130,6 +130,13 @@ pub trait Surface: Send + Sync {
     fn normal_uncertainty_deg(&self, _p: DVec3) -> f64 {
         0.0
     }
+
+    /// The image behind the surface, when it is one: its value is a trilinear interpolant
+    /// of grid values, so `verify` measures distances to S exactly, cell by cell, instead of
+    /// trusting [`Surface::project`]. Default `None`.
+    fn as_image(&self) -> Option<&crate::image::ImageSurface> {
+        None
+    }
 }
 
 /// A reference to a surface is the surface (every method forwards, overrides included).
@@ -166,6 +173,9 @@ impl<S: Surface + ?Sized> Surface for &S {
     }
     fn normal_uncertainty_deg(&self, p: DVec3) -> f64 {
         (**self).normal_uncertainty_deg(p)
+    }
+    fn as_image(&self) -> Option<&crate::image::ImageSurface> {
+        (**self).as_image()
     }
 }
 

@@ -70,4 +70,4 @@ pub use error::MeshError;
 pub use levels::repair::{DecisionKind, TopologyDecision};
 pub use mesher::{mesh, mesh_with_progress};
 pub use options::{Initialization, MeshOptions, OracleKind};
-pub use stats::{MeshResult, Progress, Stats, StopReason, SurfaceBall, Unmet};
+pub use stats::{MeshResult, Progress, Stats, StopReason, SurfaceBall, Unmet, UnmetFacet};

@@ -140,6 +140,41 @@ impl fmt::Display for Unmet {
     }
 }
 
+/// An output facet where a criterion does not hold: where it is, by how much and why, for
+/// the report (see [`Stats::unmet_facets`]).
+///
+/// ```
+/// use rdt_mesher::UnmetFacet;
+/// let f = UnmetFacet { criterion: "size".into(), facet: 7, center: [0.0, 1.0, 2.0], value: 3.17,
+///                      why: "within 0.01 of a sharp input edge".into() };
+/// assert_eq!(f.to_string(), "size at facet 7 (0, 1, 2): 3.17; within 0.01 of a sharp input edge");
+/// ```
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct UnmetFacet {
+    /// `size` (value: r / sigma at the ball's center) or `angle` (value: the smallest angle,
+    /// degrees).
+    pub criterion: String,
+    /// Index of the facet in the output mesh.
+    pub facet: usize,
+    /// Its surface Delaunay ball's center.
+    pub center: [f64; 3],
+    /// The measure that fails the criterion.
+    pub value: f64,
+    /// What is known about the cause.
+    pub why: String,
+}
+
+impl fmt::Display for UnmetFacet {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let [x, y, z] = self.center;
+        write!(
+            f,
+            "{} at facet {} ({x}, {y}, {z}): {}; {}",
+            self.criterion, self.facet, self.value, self.why
+        )
+    }
+}
+
 /// Figures of a run, for the report.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Stats {
@@ -202,6 +237,11 @@ pub struct Stats {
     pub stopped_by: Option<StopReason>,
     /// Criteria that do not hold at the end (empty when the run completed).
     pub unmet: Vec<Unmet>,
+    /// Where the size and angle criteria fail: the worst facets first, at most 20 (filled by
+    /// `rdt_mesher::pipeline` for constant-size runs).
+    pub unmet_facets: Vec<UnmetFacet>,
+    /// How many facets fail the size or angle criterion in all.
+    pub unmet_facets_total: usize,
     /// Edges of the output with other than two facets (0 for a closed 2-manifold).
     pub nonmanifold_edges: usize,
     /// Vertices with other than one umbrella (0 for a closed 2-manifold).

@@ -182,6 +182,8 @@ pub struct SeedCoverage {
     /// Distance to the nearest triangle.
     pub distance: f64,
     pub nearest_triangle: Option<usize>,
+    /// The threshold used for this seed.
+    pub tolerance: f64,
     pub covered: bool,
 }
 
@@ -189,34 +191,37 @@ pub struct SeedCoverage {
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct ComponentCoverage {
     pub seeds: Vec<SeedCoverage>,
+    /// The largest per-seed threshold.
     pub tolerance: f64,
     pub uncovered: usize,
 }
 
 /// Check that every seed (a point on a component of S; one or more per component) is within
-/// `tolerance` of the mesh.
+/// `tolerance(nearest triangle)` of the mesh.
 pub fn component_coverage(
     dist: &MeshDistance<'_>,
     seeds: &[DVec3],
-    tolerance: f64,
+    tolerance: &(dyn Fn(usize) -> f64 + Sync),
 ) -> ComponentCoverage {
     let seeds: Vec<SeedCoverage> = seeds
         .par_iter()
         .map(|&s| {
             let n = dist.nearest(s);
             let d = n.map_or(f64::INFINITY, |x| x.1);
+            let tol = n.map_or(0.0, |x| tolerance(x.0));
             SeedCoverage {
                 seed: s.to_array(),
                 distance: d,
                 nearest_triangle: n.map(|x| x.0),
-                covered: d <= tolerance,
+                tolerance: tol,
+                covered: d <= tol,
             }
         })
         .collect();
     let uncovered = seeds.iter().filter(|s| !s.covered).count();
     ComponentCoverage {
+        tolerance: seeds.iter().map(|s| s.tolerance).fold(0.0, f64::max),
         seeds,
-        tolerance,
         uncovered,
     }
 }

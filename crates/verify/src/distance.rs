@@ -9,6 +9,8 @@ use serde::Serialize;
 
 use geom::bvh::TriangleBvh;
 
+use crate::level_set::LevelSet;
+
 /// Exact nearest-triangle queries on a mesh (branch and bound on the BVH).
 ///
 /// Distances come from [`geom::closest::closest_point_triangle`] (degenerate triangles
@@ -87,14 +89,27 @@ impl Acc {
 /// Geometry of the mesh against the surface.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct Geometry {
-    /// Mesh -> S: samples on the triangles projected onto S.
+    /// Mesh -> S: samples on the triangles, each to a point of S (see
+    /// `mesh_to_surface_method`).
     pub mesh_to_surface: DistanceStats,
-    /// Samples whose projection the oracle could not compute (excluded).
+    /// How the mesh -> S distances were measured.
+    pub mesh_to_surface_method: String,
+    /// Samples for which no point of S was found: not measured (excluded from the figures;
+    /// the `hausdorff` check FAILs on them).
     pub projection_failures: usize,
-    /// S -> mesh: dense samples of S to their nearest triangle (exact).
+    /// Samples whose projection landed farther than a point of S found by rays (the nearer
+    /// point is used).
+    pub corrected_projections: usize,
+    /// Image samples whose search stopped on its work budget: their figure is an upper bound
+    /// with a gap above the tolerance.
+    pub bounded_only: usize,
+    /// S -> mesh: samples of S to their nearest triangle (exact).
     pub surface_to_mesh: DistanceStats,
     /// Where the S samples came from.
     pub surface_samples_source: String,
+    /// Every point of S is within this distance of an S sample (when known: images), so the
+    /// true S -> mesh distance is at most `surface_to_mesh.max` plus this.
+    pub surface_covering_radius: Option<f64>,
     /// max of the two one-sided distances.
     pub hausdorff: f64,
     pub bounding_radius: f64,
@@ -134,48 +149,131 @@ pub fn triangle_samples(a: DVec3, b: DVec3, c: DVec3, n: usize, out: &mut Vec<DV
     }
 }
 
-/// Mesh -> S statistics of samples on the triangles (distance `|p - project(p)|`), the
-/// number of samples whose projection failed and, when `dist` is given, S -> mesh statistics
-/// of the projected points. Memory is O(number of triangles).
+/// How mesh samples are measured against S.
+pub(crate) enum Measure<'a> {
+    /// An image: exact distance to the trilinear level set ([`LevelSet::nearest`]).
+    LevelSet(Box<LevelSet<'a>>),
+    /// Any other surface: [`Surface::project`], checked by rays where it lands farther than
+    /// half the sample's triangle's longest edge (a projection that ran to a far sheet).
+    Project(&'a dyn Surface),
+}
+
+impl<'a> Measure<'a> {
+    pub(crate) fn new(surface: &'a dyn Surface) -> Measure<'a> {
+        match surface.as_image() {
+            Some(img) => Measure::LevelSet(Box::new(LevelSet::new(img))),
+            None => Measure::Project(surface),
+        }
+    }
+
+    /// What the mesh -> S figures are, for the report.
+    pub(crate) fn describe(&self) -> String {
+        match self {
+            Measure::LevelSet(ls) => format!(
+                "exact distance to the trilinear level set of the image (branch and bound over \
+                 voxel cells, within max(1e-2 d, {:.1e}))",
+                ls.tolerance(0.0)
+            ),
+            Measure::Project(_) => "distance to the surface's projection of the sample, checked \
+                 by rays from the sample where it is farther than half the triangle's longest \
+                 edge (an upper bound: a point of S)"
+                .into(),
+        }
+    }
+
+    /// A point of S near `p`, its distance, and whether the distance was corrected (rays found
+    /// a nearer point than the projection) or only bounded (the search stopped with a gap
+    /// larger than its tolerance). `None`: not measured.
+    fn measure(&self, p: DVec3, edge: f64) -> Option<(DVec3, f64, Flag)> {
+        match self {
+            Measure::LevelSet(ls) => {
+                let n = ls.nearest(p);
+                let q = n.point?;
+                let exact = n.upper - n.lower <= 2.0 * ls.tolerance(n.upper);
+                Some((q, n.upper, if exact { Flag::Exact } else { Flag::Bounded }))
+            }
+            Measure::Project(s) => {
+                let q = s.project(p).filter(|q| q.is_finite());
+                let d = q.map(|q| (p - q).length());
+                if d.is_some_and(|d| d <= 0.5 * edge) {
+                    return Some((q?, d?, Flag::Exact));
+                }
+                let r = oracle::roots::nearest_crossing_on_rays(*s, p)
+                    .filter(|r| r.is_finite())
+                    .map(|r| (r, (p - r).length()));
+                match (q.zip(d), r) {
+                    (Some((_, d)), Some((r, dr))) if dr < d => Some((r, dr, Flag::Corrected)),
+                    (Some((q, d)), _) => Some((q, d, Flag::Exact)),
+                    (None, Some((r, dr))) => Some((r, dr, Flag::Corrected)),
+                    (None, None) => None,
+                }
+            }
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Flag {
+    Exact,
+    Corrected,
+    Bounded,
+}
+
+/// Counts of a mesh -> S pass.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counts {
+    fails: usize,
+    corrected: usize,
+    bounded: usize,
+}
+
+/// Mesh -> S statistics of samples on the triangles (see [`Measure`]), the counts of samples
+/// not measured, corrected or only bounded and, when `dist` is given, S -> mesh statistics
+/// of the points of S found. Memory is O(number of triangles).
 fn mesh_samples(
     mesh: &TriMesh,
-    surface: &dyn Surface,
+    measure: &Measure<'_>,
     per_edge: usize,
     dist: Option<&MeshDistance<'_>>,
-) -> (Acc, Acc, usize) {
+) -> (Acc, Acc, Counts) {
     const CHUNK: usize = 1024;
-    let per_chunk: Vec<(Acc, Acc, usize)> = mesh
+    let per_chunk: Vec<(Acc, Acc, Counts)> = mesh
         .triangles
         .par_chunks(CHUNK)
         .map(|tris| {
-            let (mut m2s, mut s2m, mut fails) = (Acc::default(), Acc::default(), 0);
+            let (mut m2s, mut s2m, mut n) = (Acc::default(), Acc::default(), Counts::default());
             let mut pts = Vec::new();
             for t in tris {
                 let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+                let edge = (b - a).length().max((c - b).length()).max((a - c).length());
                 pts.clear();
                 triangle_samples(a, b, c, per_edge, &mut pts);
                 for &p in &pts {
-                    match surface.project(p) {
-                        Some(q) if q.is_finite() => {
-                            m2s.add(p, (p - q).length());
-                            if let Some(d) = dist {
-                                s2m.add(q, d.nearest(q).map_or(f64::INFINITY, |x| x.1));
+                    match measure.measure(p, edge) {
+                        Some((q, d, flag)) => {
+                            m2s.add(p, d);
+                            n.corrected += (flag == Flag::Corrected) as usize;
+                            n.bounded += (flag == Flag::Bounded) as usize;
+                            if let Some(dd) = dist {
+                                s2m.add(q, dd.nearest(q).map_or(f64::INFINITY, |x| x.1));
                             }
                         }
-                        _ => fails += 1,
+                        None => n.fails += 1,
                     }
                 }
             }
-            (m2s, s2m, fails)
+            (m2s, s2m, n)
         })
         .collect();
-    let (mut m2s, mut s2m, mut fails) = (Acc::default(), Acc::default(), 0);
+    let (mut m2s, mut s2m, mut n) = (Acc::default(), Acc::default(), Counts::default());
     for (a, b, f) in &per_chunk {
         m2s.merge(a);
         s2m.merge(b);
-        fails += f;
+        n.fails += f.fails;
+        n.corrected += f.corrected;
+        n.bounded += f.bounded;
     }
-    (m2s, s2m, fails)
+    (m2s, s2m, n)
 }
 
 /// S -> mesh statistics of the given samples of S (exact nearest triangle).
@@ -203,8 +301,8 @@ pub fn mesh_to_surface(
     surface: &dyn Surface,
     per_edge: usize,
 ) -> (DistanceStats, usize) {
-    let (m2s, _, fails) = mesh_samples(mesh, surface, per_edge, None);
-    (m2s.stats(), fails)
+    let (m2s, _, n) = mesh_samples(mesh, &Measure::new(surface), per_edge, None);
+    (m2s.stats(), n.fails)
 }
 
 /// Normal deviation of the facets against the surface gradient.
@@ -264,8 +362,9 @@ pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviatio
     nd
 }
 
-/// Compute [`Geometry`]. `surface_samples`: dense samples of S; if `None`, the projections
-/// of the mesh samples are used (they cover only the parts of S near the mesh).
+/// Compute [`Geometry`]. `surface_samples`: dense samples of S; if `None`, the points of S on
+/// the voxel edges for an image ([`LevelSet::edge_crossings`]), else the points of S found
+/// for the mesh samples (they cover only the parts of S near the mesh).
 pub fn geometry(
     mesh: &TriMesh,
     bvh: &TriangleBvh,
@@ -273,35 +372,66 @@ pub fn geometry(
     per_edge: usize,
     surface_samples: Option<&[DVec3]>,
 ) -> Geometry {
+    geometry_labelled(mesh, bvh, surface, per_edge, surface_samples, None)
+}
+
+/// [`geometry`] with a description of the given samples for the report.
+pub(crate) fn geometry_labelled(
+    mesh: &TriMesh,
+    bvh: &TriangleBvh,
+    surface: &dyn Surface,
+    per_edge: usize,
+    surface_samples: Option<&[DVec3]>,
+    label: Option<&str>,
+) -> Geometry {
     let dist = MeshDistance::new(mesh, bvh);
-    let (mesh_to_surface, surface_to_mesh, fails, source) = match surface_samples {
-        Some(s) => {
-            let (m2s, _, fails) = mesh_samples(mesh, surface, per_edge, None);
-            (
-                m2s.stats(),
-                surface_to_mesh(&dist, s),
-                fails,
-                format!("{} given samples", s.len()),
-            )
-        }
-        None => {
-            let (m2s, s2m, fails) = mesh_samples(mesh, surface, per_edge, Some(&dist));
-            let n = s2m.n;
-            (
-                m2s.stats(),
-                s2m.stats(),
-                fails,
-                format!("{n} projections of the mesh samples onto S"),
-            )
-        }
+    let measure = Measure::new(surface);
+    let own = match (&measure, surface_samples) {
+        (Measure::LevelSet(ls), None) => Some(ls.edge_crossings()),
+        _ => None,
     };
+    let given = surface_samples.or(own.as_deref());
+    let (m2s, s2m, n) = mesh_samples(mesh, &measure, per_edge, given.is_none().then_some(&dist));
+    let (surface_to_mesh, source, covering) = match (given, &measure) {
+        (Some(s), Measure::LevelSet(ls)) if surface_samples.is_none() => (
+            surface_to_mesh(&dist, s),
+            format!(
+                "{} points of S on the voxel edges (the marching-cubes vertices); every point of \
+                 S is within {:.3e} of one",
+                s.len(),
+                ls.covering_radius()
+            ),
+            Some(ls.covering_radius()),
+        ),
+        (Some(s), _) => (
+            surface_to_mesh(&dist, s),
+            match label {
+                Some(l) => format!("{} {l}", s.len()),
+                None => format!("{} given samples", s.len()),
+            },
+            None,
+        ),
+        (None, _) => (
+            s2m.stats(),
+            format!(
+                "{} points of S found for the mesh samples (only the parts of S near the mesh)",
+                s2m.n
+            ),
+            None,
+        ),
+    };
+    let mesh_to_surface = m2s.stats();
     let hausdorff = mesh_to_surface.max.max(surface_to_mesh.max);
     let bounding_radius = surface.bounding_sphere().radius;
     Geometry {
         mesh_to_surface,
-        projection_failures: fails,
+        mesh_to_surface_method: measure.describe(),
+        projection_failures: n.fails,
+        corrected_projections: n.corrected,
+        bounded_only: n.bounded,
         surface_to_mesh,
         surface_samples_source: source,
+        surface_covering_radius: covering,
         hausdorff,
         bounding_radius,
         hausdorff_relative: hausdorff / bounding_radius,

@@ -44,6 +44,7 @@ pub mod bvh;
 pub mod certificate;
 pub mod distance;
 pub mod intersect;
+pub mod level_set;
 pub mod medial;
 pub mod quality;
 mod surface_checks;
@@ -108,6 +109,10 @@ pub struct Options {
     /// Dense samples of S for the S -> mesh distance (e.g. vertices of a much finer mesh).
     /// Default: projections of the mesh samples onto S (they miss unmeshed components).
     pub surface_samples: Option<Vec<DVec3>>,
+    /// What `surface_samples` are, for the report (default: "N given samples"). Labelled
+    /// samples serve the S -> mesh distances only: [`DmSource::Poles`] then estimates d_M
+    /// from the mesh vertices.
+    pub surface_samples_source: Option<String>,
     /// FAIL the Hausdorff check above this distance (default: report only).
     pub max_hausdorff: Option<f64>,
     /// Requested epsilon of the loose epsilon-sample certificate.
@@ -120,8 +125,9 @@ pub struct Options {
     /// Default: `surface.seed_points(seed)`.
     pub component_seeds: Option<Vec<DVec3>>,
     pub seed: u64,
-    /// A seed is covered if the mesh is within this distance. Default:
-    /// max(2 x measured Hausdorff, 1e-3 x bounding radius).
+    /// A seed is covered if the mesh is within this distance. Default: twice the surface
+    /// Delaunay ball radius of the facet nearest to the seed (the mesh's own scale there; see
+    /// the `components-sampled` check).
     pub seed_tolerance: Option<f64>,
 }
 
@@ -134,6 +140,7 @@ impl Default for Options {
             max_listed: 20,
             samples_per_edge: 4,
             surface_samples: None,
+            surface_samples_source: None,
             max_hausdorff: None,
             epsilon: None,
             dm: DmSource::Auto,

@@ -20,16 +20,19 @@ pub(crate) fn against(
     surface: &dyn Surface,
     opts: &Options,
 ) {
-    let ml = opts.max_listed;
     let (normals, hausdorff) = hausdorff_check(r, mesh, bvh, surface, opts);
+    let measured = r
+        .geometry
+        .as_ref()
+        .is_some_and(|g| g.projection_failures == 0);
 
     // d_M source.
     let dm = dm_source(r, mesh, surface, opts);
-    certificate_checks(r, mesh, surface, opts, ml, &dm, hausdorff);
+    let balls = certificate_checks(r, mesh, surface, opts, &dm, measured.then_some(hausdorff));
 
     normals_check(r, mesh, &normals);
 
-    components_sampled_check(r, mesh, bvh, surface, opts, hausdorff);
+    components_sampled_check(r, mesh, bvh, surface, opts, &balls);
 }
 
 /// Mesh <-> S distances and the `hausdorff` check; gives the normal deviation and the
@@ -41,44 +44,30 @@ fn hausdorff_check(
     surface: &dyn Surface,
     opts: &Options,
 ) -> (NormalDeviation, f64) {
-    let g = distance::geometry(
+    let g = distance::geometry_labelled(
         mesh,
         bvh,
         surface,
         opts.samples_per_edge,
         opts.surface_samples.as_deref(),
+        opts.surface_samples_source.as_deref(),
     );
-    let detail = format!(
-        "two-sided {:.3e} ({:.3e} of the bounding radius); mesh->S max {:.3e} mean {:.3e} \
-         ({} samples, {} projection failures); S->mesh max {:.3e} mean {:.3e} ({})",
-        g.hausdorff,
-        g.hausdorff_relative,
-        g.mesh_to_surface.max,
-        g.mesh_to_surface.mean,
-        g.mesh_to_surface.samples,
-        g.projection_failures,
-        g.surface_to_mesh.max,
-        g.surface_to_mesh.mean,
-        g.surface_samples_source
+    let detail = hausdorff_detail(&g);
+    // A sample with no point of S found has no distance: the figure would leave it out
+    // silently, so it fails the check as much as a distance above the limit.
+    let status = match opts.max_hausdorff {
+        _ if g.projection_failures > 0 => Status::Fail,
+        Some(m) => pass_fail(g.hausdorff <= m),
+        None => Status::Info,
+    };
+    r.push(
+        "hausdorff",
+        status,
+        match opts.max_hausdorff {
+            Some(m) => format!("{detail}; limit {m}"),
+            None => detail,
+        },
     );
-    match opts.max_hausdorff {
-        // A sample that could not be projected has no distance: the estimate would leave it
-        // out silently, so it fails the check as much as a distance above the limit.
-        Some(m) => r.push(
-            "hausdorff",
-            pass_fail(g.hausdorff <= m && g.projection_failures == 0),
-            format!("{detail}; limit {m}"),
-        ),
-        None => r.push(
-            "hausdorff",
-            if g.projection_failures == 0 {
-                Status::Info
-            } else {
-                Status::Fail
-            },
-            detail,
-        ),
-    }
     let normals = g.normals.clone();
     let hausdorff = g.hausdorff;
     r.geometry = Some(g);
@@ -105,7 +94,12 @@ fn dm_source(
         }
         DmSource::Function { dm, sup } => Some((dm.clone(), *sup, "given function".into())),
         DmSource::Poles => {
-            let samples = opts.surface_samples.as_deref().unwrap_or(&mesh.vertices);
+            // Labelled samples (input triangles, noisy points) serve the distances only.
+            let samples = opts
+                .surface_samples
+                .as_deref()
+                .filter(|_| opts.surface_samples_source.is_none())
+                .unwrap_or(&mesh.vertices);
             match MedialAxisEstimate::new(samples, None) {
                 Ok(m) => {
                     let sup = samples.iter().map(|&p| m.dm(p)).fold(0.0, f64::max);
@@ -127,95 +121,120 @@ fn dm_source(
     }
 }
 
-/// The loose epsilon-sample certificate and theorem 4.7 (or SKIPs without d_M).
+/// The loose epsilon-sample certificate and theorem 4.7 (or SKIPs without d_M). Both PASS
+/// only where the paper's theorems hold: the certificate's eps below epsilon_1 ~ 0.096
+/// (theorems 4.4 to 4.7 need eps < epsilon_1); above it they are INFO with "no guarantee".
+/// `hausdorff`: the measured two-sided figure, `None` when some sample was not measured.
+/// Returns the balls used (empty when none were computed).
 fn certificate_checks(
     r: &mut Report,
     mesh: &TriMesh,
     surface: &dyn Surface,
     opts: &Options,
-    ml: usize,
     dm: &Option<(DmFn, f64, String)>,
-    hausdorff: f64,
-) {
-    let computed;
+    hausdorff: Option<f64>,
+) -> Vec<certificate::SurfaceBall> {
     let balls = match &opts.surface_balls {
-        Some(b) => b.as_slice(),
-        None => {
-            computed = if dm.is_some() {
-                certificate::surface_delaunay_balls(mesh, surface)
-            } else {
-                Vec::new()
-            };
-            &computed
-        }
+        Some(b) => b.clone(),
+        None if dm.is_some() => certificate::surface_delaunay_balls(mesh, surface),
+        None => Vec::new(),
     };
-    match dm {
-        Some((f, sup, source)) => {
-            let cert = certificate::loose_epsilon(
-                balls,
-                mesh.triangles.len(),
-                f.as_ref(),
-                opts.epsilon,
-                source,
-                ml,
-            );
+    let Some((f, sup, source)) = dm else {
+        if r.check("loose-epsilon").is_none() {
             r.push(
                 "loose-epsilon",
-                pass_fail(cert.passed()),
-                format!(
-                    "achieved eps {:.4} (max r/d_M(c), at facet {}){}; {} balls, {} facets \
-                     without ball, d_M: {}",
-                    cert.eps_achieved,
-                    cert.worst_facet.map_or("-".to_string(), |f| f.to_string()),
-                    match cert.requested_eps {
-                        Some(e) =>
-                            format!(", requested {e}: {} facets exceed", cert.exceeding_total),
-                        None => String::new(),
-                    },
-                    cert.balls,
-                    cert.facets_without_ball,
-                    cert.dm_source
-                ),
-            );
-            let hb = certificate::hausdorff_bound(cert.eps_achieved, *sup, hausdorff);
-            r.push(
-                "theorem-4.7",
-                if hb.applicable {
-                    pass_fail(hb.holds)
-                } else {
-                    Status::Info
-                },
-                format!(
-                    "measured Hausdorff {:.3e} vs 4.5 eps^2 d_M^sup = {:.3e} (eps {:.4}, \
-                     d_M^sup {:.4}){}",
-                    hb.hausdorff,
-                    hb.bound,
-                    hb.eps,
-                    hb.dm_sup,
-                    if hb.applicable {
-                        ""
-                    } else {
-                        "; not applicable: eps >= 0.096"
-                    }
-                ),
-            );
-            r.certificate = Some(cert);
-            r.hausdorff_bound = Some(hb);
-        }
-        None => {
-            if r.check("loose-epsilon").is_none() {
-                r.push(
-                    "loose-epsilon",
-                    Status::Skipped,
-                    "no d_M: the surface gives no dm_inf_hint; set Options::dm (command line: --dm poles or --dm VALUE)".into(),
-                );
-            }
-            r.push(
-                "theorem-4.7",
                 Status::Skipped,
-                "needs the certificate's eps and d_M^sup".into(),
+                format!("no d_M: the surface gives no d_M^inf hint; {DM_HINT}"),
             );
         }
+        r.push(
+            "theorem-4.7",
+            Status::Skipped,
+            format!("needs the certificate's eps and d_M^sup; {DM_HINT}"),
+        );
+        return balls;
+    };
+    let cert = certificate::loose_epsilon(
+        &balls,
+        mesh.triangles.len(),
+        f.as_ref(),
+        opts.epsilon,
+        source,
+        opts.max_listed,
+    );
+    let (status, detail) = epsilon_verdict(&cert);
+    r.push("loose-epsilon", status, detail);
+    let hb = certificate::hausdorff_bound(cert.eps_achieved, *sup, hausdorff.unwrap_or(f64::NAN));
+    let figures = format!(
+        "measured Hausdorff {:.3e} vs 4.5 eps^2 d_M^sup = {:.3e} (eps {:.4}, d_M^sup {:.4})",
+        hb.hausdorff, hb.bound, hb.eps, hb.dm_sup
+    );
+    let (status, detail) = if hausdorff.is_none() {
+        (
+            Status::Skipped,
+            format!("{figures}; not measured: the Hausdorff distance has unmeasured samples"),
+        )
+    } else if !cert.passed() {
+        (
+            Status::Info,
+            format!("{figures}; no guarantee: the loose epsilon-sample certificate failed"),
+        )
+    } else if hb.applicable {
+        (pass_fail(hb.holds), figures)
+    } else {
+        (
+            Status::Info,
+            format!(
+                "{figures}; no guarantee at eps = {:.4} (theorem 4.7 needs eps < {})",
+                hb.eps,
+                certificate::EPSILON_1
+            ),
+        )
+    };
+    r.push("theorem-4.7", status, detail);
+    r.certificate = Some(cert);
+    r.hausdorff_bound = Some(hb);
+    balls
+}
+
+/// Where a user gets a d_M from, per command.
+const DM_HINT: &str = "give one (verify: --dm poles or --dm VALUE; mesh: --epsilon E, whose \
+                       second pass is certified with d_M from Voronoi poles; library: \
+                       Options::dm)";
+
+/// The `loose-epsilon` line: FAIL when the certificate fails (a facet over the requested
+/// eps, a facet without ball, d_M undefined), PASS when it holds with eps < epsilon_1 (the
+/// range of theorems 4.4 to 4.7), INFO "no guarantee" when it holds only above.
+fn epsilon_verdict(cert: &certificate::EpsilonCertificate) -> (Status, String) {
+    let figures = format!(
+        "achieved eps {:.4} (max r/d_M(c), at facet {}){}; {} balls, {} facets without ball, \
+         d_M: {}",
+        cert.eps_achieved,
+        cert.worst_facet.map_or("-".to_string(), |f| f.to_string()),
+        match cert.requested_eps {
+            Some(e) => format!(", requested {e}: {} facets exceed", cert.exceeding_total),
+            None => String::new(),
+        },
+        cert.balls,
+        cert.facets_without_ball,
+        cert.dm_source
+    );
+    let e1 = certificate::EPSILON_1;
+    if !cert.passed() {
+        (Status::Fail, figures)
+    } else if cert.eps_achieved < e1 {
+        (
+            Status::Pass,
+            format!("{figures}; a loose eps-sample with eps < {e1}: theorems 4.4 to 4.7 apply"),
+        )
+    } else {
+        (
+            Status::Info,
+            format!(
+                "{figures}; no guarantee at eps = {:.4} (the theorems need eps < {e1})",
+                cert.eps_achieved
+            ),
+        )
     }
 }
 
@@ -270,25 +289,48 @@ fn normals_check(r: &mut Report, mesh: &TriMesh, normals: &NormalDeviation) {
 }
 
 /// Condition 2 of definition 2.2: a mesh point near every seed on S.
+///
+/// The threshold is the mesh's own scale at the seed: twice the radius of the surface
+/// Delaunay ball of the facet nearest to the seed (its circumradius when no ball is known).
+/// Why: by theorem 4.14 the surface Delaunay balls cover S (for eps <= epsilon_0), and a ball
+/// B(c, r) has its facet's vertices on its sphere, so every point of a sampled component is
+/// within 2r of a facet; and a component without vertices is at least 2 d_M^inf from the
+/// others (the midpoint of a closest pair is on the medial axis), which exceeds 2r when
+/// r < d_M^inf (any eps < 1). A fixed multiple of the bounding radius or of the Hausdorff
+/// estimate has no such meaning (a false alarm in the estimate would let a missed component
+/// pass).
 fn components_sampled_check(
     r: &mut Report,
     mesh: &TriMesh,
     bvh: &bvh::TriangleBvh,
     surface: &dyn Surface,
     opts: &Options,
-    hausdorff: f64,
+    balls: &[certificate::SurfaceBall],
 ) {
-    // Condition 2 of definition 2.2.
     let seeds = match &opts.component_seeds {
         Some(s) => s.clone(),
         None => surface.seed_points(opts.seed),
     };
-    let radius = surface.bounding_sphere().radius;
-    let tol = opts
-        .seed_tolerance
-        .unwrap_or((2.0 * hausdorff).max(1e-3 * radius));
+    let mut radius: Vec<f64> = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            certificate::circumcircle(a, b, c).map_or(0.0, |x| x.1)
+        })
+        .collect();
+    for b in balls {
+        if let Some(x) = radius.get_mut(b.facet) {
+            *x = b.radius;
+        }
+    }
+    let slack = 10.0 * surface.tolerance();
+    let tol = |facet: usize| match opts.seed_tolerance {
+        Some(t) => t,
+        None => 2.0 * radius.get(facet).copied().unwrap_or(0.0) + slack,
+    };
     let dist = MeshDistance::new(mesh, bvh);
-    let cov = certificate::component_coverage(&dist, &seeds, tol);
+    let cov = certificate::component_coverage(&dist, &seeds, &tol);
     r.push(
         "components-sampled",
         pass_fail(cov.uncovered == 0 && !seeds.is_empty()),
@@ -296,12 +338,55 @@ fn components_sampled_check(
             "no seed points on S to check against".into()
         } else {
             format!(
-                "{} of {} seed points of S farther than {:.3e} from the mesh",
+                "{} of {} seed points of S farther from the mesh than {} (largest threshold \
+                 {:.3e}, farthest seed {:.3e})",
                 cov.uncovered,
                 seeds.len(),
-                tol
+                match opts.seed_tolerance {
+                    Some(t) => format!("{t:.3e} (given)"),
+                    None => "twice the surface Delaunay ball radius of their nearest facet".into(),
+                },
+                cov.tolerance,
+                cov.seeds.iter().map(|s| s.distance).fold(0.0, f64::max),
             )
         },
     );
     r.components_sampled = Some(cov);
+}
+
+/// The `hausdorff` line: each side's figure, what it is and how it was measured.
+fn hausdorff_detail(g: &distance::Geometry) -> String {
+    let mut s = format!(
+        "two-sided {:.3e} ({:.3e} of the bounding radius); mesh->S max {:.3e} mean {:.3e} \
+         ({} samples, {}",
+        g.hausdorff,
+        g.hausdorff_relative,
+        g.mesh_to_surface.max,
+        g.mesh_to_surface.mean,
+        g.mesh_to_surface.samples,
+        g.mesh_to_surface_method,
+    );
+    if g.projection_failures > 0 {
+        s += &format!(
+            "; NOT MEASURED at {} samples: no point of S found",
+            g.projection_failures
+        );
+    }
+    if g.corrected_projections > 0 {
+        s += &format!(
+            "; {} projections replaced by a nearer point of S found by rays",
+            g.corrected_projections
+        );
+    }
+    if g.bounded_only > 0 {
+        s += &format!(
+            "; {} samples only bounded above (search budget)",
+            g.bounded_only
+        );
+    }
+    s += &format!(
+        "); S->mesh max {:.3e} mean {:.3e} ({})",
+        g.surface_to_mesh.max, g.surface_to_mesh.mean, g.surface_samples_source
+    );
+    s
 }

@@ -160,15 +160,21 @@ fn loose_epsilon_certificate_on_the_sphere() {
     assert!(c.exceeding_total >= exceeding && c.exceeding_total <= not_exceeding);
     assert!(c.exceeding_total > 0);
     assert_eq!(r.status("loose-epsilon"), Some(Status::Fail));
-    // Request more than achieved: PASS.
+    // Request more than achieved: the certificate holds (PASS below epsilon_1, INFO "no
+    // guarantee" above).
     let opts = Options {
         epsilon: Some(max_r * 1.01),
         ..sphere_opts()
     };
     let r = check_against(&m, &UnitSphere, &opts);
+    assert!(r.certificate.as_ref().unwrap().passed());
     assert_eq!(
         r.status("loose-epsilon"),
-        Some(Status::Pass),
+        Some(if max_r < verify::certificate::EPSILON_1 {
+            Status::Pass
+        } else {
+            Status::Info
+        }),
         "{}",
         r.summary()
     );

@@ -344,12 +344,8 @@ fn print_single(spec: &str, opened: &Input<'_>, out: &Outcome, out_path: &Path) 
             t.components.len()
         );
     }
-    if let Some(c) = &out.report {
-        if !c.passed() {
-            outln!("verify: FAIL: {}", c.failures().join(", "));
-        } else {
-            outln!("verify: PASS ({} checks)", c.checks.len());
-        }
+    if let Some(line) = out.verify_line() {
+        outln!("{line}");
     }
     if let Some(s) = &st.stopped_by {
         outln!("stopped by {s}; unmet: {}", unmet(st));
@@ -430,11 +426,9 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
             );
         }
         if c.passed() {
-            outln!(
-                "verify: PASS ({} checks); wrote {}",
-                c.checks.len(),
-                out_path.display()
-            );
+            // `PASS with unmet criteria (...)` when a pass left one unmet.
+            let line = out.verify_line().unwrap_or_default();
+            outln!("{line}; wrote {}", out_path.display());
         } else {
             outln!("verify: FAIL: {}", c.failures().join(", "));
         }

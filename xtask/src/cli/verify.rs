@@ -72,6 +72,12 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
     let report = match &a.against {
         Some(spec) => {
             let opened = input::open(spec, a.bounding_sphere.as_deref(), &a.surface)?;
+            let (samples, source) = reference_samples(spec, &opened, &a.surface).unzip();
+            let opts = verify::Options {
+                surface_samples: samples,
+                surface_samples_source: source,
+                ..opts
+            };
             verify::check_against(&mesh, opened.surface(), &opts)
         }
         None => verify::check(&mesh, &opts),
@@ -90,4 +96,44 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Dense samples of S for the S -> mesh side, when the input gives them: the triangles of an
+/// exact mesh input (S itself, 15 points per triangle), the points of a point set (noisy
+/// samples of S: the figure includes their noise). `None` otherwise (images sample their
+/// level set on the voxel edges themselves).
+fn reference_samples(
+    spec: &str,
+    opened: &rdt_mesher::pipeline::Input<'_>,
+    o: &SurfaceOptions,
+) -> Option<(Vec<glam::DVec3>, String)> {
+    use rdt_mesher::pipeline::InputKind;
+    match opened.kind {
+        InputKind::Polyhedron if !o.smooth_polyhedron => {
+            let m = meshio::read(spec).ok()?;
+            let mut pts = Vec::new();
+            for t in &m.triangles {
+                let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+                verify::distance::triangle_samples(a, b, c, 4, &mut pts);
+            }
+            Some((pts, "samples of the input triangles (S itself)".into()))
+        }
+        InputKind::PointSet => {
+            let pts = if spec.to_ascii_lowercase().ends_with(".xyz") {
+                oracle::pointset::read_xyz(spec).ok()?.points
+            } else {
+                meshio::read_point_cloud(spec)
+                    .map(|c| c.points)
+                    .or_else(|_| meshio::read(spec).map(|m| m.vertices))
+                    .ok()?
+            };
+            Some((
+                pts,
+                "input points (noisy samples of S: the figure includes their noise, not only \
+                 the mesh's error)"
+                    .into(),
+            ))
+        }
+        _ => None,
+    }
 }

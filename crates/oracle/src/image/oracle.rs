@@ -254,6 +254,10 @@ impl Surface for ImageSurface {
     fn dm_inf_hint(&self) -> Option<f64> {
         *self.dm.get_or_init(|| distance::dm_inf_estimate(self))
     }
+
+    fn as_image(&self) -> Option<&ImageSurface> {
+        Some(self)
+    }
 }
 
 impl ImageSurface {

@@ -4,7 +4,7 @@
 //! Invariant: `verdict` is [`Verdict::Pass`] iff the report (when verification ran) passed
 //! and no pass stopped on a budget (single pass: and no criterion is unmet).
 
-use crate::{MeshResult, Stats, SurfaceBall};
+use crate::{MeshResult, Stats, SurfaceBall, Unmet, UnmetFacet};
 use glam::DVec3;
 use meshio::TriMesh;
 use std::fmt;
@@ -160,6 +160,8 @@ pub struct SharpEdges {
     pub deviation: Result<f64, String>,
     /// Diagonal of the bounding box of the edges and the output.
     pub bbox_diagonal: f64,
+    /// The edges, to locate unmet facets near them.
+    pub(crate) edges: Vec<(DVec3, DVec3)>,
 }
 
 impl SharpEdges {
@@ -179,6 +181,7 @@ impl SharpEdges {
             input_edges: edges.len(),
             deviation: dev,
             bbox_diagonal: (diag.1 - diag.0).length(),
+            edges: edges.to_vec(),
         }
     }
 }
@@ -265,8 +268,66 @@ impl Outcome {
         }
     }
 
-    /// Sets the verdict from the report and the stats (the rule of the module's invariant).
+    /// The verification line the CLI prints: `verify: PASS (N checks)`, `verify: PASS with
+    /// unmet criteria (...) (N checks)` when the checks pass but the mesher left a criterion
+    /// unmet or stopped on a budget (never a bare PASS beside an unmet criterion), or
+    /// `verify: FAIL: names`. `None` without verification.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{run, Input, Request, SizeRequest};
+    /// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+    /// let out = run(&input, &Request { size: SizeRequest::Size(0.3), ..Default::default() })
+    ///     .unwrap();
+    /// assert!(out.verify_line().unwrap().starts_with("verify: PASS ("));
+    /// ```
+    pub fn verify_line(&self) -> Option<String> {
+        let r = self.report.as_ref()?;
+        if !r.passed() {
+            return Some(format!("verify: FAIL: {}", r.failures().join(", ")));
+        }
+        let mut unmet = Vec::new();
+        let passes: Vec<&Stats> = match &self.two_pass {
+            Some(tp) => vec![&tp.first.stats, &self.stats],
+            None => vec![&self.stats],
+        };
+        for st in passes {
+            if let Some(s) = &st.stopped_by {
+                unmet.push(format!("stopped by {s}"));
+            }
+            for u in &st.unmet {
+                unmet.push(match u {
+                    Unmet::Size { max_r_over_sigma } => format!(
+                        "size: {}, max r/sigma {max_r_over_sigma:.2}",
+                        count(st, "size")
+                    ),
+                    Unmet::Angle { min_angle_deg, .. } => format!(
+                        "angle: {}, min angle {min_angle_deg:.2} deg",
+                        count(st, "angle")
+                    ),
+                    other => other.to_string(),
+                });
+            }
+        }
+        let where_ = if self.stats.unmet_facets.is_empty() {
+            ""
+        } else {
+            "; where: the report's stats.unmet_facets"
+        };
+        Some(if unmet.is_empty() {
+            format!("verify: PASS ({} checks)", r.checks.len())
+        } else {
+            format!(
+                "verify: PASS with unmet criteria ({}) ({} checks{where_})",
+                unmet.join("; "),
+                r.checks.len()
+            )
+        })
+    }
+
+    /// Sets the verdict from the report and the stats (the rule of the module's invariant),
+    /// and locates the facets that fail the size and angle criteria.
     pub(crate) fn decide(&mut self) {
+        self.locate_unmet();
         let mut failures = Vec::new();
         if let Some(r) = &self.report
             && !r.passed()
@@ -295,6 +356,107 @@ impl Outcome {
             }
         }
         self.verdict = Verdict::from(failures);
+    }
+}
+
+/// The facets of `st` failing `criterion`: "N facets", "N facets (M listed)", or "some
+/// facets" when they were not located (two-pass runs).
+fn count(st: &Stats, criterion: &str) -> String {
+    let listed = st
+        .unmet_facets
+        .iter()
+        .filter(|f| f.criterion == criterion)
+        .count();
+    let both = st
+        .unmet
+        .iter()
+        .filter(|u| matches!(u, Unmet::Size { .. } | Unmet::Angle { .. }))
+        .count()
+        > 1;
+    let total = st.unmet_facets_total;
+    match listed {
+        0 => "some facets".into(),
+        _ if total > listed && both => {
+            format!("{total} facets fail size or angle ({listed} listed for {criterion})")
+        }
+        _ if total > listed => format!("{total} facets ({listed} listed)"),
+        _ => format!("{listed} facets"),
+    }
+}
+
+/// At most this many unmet facets are listed.
+const MAX_LISTED: usize = 20;
+
+impl Outcome {
+    /// Fill `stats.unmet_facets` (constant-size runs): the facets whose ball is larger than
+    /// sigma and those with an angle below the bound, worst first, with the distance of the
+    /// ball's center to the nearest sharp input edge when the input has some, and the
+    /// context of the run (stopped by a budget or not, manifold patch insertions).
+    fn locate_unmet(&mut self) {
+        let Some(sigma) = self.sigma else { return };
+        let st = &self.stats;
+        let size = st.unmet.iter().any(|u| matches!(u, Unmet::Size { .. }));
+        let angle = st.unmet.iter().find_map(|u| match u {
+            Unmet::Angle { bound_deg, .. } => Some(*bound_deg),
+            _ => None,
+        });
+        if !size && angle.is_none() {
+            return;
+        }
+        let mut bad: Vec<(String, usize, f64, f64)> = Vec::new();
+        for (i, (b, t)) in self.balls.iter().zip(&self.mesh.triangles).enumerate() {
+            let rs = b.radius / sigma;
+            if size && rs > 1.0 {
+                bad.push(("size".into(), i, rs, -rs));
+            }
+            if let Some(bound) = angle {
+                let a = crate::criteria::min_angle_deg(t.map(|v| self.mesh.vertices[v as usize]));
+                if a < bound {
+                    bad.push(("angle".into(), i, a, a));
+                }
+            }
+        }
+        bad.sort_by(|x, y| x.3.total_cmp(&y.3).then(x.1.cmp(&y.1)));
+        let context = match (&st.stopped_by, st.manifold_insertions) {
+            (Some(s), _) => format!("the run was stopped by {s}"),
+            (None, 0) => {
+                "the refinement ended with this ball in place (no budget stopped it)".into()
+            }
+            (None, n) => format!(
+                "the refinement ended with this ball in place (no budget stopped it; the \
+                 manifold patch inserted {n} points)"
+            ),
+        };
+        let edges = self.sharp_edges.as_ref().map(|s| s.edges.as_slice());
+        let listed: Vec<UnmetFacet> = bad
+            .iter()
+            .take(MAX_LISTED)
+            .map(|(criterion, i, v, _)| {
+                let c = self.balls[*i].center;
+                let near = edges.filter(|e| !e.is_empty()).map(|e| {
+                    e.iter()
+                        .map(|&(a, b)| (geom::closest::closest_point_segment(c, a, b) - c).length())
+                        .fold(f64::INFINITY, f64::min)
+                });
+                let why = match near {
+                    Some(d) if d <= 2.0 * sigma => format!(
+                        "ball center {d:.3e} from a sharp input edge (within 2 sigma: the \
+                         input is not smooth there, where the theorems do not apply); {context}"
+                    ),
+                    Some(d) => format!("nearest sharp input edge {d:.3e} away; {context}"),
+                    None => context.clone(),
+                };
+                UnmetFacet {
+                    criterion: criterion.clone(),
+                    facet: *i,
+                    center: c.to_array(),
+                    value: *v,
+                    why,
+                }
+            })
+            .collect();
+        self.stats.unmet_facets_total = bad.len();
+        self.stats.unmet_facets = listed;
     }
 }
 
