@@ -9,32 +9,12 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod common;
+use common::{json, root, xtask};
+
 /// A fresh, empty scratch directory for one test (under cargo's per-target tmp dir).
 fn scratch(test: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("xtask-cli")
-        .join(test);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// The repository root (the tests read committed fixtures only).
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
-/// Runs `xtask ARGS` in `dir` (so a default `out/` path would land in the scratch directory).
-fn xtask(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(args)
-        .current_dir(dir)
-        .env("RUST_BACKTRACE", "1")
-        .output()
-        .expect("cannot run the xtask binary")
+    common::scratch_dir("xtask-cli", test)
 }
 
 fn text(b: &[u8]) -> String {
@@ -102,13 +82,6 @@ fn mentions(line: &str, needles: &[&str]) {
             "error line does not mention {n:?}:\n{line}"
         );
     }
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    let s = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("cannot read report {}: {e}", path.display()));
-    serde_json::from_str(&s)
-        .unwrap_or_else(|e| panic!("report {} is not JSON: {e}", path.display()))
 }
 
 /// Mesh `args` into `dir/out.ply` with a report; returns (stdout, report).
