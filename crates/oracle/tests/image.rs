@@ -1,5 +1,7 @@
 //! Tests of the voxel-image oracle (`oracle::image`).
 
+mod common;
+
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use oracle::Surface;
 use oracle::image::{
@@ -748,11 +750,7 @@ fn tanglecube_64_topology_and_seeds() {
         // Within a fraction of a voxel of the analytic surface (|grad f| ≈ 10..30 there).
         let g = {
             let e = 1e-6;
-            DVec3::new(
-                synthetic::tanglecube(p + DVec3::X * e) - synthetic::tanglecube(p - DVec3::X * e),
-                synthetic::tanglecube(p + DVec3::Y * e) - synthetic::tanglecube(p - DVec3::Y * e),
-                synthetic::tanglecube(p + DVec3::Z * e) - synthetic::tanglecube(p - DVec3::Z * e),
-            ) / (2.0 * e)
+            oracle::roots::central_difference(synthetic::tanglecube, p, e)
         };
         let dist = synthetic::tanglecube(p).abs() / g.length();
         assert!(dist < 0.25 * h, "seed {p} is {dist} from the surface");
@@ -765,11 +763,7 @@ fn tanglecube_64_topology_and_seeds() {
 fn results_do_not_depend_on_thread_count() {
     let vol = synthetic::tanglecube_volume(40);
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        common::with_threads(threads, || {
             let s = ImageSurface::new(vol.clone(), &dark(0.0)).unwrap();
             (s.topology().clone(), s.seed_points(3), s.dm_inf_hint())
         })

@@ -1,6 +1,8 @@
 //! Implicit backend: expression parser/compiler, ImplicitSurface checks and oracles, root
 //! finding, catalog.
 
+mod common;
+
 use glam::DVec3;
 use oracle::catalog;
 use oracle::expr::{Expr, ExprErrorKind};
@@ -11,10 +13,7 @@ use proptest::prelude::*;
 use std::cell::Cell;
 
 fn ball(r: f64) -> BoundingSphere {
-    BoundingSphere {
-        center: DVec3::ZERO,
-        radius: r,
-    }
+    BoundingSphere::at_origin(r)
 }
 
 fn ev(src: &str, p: [f64; 3]) -> f64 {
@@ -366,11 +365,7 @@ fn gradient_is_exact() {
             let (v, g) = x.eval_grad(p);
             assert_eq!(v, x.eval(p));
             let h = 1e-6;
-            let fd = DVec3::new(
-                x.eval(p + DVec3::X * h) - x.eval(p - DVec3::X * h),
-                x.eval(p + DVec3::Y * h) - x.eval(p - DVec3::Y * h),
-                x.eval(p + DVec3::Z * h) - x.eval(p - DVec3::Z * h),
-            ) / (2.0 * h);
+            let fd = oracle::roots::central_difference(|q| x.eval(q), p, h);
             let err = (g - fd).length();
             assert!(
                 err <= 1e-5 * (1.0 + g.length()) + 1e-6 * v.abs(),
@@ -718,20 +713,7 @@ fn seeds_find_every_component_and_are_deterministic() {
         }
     }
     // Deterministic: same seed, same points, whatever the thread count.
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let three = rayon::ThreadPoolBuilder::new()
-        .num_threads(3)
-        .build()
-        .unwrap();
-    let s1 = one.install(|| {
-        ImplicitSurface::from_fn(f, ball(2.0))
-            .unwrap()
-            .seed_points(1)
-    });
-    let s3 = three.install(|| {
+    let s3 = common::with_threads(3, || {
         ImplicitSurface::from_fn(f, ball(2.0))
             .unwrap()
             .seed_points(1)
@@ -783,10 +765,7 @@ fn projection_falls_back_to_rays_where_the_value_is_flat() {
     struct NanBeyond;
     impl Surface for NanBeyond {
         fn bounding_sphere(&self) -> BoundingSphere {
-            BoundingSphere {
-                center: DVec3::ZERO,
-                radius: 3.0,
-            }
+            BoundingSphere::at_origin(3.0)
         }
         fn value(&self, p: DVec3) -> f64 {
             if p.x > 1.5 {
@@ -1147,11 +1126,7 @@ fn trefoil_is_a_tube_of_constant_radius() {
         let g = s.gradient(p);
         assert!((g.length() - 1.0).abs() < 1e-9, "|grad| at {p}");
         let e = 1e-6;
-        let fd = DVec3::new(
-            f(p + DVec3::X * e) - f(p - DVec3::X * e),
-            f(p + DVec3::Y * e) - f(p - DVec3::Y * e),
-            f(p + DVec3::Z * e) - f(p - DVec3::Z * e),
-        ) / (2.0 * e);
+        let fd = oracle::roots::central_difference(f, p, e);
         if b.abs() < 0.13 {
             assert!((g - fd).length() < 1e-5, "grad at {p}: {g} vs {fd}");
         }

@@ -1,6 +1,8 @@
 //! Point-set oracle: normal estimation and orientation, IMLS zero set, signs far away, seeds,
 //! local feature size, `.xyz` reading and input errors.
 
+mod common;
+
 use glam::DVec3;
 use meshio::TriMesh;
 use oracle::Surface;
@@ -43,11 +45,7 @@ fn results_do_not_depend_on_thread_count() {
         10,
     ));
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        common::with_threads(threads, || {
             let s = PointSetSurface::new(&pts, None, &PointSetParams::default()).unwrap();
             let mut rng = SplitMix64(4);
             let vals: Vec<u64> = (0..3000)

@@ -96,10 +96,7 @@ fn two_disjoint_spheres_are_both_found() {
             let b = (p + DVec3::X * 1.5).length() - 0.5;
             a.min(b)
         },
-        BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 3.5,
-        },
+        BoundingSphere::at_origin(3.5),
     )
     .unwrap();
     let opts = MeshOptions {

@@ -120,7 +120,7 @@ proptest! {
         sigma0 in 0.001..0.5f64,
     ) {
         let pts: Vec<DVec3> = pts.into_iter().map(|(x, y, z)| DVec3::new(x, y, z)).collect();
-        let bs = oracle::BoundingSphere { center: DVec3::ZERO, radius: 3.0 };
+        let bs = oracle::BoundingSphere::at_origin(3.0);
         // A degenerate (flat) sample may be refused; then nothing to check.
         if let Ok(m) = MedialAxisEstimate::new(&pts, 0.0, bs) {
             let f = adaptive_field(Arc::new(m), eps, sigma0);

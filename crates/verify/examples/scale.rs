@@ -61,10 +61,7 @@ fn main() {
 struct UnitSphere;
 impl oracle::Surface for UnitSphere {
     fn bounding_sphere(&self) -> oracle::BoundingSphere {
-        oracle::BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 2.0,
-        }
+        oracle::BoundingSphere::at_origin(2.0)
     }
     fn value(&self, p: DVec3) -> f64 {
         p.length() - 1.0

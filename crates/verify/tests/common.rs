@@ -102,10 +102,7 @@ pub struct UnitSphere;
 
 impl Surface for UnitSphere {
     fn bounding_sphere(&self) -> BoundingSphere {
-        BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 2.0,
-        }
+        BoundingSphere::at_origin(2.0)
     }
     fn value(&self, p: DVec3) -> f64 {
         p.length() - 1.0
@@ -156,10 +153,7 @@ impl Torus {
 
 impl Surface for Torus {
     fn bounding_sphere(&self) -> BoundingSphere {
-        BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 1.5 * (self.big + self.small),
-        }
+        BoundingSphere::at_origin(1.5 * (self.big + self.small))
     }
     fn value(&self, p: DVec3) -> f64 {
         (p - self.core_point(p)).length() - self.small
