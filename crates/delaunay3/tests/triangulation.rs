@@ -302,14 +302,7 @@ fn exact_sphere_points() {
 
 #[test]
 fn grid_points_all_orders() {
-    let mut pts = Vec::new();
-    for x in 0..6 {
-        for y in 0..6 {
-            for z in 0..6 {
-                pts.push(DVec3::new(x as f64, y as f64, z as f64));
-            }
-        }
-    }
+    let mut pts = grid(6);
     let a = build_checked(&pts);
     let mut rev = pts.clone();
     rev.reverse();
@@ -380,14 +373,7 @@ fn hull_points_on_hull_planes() {
 fn larger_degenerate_inputs() {
     // A shuffled 12^3 grid, then exactly cospherical points around a grid point, then the
     // grid again (all duplicates): valid at the end, order-independent.
-    let mut pts = Vec::new();
-    for x in 0..12 {
-        for y in 0..12 {
-            for z in 0..12 {
-                pts.push(DVec3::new(x as f64, y as f64, z as f64));
-            }
-        }
-    }
+    let mut pts = grid(12);
     let mut r = Rng(5);
     for i in (1..pts.len()).rev() {
         pts.swap(i, (r.next_u64() % (i as u64 + 1)) as usize);

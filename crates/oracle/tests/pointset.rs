@@ -71,20 +71,19 @@ fn noisy_sphere_without_normals() {
     assert!(s.stats().estimated_normals);
     assert_eq!(s.stats().components, 1);
     // Orientation: outward for > 99% of the points.
-    let good = s
-        .normals()
-        .iter()
-        .zip(&pts)
-        .filter(|(n, p)| n.dot(p.normalize()) > 0.0)
-        .count();
+    // The number of estimated normals whose cosine with the true (radial) one exceeds `c`.
+    let cos_above = |c: f64| {
+        let radial = pts.iter().map(|p| p.normalize());
+        s.normals()
+            .iter()
+            .zip(radial)
+            .filter(|(n, r)| n.dot(*r) > c)
+            .count()
+    };
+    let good = cos_above(0.0);
     assert!(good as f64 > 0.99 * pts.len() as f64, "{good} outward");
     // And accurate: within ~25 degrees of the true normal for 95% of the points.
-    let close = s
-        .normals()
-        .iter()
-        .zip(&pts)
-        .filter(|(n, p)| n.dot(p.normalize()) > 0.9)
-        .count();
+    let close = cos_above(0.9);
     assert!(close as f64 > 0.95 * pts.len() as f64, "{close} accurate");
     // Zero set within a few sigma of the unit sphere at many projected points.
     let mut rng = SplitMix64(9);

@@ -6,7 +6,7 @@ use oracle::BoundingSphere;
 use rdt_mesher::{Criteria, MeshOptions, OracleKind, Sizing, mesh, topology};
 
 mod common;
-use common::analytic::{Analytic, sphere, torus};
+use common::analytic::{Analytic, ellipsoid, sphere, torus};
 
 /// Euler characteristic V - E + F of a triangle mesh.
 fn euler(m: &meshio::TriMesh) -> i64 {
@@ -286,15 +286,7 @@ mod props {
         #[test]
         fn random_ellipsoids(ax in 0.4f64..1.2, ay in 0.4f64..1.2, az in 0.4f64..1.2,
                              cx in -0.5f64..0.5, seed in 0u64..1000) {
-            let c = DVec3::new(cx, -cx, 0.3 * cx);
-            let s = Analytic {
-                f: move |p: DVec3| {
-                    let q = p - c;
-                    (q.x / ax).powi(2) + (q.y / ay).powi(2) + (q.z / az).powi(2) - 1.0
-                },
-                center: c,
-                radius: 1.5,
-            };
+            let s = ellipsoid(DVec3::new(ax, ay, az), cx);
             let opts = MeshOptions {
                 criteria: Criteria::uniform(0.12),
                 seed,

@@ -169,6 +169,14 @@ fn two_pass_ellipsoid_is_sparser_and_certified() {
         tp.second.stats.nonmanifold_edges + tp.second.stats.nonmanifold_vertices,
         0
     );
+    let rep = certified_loose_epsilon(&tp, &s, eps);
+    assert_eq!(rep.status("closed"), Some(verify::Status::Pass));
+}
+
+/// The verify report of the second pass of `tp` against `s` (the first pass's vertices as
+/// surface samples, d_M from the poles), asserting that the loose-epsilon check at `eps`
+/// passed.
+fn certified_loose_epsilon(tp: &sizing::TwoPass, s: &dyn Surface, eps: f64) -> verify::Report {
     let balls =
         verify::SurfaceBall::per_facet(tp.second.balls.iter().map(|b| (b.center, b.radius)));
     let vo = verify::Options {
@@ -180,14 +188,10 @@ fn two_pass_ellipsoid_is_sparser_and_certified() {
         surface_samples: Some(tp.first.mesh.vertices.clone()),
         ..Default::default()
     };
-    let rep = verify::check_against(&tp.second.mesh, &s, &vo);
-    assert_eq!(
-        rep.status("loose-epsilon"),
-        Some(verify::Status::Pass),
-        "{}",
-        rep.summary()
-    );
-    assert_eq!(rep.status("closed"), Some(verify::Status::Pass));
+    let rep = verify::check_against(&tp.second.mesh, s, &vo);
+    let loose = rep.status("loose-epsilon");
+    assert_eq!(loose, Some(verify::Status::Pass), "{}", rep.summary());
+    rep
 }
 
 /// The sphere's d_M is constant: both passes are close in size.
@@ -354,24 +358,7 @@ fn two_pass_chair_with_too_large_dm_inf_is_certified() {
         tp.dm_inf_estimate
     );
     assert!(tp.floor < tp.sigma0);
-    let balls =
-        verify::SurfaceBall::per_facet(tp.second.balls.iter().map(|b| (b.center, b.radius)));
-    let vo = verify::Options {
-        self_intersections: false,
-        samples_per_edge: 1,
-        surface_balls: Some(balls),
-        epsilon: Some(eps),
-        dm: verify::DmSource::Poles,
-        surface_samples: Some(tp.first.mesh.vertices.clone()),
-        ..Default::default()
-    };
-    let rep = verify::check_against(&tp.second.mesh, &s, &vo);
-    assert_eq!(
-        rep.status("loose-epsilon"),
-        Some(verify::Status::Pass),
-        "{}",
-        rep.summary()
-    );
+    let rep = certified_loose_epsilon(&tp, &s, eps);
     // Where the size is set by the estimate, some ball is at least 80% of it: the second pass
     // is not needlessly fine.
     let worst = rep.certificate.as_ref().unwrap().eps_achieved;

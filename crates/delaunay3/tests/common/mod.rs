@@ -112,3 +112,16 @@ pub fn bulk_agrees_with_one_by_one(pts: &[DVec3]) -> Triangulation {
     assert_eq!(tets_by_points(&t), tets_by_points(&b));
     t
 }
+
+/// The integer grid `{0..n}^3`, x slowest, z fastest.
+pub fn grid(n: u32) -> Vec<DVec3> {
+    let mut pts = Vec::new();
+    for x in 0..n {
+        for y in 0..n {
+            for z in 0..n {
+                pts.push(DVec3::new(x as f64, y as f64, z as f64));
+            }
+        }
+    }
+    pts
+}

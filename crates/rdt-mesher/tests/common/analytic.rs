@@ -22,6 +22,20 @@ impl<F: Fn(DVec3) -> f64 + Send + Sync> Surface for Analytic<F> {
     }
 }
 
+/// The ellipsoid with semi-axes `axes` centred at `(cx, -cx, 0.3 cx)`, in a ball of radius
+/// 1.5 (the random ellipsoids of the property tests: axes in [0.4, 1.2], |cx| <= 0.5).
+pub fn ellipsoid(axes: DVec3, cx: f64) -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
+    let c = DVec3::new(cx, -cx, 0.3 * cx);
+    Analytic {
+        f: move |p: DVec3| {
+            let q = p - c;
+            (q.x / axes.x).powi(2) + (q.y / axes.y).powi(2) + (q.z / axes.z).powi(2) - 1.0
+        },
+        center: c,
+        radius: 1.5,
+    }
+}
+
 pub fn sphere() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
     Analytic {
         f: |p: DVec3| p.length_squared() - 1.0,
