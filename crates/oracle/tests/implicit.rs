@@ -30,6 +30,18 @@ fn assert_evals(p: [f64; 3], cases: &[(&str, f64)]) {
     }
 }
 
+/// Asserts that `src` fails to parse with an arity error (`expected` arguments, `found` given).
+fn assert_arity(src: &str, expected: usize, found: usize) {
+    let kind = Expr::parse(src).unwrap_err().kind;
+    let arity = match &kind {
+        ExprErrorKind::Arity {
+            expected, found, ..
+        } => Some((*expected, *found)),
+        _ => None,
+    };
+    assert_eq!(arity, Some((expected, found)), "{src}: {kind:?}");
+}
+
 // ---------------------------------------------------------------- parser
 
 #[test]
@@ -161,24 +173,8 @@ fn unknown_names_are_named() {
     assert_eq!(e.kind, ExprErrorKind::UnknownVariable("X".into()));
     let e = Expr::parse("x(2)").unwrap_err();
     assert_eq!(e.kind, ExprErrorKind::NotAFunction("x".into()));
-    let e = Expr::parse("min(x)").unwrap_err();
-    assert!(matches!(
-        e.kind,
-        ExprErrorKind::Arity {
-            expected: 2,
-            found: 1,
-            ..
-        }
-    ));
-    let e = Expr::parse("sin(x, y)").unwrap_err();
-    assert!(matches!(
-        e.kind,
-        ExprErrorKind::Arity {
-            expected: 1,
-            found: 2,
-            ..
-        }
-    ));
+    assert_arity("min(x)", 2, 1);
+    assert_arity("sin(x, y)", 1, 2);
 }
 
 #[test]

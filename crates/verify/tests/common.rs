@@ -7,6 +7,18 @@ use oracle::{BoundingSphere, Surface};
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
+/// Asserts that check `name` of `r` has status `want` (the summary in the message).
+pub fn assert_status(r: &verify::Report, name: &str, want: verify::Status) {
+    assert_eq!(r.status(name), Some(want), "{name}: {}", r.summary());
+}
+
+/// The corners of each triangle of `m`, in order.
+pub fn corners(m: &TriMesh) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+    m.triangles
+        .iter()
+        .map(|t| t.map(|i| m.vertices[i as usize]))
+}
+
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../fixtures/meshes")

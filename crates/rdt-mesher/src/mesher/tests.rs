@@ -180,15 +180,7 @@ fn scaffold_changes_speed_not_the_result() {
 /// Analytic surfaces through `oracle`'s trait only (shared with the integration tests).
 #[path = "../../tests/common/analytic.rs"]
 mod analytic;
-use analytic::{Analytic, ellipsoid, sphere, torus};
-
-fn in_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .unwrap()
-        .install(f)
-}
+use analytic::{Analytic, ellipsoid, in_pool, sphere, torus};
 
 /// Run the refinement on `s`, then check Del(E), the Voronoi cache and Del_S(E) against a
 /// recomputation from scratch.

@@ -1,5 +1,6 @@
-//! Analytic test surfaces defined only through `oracle`'s trait (no backend), shared by the
-//! integration tests and the mesher's unit tests (`src/mesher/tests.rs` includes this file).
+//! Analytic test surfaces defined only through `oracle`'s trait (no backend), and a rayon
+//! pool helper, shared by the integration tests and the mesher's unit tests
+//! (`src/mesher/tests.rs` includes this file).
 
 use glam::DVec3;
 use oracle::{BoundingSphere, Surface};
@@ -53,4 +54,13 @@ pub fn torus() -> Analytic<impl Fn(DVec3) -> f64 + Send + Sync> {
         center: DVec3::ZERO,
         radius: 2.0,
     }
+}
+
+/// Runs `f` on a rayon pool of `n` threads.
+pub fn in_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(f)
 }
