@@ -177,6 +177,36 @@ pub fn projection_axis(a: DVec3, b: DVec3, c: DVec3) -> Option<(usize, Sign)> {
         })
 }
 
+/// What is wrong with a point given to the exact predicates (see [`first_bad_point`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BadPoint {
+    /// A coordinate is NaN or infinite (the coordinates, in order).
+    NonFinite([f64; 3]),
+    /// This coordinate's magnitude is above the bound.
+    TooLarge(f64),
+}
+
+/// The first point (index and reason) with a non-finite coordinate or one of magnitude above
+/// `max_abs`: the oracles check their input with it so that the exact predicates' products
+/// stay in range.
+///
+/// ```
+/// use geom::predicates::{BadPoint, first_bad_point};
+/// use glam::DVec3;
+/// let pts = [DVec3::ZERO, DVec3::new(0.0, 2e60, 0.0), DVec3::splat(f64::NAN)];
+/// assert_eq!(first_bad_point(&pts, 1e60), Some((1, BadPoint::TooLarge(2e60))));
+/// assert_eq!(first_bad_point(&pts[..1], 1e60), None);
+/// ```
+pub fn first_bad_point(points: &[DVec3], max_abs: f64) -> Option<(usize, BadPoint)> {
+    points.iter().enumerate().find_map(|(i, p)| {
+        if !p.is_finite() {
+            return Some((i, BadPoint::NonFinite(p.to_array())));
+        }
+        let big = p.to_array().into_iter().find(|c| c.abs() > max_abs);
+        big.map(|c| (i, BadPoint::TooLarge(c)))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
