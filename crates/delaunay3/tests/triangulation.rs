@@ -302,7 +302,7 @@ fn exact_sphere_points() {
 
 #[test]
 fn grid_points_all_orders() {
-    let mut pts = grid(6);
+    let pts = grid(6);
     let a = build_checked(&pts);
     let mut rev = pts.clone();
     rev.reverse();

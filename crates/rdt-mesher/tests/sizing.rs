@@ -204,7 +204,7 @@ fn certified_loose_epsilon(tp: &sizing::TwoPass, s: &dyn Surface, eps: f64) -> v
 /// The sphere's d_M is constant: both passes are close in size.
 #[test]
 fn two_pass_sphere_sizes_are_close() {
-    let (s, tp) = two_pass_of("sphere", 0.15, 1.0);
+    let (_, tp) = two_pass_of("sphere", 0.15, 1.0);
     let (n1, n2) = (
         tp.first.stats.vertices as f64,
         tp.second.stats.vertices as f64,

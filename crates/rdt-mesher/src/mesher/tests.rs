@@ -180,7 +180,7 @@ fn scaffold_changes_speed_not_the_result() {
 /// Analytic surfaces through `oracle`'s trait only (shared with the integration tests).
 #[path = "../../tests/common/analytic.rs"]
 mod analytic;
-use analytic::{Analytic, ellipsoid, in_pool, sphere, torus};
+use analytic::{ellipsoid, in_pool, sphere, torus};
 
 /// Run the refinement on `s`, then check Del(E), the Voronoi cache and Del_S(E) against a
 /// recomputation from scratch.
