@@ -42,10 +42,13 @@ type PaperPass = (f64, f64, f64, f64, f64, f64, u64);
 /// Paper's figures: first (time, size); intersection and bipolar second pass.
 type PaperRow = (Option<(f64, u64)>, [PaperPass; 2]);
 
-/// The paper's Table 1, one surface a row: name, first pass (time, size) where given, the
-/// intersection then the bipolar second pass.
+/// One row of [`PAPER`]: name, first pass (time, size) where given, the intersection then the
+/// bipolar second pass.
+type PaperEntry = (&'static str, Option<(f64, u64)>, PaperPass, PaperPass);
+
+/// The paper's Table 1, one surface a row.
 #[rustfmt::skip]
-const PAPER: &[(&str, Option<(f64, u64)>, PaperPass, PaperPass)] = &[
+const PAPER: &[PaperEntry] = &[
     ("sphere", Some((0.29, 1146)), (0.032, 14.6, 8929.0, 0.19, 85.4, 0.22, 445), (0.033, 87.5, 3226.0, 0.005, 12.5, 0.038, 445)),
     ("ellipsoid", Some((0.59, 1864)), (0.1, 6.3, 7410.0, 1.48, 93.7, 1.58, 380), (0.11, 91.7, 8170.0, 0.01, 8.3, 0.12, 380)),
     ("torus", Some((1.21, 2234)), (0.05, 0.2, 58e3, 26.83, 99.8, 26.88, 1268), (0.055, 88.7, 63e3, 0.07, 11.3, 0.62, 1307)),
