@@ -82,15 +82,12 @@ static void parse3(const std::string& opt, const std::string& v, double out[3]) 
 }
 
 int main(int argc, char** argv) {
-  bench::Args args(argc, argv, {"--manifold"});
-  if (args.has("--help")) {
-    std::fprintf(stderr,
-                 "usage: cgal_image_mesher --tanglecube-grid N [--write-inr F.inr] | --input "
-                 "vol.inr --center X,Y,Z --sphere-radius B [--origin X,Y,Z] [--inside "
-                 "below|above]\n  [--iso 0] [--angle 30] --radius R --distance D [--manifold] "
-                 "[--error-bound 1e-3] [--seed 0] [--output F.off]\n");
-    return 0;
-  }
+  bench::Args args = bench::mesher_args(
+      argc, argv,
+      "usage: cgal_image_mesher --tanglecube-grid N [--write-inr F.inr] | --input vol.inr "
+      "--center X,Y,Z --sphere-radius B [--origin X,Y,Z] [--inside below|above]\n  [--iso 0] "
+      "[--angle 30] --radius R --distance D [--manifold] [--error-bound 1e-3] [--seed 0] "
+      "[--output F.off]");
   std::string path;
   double origin[3] = {0, 0, 0}, center[3] = {0, 0, 0};
   double sphere_r = 0, rel_r = 0;  // CGAL sphere radius; radius the error bound refers to

@@ -29,15 +29,12 @@ typedef FT (*Function)(Point_3);
 typedef CGAL::Implicit_surface_3<GT, Function> Surface_3;
 
 int main(int argc, char** argv) {
-  bench::Args args(argc, argv, {"--manifold"});
-  if (args.has("--help")) {
-    std::fprintf(stderr,
-                 "usage: cgal_surface_mesher --surface NAME [--angle 30] --radius R --distance D "
-                 "[--manifold] [--error-bound 1e-3] [--seed 0] [--initial-points 20] "
-                 "[--output F.off]\nsurfaces: %s\n",
-                 bench::catalog_names().c_str());
-    return 0;
-  }
+  bench::Args args = bench::mesher_args(
+      argc, argv,
+      "usage: cgal_surface_mesher --surface NAME [--angle 30] --radius R --distance D "
+      "[--manifold] [--error-bound 1e-3] [--seed 0] [--initial-points 20] "
+      "[--output F.off]\nsurfaces: " +
+          bench::catalog_names());
   std::string name = args.str("--surface", "");
   const bench::CatalogSurface* surf = bench::find_surface(name);
   if (!surf)

@@ -12,6 +12,8 @@
 #include <CGAL/make_surface_mesh.h>
 
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 
 namespace bench {
@@ -25,6 +27,17 @@ typedef GT::FT FT;
 
 // Evaluations of the surface function (the programs' Surface_3 functions count them).
 inline long long g_evals = 0;
+
+// The command line of a mesher program (the flag --manifold takes no value); with --help,
+// prints `usage` on stderr and exits 0.
+inline Args mesher_args(int argc, char** argv, const std::string& usage) {
+  Args args(argc, argv, {"--manifold"});
+  if (args.has("--help")) {
+    std::fprintf(stderr, "%s\n", usage.c_str());
+    std::exit(0);
+  }
+  return args;
+}
 
 // --angle (default 30) --radius --distance --error-bound (default 1e-3) --seed (default 0)
 // --manifold --output.
