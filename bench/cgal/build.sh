@@ -34,7 +34,8 @@ mkdir -p "$out"
 flags=(-O3 -DNDEBUG -std=c++17 -frounding-math -ffp-contract=off)
 # shellcheck disable=SC2206
 extra=(${CXXFLAGS_EXTRA:-})
-common=("$here/common.hpp" "$here/surfaces.hpp" "$here/mesh_stats.hpp" "$here/build.sh")
+common=("$here/common.hpp" "$here/surfaces.hpp" "$here/mesh_stats.hpp" "$here/surface_run.hpp"
+        "$here/build.sh")
 
 for prog in cgal_delaunay cgal_surface_mesher cgal_image_mesher; do
   src="$here/$prog.cpp"

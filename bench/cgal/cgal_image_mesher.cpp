@@ -24,31 +24,21 @@
 //    "load_seconds":..,"vertices":..,"facets":..,"edges":..,"euler":..,"boundary_edges":..,
 //    "nonmanifold_edges":..,"triangulation_vertices":..,"f_evals":..,"peak_rss_bytes":..,
 //    "cgal_version":..}
-#include "common.hpp"
-#include "mesh_stats.hpp"
+#include "surface_run.hpp"
 #include "surfaces.hpp"
 
-#include <CGAL/Complex_2_in_triangulation_3.h>
 #include <CGAL/Gray_level_image_3.h>
 #include <CGAL/Implicit_surface_3.h>
-#include <CGAL/Random.h>
-#include <CGAL/Surface_mesh_default_criteria_3.h>
-#include <CGAL/Surface_mesh_default_triangulation_3.h>
-#include <CGAL/make_surface_mesh.h>
 
 #include <cstring>
 #include <fstream>
 
-typedef CGAL::Surface_mesh_default_triangulation_3 Tr;
-typedef CGAL::Complex_2_in_triangulation_3<Tr> C2t3;
-typedef Tr::Geom_traits GT;
-typedef GT::Sphere_3 Sphere_3;
-typedef GT::Point_3 Point_3;
-typedef GT::FT FT;
+using bench::FT;
+using bench::GT;
+using bench::Point_3;
+using bench::Sphere_3;
 typedef CGAL::Gray_level_image_3<FT, Point_3> Gray_level_image;
 typedef CGAL::Implicit_surface_3<GT, Gray_level_image> Surface_3;
-
-static long long g_evals = 0;
 
 static void write_tanglecube_inr(const std::string& path, std::size_t n) {
   const double h = 8.0 / static_cast<double>(n - 1);
@@ -92,15 +82,12 @@ static void parse3(const std::string& opt, const std::string& v, double out[3]) 
 }
 
 int main(int argc, char** argv) {
-  bench::Args args(argc, argv, {"--manifold"});
-  if (args.has("--help")) {
-    std::fprintf(stderr,
-                 "usage: cgal_image_mesher --tanglecube-grid N [--write-inr F.inr] | --input "
-                 "vol.inr --center X,Y,Z --sphere-radius B [--origin X,Y,Z] [--inside "
-                 "below|above]\n  [--iso 0] [--angle 30] --radius R --distance D [--manifold] "
-                 "[--error-bound 1e-3] [--seed 0] [--output F.off]\n");
-    return 0;
-  }
+  bench::Args args = bench::mesher_args(
+      argc, argv,
+      "usage: cgal_image_mesher --tanglecube-grid N [--write-inr F.inr] | --input vol.inr "
+      "--center X,Y,Z --sphere-radius B [--origin X,Y,Z] [--inside below|above]\n  [--iso 0] "
+      "[--angle 30] --radius R --distance D [--manifold] [--error-bound 1e-3] [--seed 0] "
+      "[--output F.off]");
   std::string path;
   double origin[3] = {0, 0, 0}, center[3] = {0, 0, 0};
   double sphere_r = 0, rel_r = 0;  // CGAL sphere radius; radius the error bound refers to
@@ -138,20 +125,8 @@ int main(int argc, char** argv) {
     bench::fail("give --tanglecube-grid N or --input vol.inr (see --help)");
   }
   double iso = args.num("--iso", 0.0);
-  double angle = args.num("--angle", 30.0);
-  if (!args.has("--radius") || !args.has("--distance"))
-    bench::fail("--radius R and --distance D are required");
-  double radius = args.num("--radius", 0);
-  double distance = args.num("--distance", 0);
-  double error_bound = args.num("--error-bound", 1e-3);
-  std::uint64_t seed = args.u64("--seed", 0);
-  bool manifold = args.has("--manifold");
-  std::string output = args.str("--output", "");
+  bench::MeshArgs m = bench::mesh_args(args);
   args.reject_unknown();
-  if (!(angle >= 0 && angle <= 30)) bench::fail("--angle must be in 0..30 degrees");
-  if (!(radius > 0)) bench::fail("--radius must be > 0");
-  if (!(distance > 0)) bench::fail("--distance must be > 0");
-  if (!(error_bound > 0 && error_bound < 1)) bench::fail("--error-bound must be in (0, 1)");
 
   {
     std::ifstream probe(path, std::ios::binary);
@@ -173,38 +148,22 @@ int main(int argc, char** argv) {
   const Gray_level_image& img = image;
   Surface_3 surface(
       [&img, ox, oy, oz](Point_3 p) -> FT {
-        ++g_evals;
+        ++bench::g_evals;
         return img(Point_3(p.x() - ox, p.y() - oy, p.z() - oz));
       },
       Sphere_3(Point_3(center[0], center[1], center[2]), sphere_r * sphere_r),  // squared!
-      error_bound * rel_r / sphere_r);
-  CGAL::Surface_mesh_default_criteria_3<Tr> criteria(angle, radius, distance);
-
-  CGAL::get_default_random() = CGAL::Random(static_cast<unsigned int>(seed));
-  Tr tr;
-  C2t3 c2t3(tr);
-  bench::Timer timer;
-  if (manifold)
-    CGAL::make_surface_mesh(c2t3, surface, criteria, CGAL::Manifold_tag());
-  else
-    CGAL::make_surface_mesh(c2t3, surface, criteria, CGAL::Non_manifold_tag());
-  double secs = timer.seconds();
-  long long evals = g_evals;
-
-  bench::MeshStats st = bench::mesh_stats(c2t3);
-  if (!output.empty()) bench::write_off(c2t3, output);
+      m.error_bound * rel_r / sphere_r);
+  // CGAL's default number of initial points (20), as make_surface_mesh without it.
+  bench::MeshRun run = bench::run_mesher(surface, m, 20);
+  long long evals = bench::g_evals;
 
   bench::Json j;
   j.s("tool", "cgal").s("bench", "image").s("input", path);
   j.s("grid", std::to_string(image.xdim()) + "x" + std::to_string(image.ydim()) + "x" +
                   std::to_string(image.zdim()));
   j.d("voxel_size", image.vx()).d("iso", iso);
-  j.d("angle", angle).d("radius", radius).d("distance", distance).b("manifold", manifold);
-  j.d("error_bound", error_bound).i("seed", static_cast<long long>(seed));
-  j.d("seconds", secs).d("load_seconds", load_secs);
-  bench::add_stats(j, st);
-  j.i("f_evals", evals).i("peak_rss_bytes", bench::peak_rss_bytes());
-  j.s("cgal_version", bench::cgal_version());
-  j.print();
+  bench::add_mesh_args(j, m);
+  j.d("seconds", run.seconds).d("load_seconds", load_secs);
+  bench::finish_json(j, run.stats, evals);
   return 0;
 }

@@ -9,32 +9,42 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod common;
+use common::{json, root, xtask};
+
 /// A fresh, empty scratch directory for one test (under cargo's per-target tmp dir).
 fn scratch(test: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("xtask-cli")
-        .join(test);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch_dir("xtask-cli", test)
 }
 
-/// The repository root (the tests read committed fixtures only).
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
+/// Runs `xtask` with the space-separated words of `line` (no quoting: arguments that hold
+/// spaces go through [`xtask`]).
+fn xtask_line(dir: &Path, line: &str) -> Output {
+    xtask(dir, &line.split_whitespace().collect::<Vec<_>>())
 }
 
-/// Runs `xtask ARGS` in `dir` (so a default `out/` path would land in the scratch directory).
-fn xtask(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(args)
-        .current_dir(dir)
-        .env("RUST_BACKTRACE", "1")
-        .output()
-        .expect("cannot run the xtask binary")
+/// The header of an ASCII PLY file with 3 vertices and 1 face.
+const PLY_TRIANGLE_HEADER: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+    property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+    end_header\n";
+
+/// Writes the file `dir/name`.
+fn put(dir: &Path, name: &str, contents: impl AsRef<[u8]>) {
+    std::fs::write(dir.join(name), contents).unwrap();
+}
+
+/// Asserts that nothing was written at `path` (`why`: the failure message).
+fn assert_absent(path: &Path, why: &str) {
+    assert!(!path.exists(), "{why}: {}", path.display());
+}
+
+/// Meshes the catalog sphere at size 0.2 into `dir/s.ply`; returns the file's bytes.
+fn sphere_ply(dir: &Path) -> Vec<u8> {
+    ok(&xtask_line(
+        dir,
+        "mesh -q implicit:sphere --size 0.2 --no-verify -o s.ply",
+    ));
+    std::fs::read(dir.join("s.ply")).unwrap()
 }
 
 fn text(b: &[u8]) -> String {
@@ -102,13 +112,6 @@ fn mentions(line: &str, needles: &[&str]) {
             "error line does not mention {n:?}:\n{line}"
         );
     }
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    let s = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("cannot read report {}: {e}", path.display()));
-    serde_json::from_str(&s)
-        .unwrap_or_else(|e| panic!("report {} is not JSON: {e}", path.display()))
 }
 
 /// Mesh `args` into `dir/out.ply` with a report; returns (stdout, report).
@@ -282,7 +285,7 @@ fn mesh_raw_volume() {
             }
         }
     }
-    std::fs::write(d.join("ball.raw"), &vox).unwrap();
+    put(&d, "ball.raw", &vox);
     let (stdout, report) = mesh_ok(
         &d,
         &[
@@ -315,23 +318,13 @@ fn mesh_raw_volume() {
     }
     // Missing --dtype: named.
     let e = failure(
-        &xtask(
-            &d,
-            &[
-                "mesh", "-q", "ball.raw", "--dims", "20,20,20", "-o", "x.ply",
-            ],
-        ),
+        &xtask_line(&d, "mesh -q ball.raw --dims 20,20,20 -o x.ply"),
         true,
     );
     mentions(&e, &["--dtype"]);
     // Wrong dims: the byte counts are named.
     let e = failure(
-        &xtask(
-            &d,
-            &[
-                "mesh", "-q", "ball.raw", "--dims", "20,20,21", "--dtype", "u8", "-o", "x.ply",
-            ],
-        ),
+        &xtask_line(&d, "mesh -q ball.raw --dims 20,20,21 --dtype u8 -o x.ply"),
         true,
     );
     mentions(&e, &["ball.raw", "8400", "8000"]);
@@ -340,30 +333,11 @@ fn mesh_raw_volume() {
 #[test]
 fn verify_command_on_a_good_mesh_and_on_its_report() {
     let d = scratch("verify_good");
-    ok(&xtask(
+    ok(&xtask_line(
         &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0.2",
-            "--no-verify",
-            "-o",
-            "s.ply",
-        ],
+        "mesh -q implicit:sphere --size 0.2 --no-verify -o s.ply",
     ));
-    let out = xtask(
-        &d,
-        &[
-            "verify",
-            "s.ply",
-            "--against",
-            "implicit:sphere",
-            "--report",
-            "v.json",
-        ],
-    );
+    let out = xtask_line(&d, "verify s.ply --against implicit:sphere --report v.json");
     let s = ok(&out);
     assert!(s.contains("PASS closed"), "{s}");
     assert!(s.contains("verdict: PASS"), "{s}");
@@ -425,7 +399,7 @@ fn verify_dm_source_for_expressions() {
         let e = failure(&run(&["--dm", bad]), false);
         mentions(&e, &["--dm", bad]);
     }
-    let e = failure(&xtask(&d, &["verify", "e.ply", "--dm", "poles"]), false);
+    let e = failure(&xtask_line(&d, "verify e.ply --dm poles"), false);
     mentions(&e, &["--dm", "--against"]);
 }
 
@@ -457,18 +431,7 @@ fn threads_option_keeps_the_mesh() {
     let three = std::fs::read(d.join("three.ply")).unwrap();
     assert!(one.len() > 1000);
     assert_eq!(one, three, "the mesh depends on the thread count");
-    let out = xtask(
-        &d,
-        &[
-            "--threads",
-            "0",
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0.3",
-        ],
-    );
+    let out = xtask_line(&d, "--threads 0 mesh -q implicit:sphere --size 0.3");
     assert_eq!(out.status.code(), Some(2));
     mentions(&text(&out.stderr), &["--threads 0"]);
 }
@@ -477,11 +440,11 @@ fn threads_option_keeps_the_mesh() {
 fn verify_mesh_with_boundary_fails() {
     let d = scratch("verify_boundary");
     // A tetrahedron without its bottom face: three boundary edges.
-    std::fs::write(
-        d.join("open.off"),
+    put(
+        &d,
+        "open.off",
         "OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n",
-    )
-    .unwrap();
+    );
     let out = xtask(&d, &["verify", "open.off"]);
     let e = failure(&out, true);
     mentions(&e, &["open.off", "FAIL", "closed"]);
@@ -492,11 +455,11 @@ fn verify_mesh_with_boundary_fails() {
     );
     assert!(s.contains("verdict: FAIL"), "{s}");
     // The closed tetrahedron passes.
-    std::fs::write(
-        d.join("tet.off"),
+    put(
+        &d,
+        "tet.off",
         "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n",
-    )
-    .unwrap();
+    );
     ok(&xtask(&d, &["verify", "tet.off"]));
 }
 
@@ -509,19 +472,8 @@ fn expression_that_does_not_parse_names_the_column() {
         ("x^2+y^2+w^2-1", "column 9", "'w'"),
         ("(x^2+y^2+z^2-1", "column", "')'"),
     ] {
-        let spec = format!("implicit:{expr}");
-        let out = xtask(
-            &d,
-            &[
-                "mesh",
-                "-q",
-                &spec,
-                "--bounding-sphere",
-                "0,0,0,2",
-                "-o",
-                "x.ply",
-            ],
-        );
+        let line = format!("mesh -q implicit:{expr} --bounding-sphere 0,0,0,2 -o x.ply");
+        let out = xtask_line(&d, &line);
         let e = failure(&out, false);
         mentions(&e, &[col, what, expr]);
     }
@@ -530,15 +482,9 @@ fn expression_that_does_not_parse_names_the_column() {
 #[test]
 fn expression_parse_error_is_one_line() {
     let d = scratch("bad_expr_one_line");
-    let out = xtask(
+    let out = xtask_line(
         &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:x^2+y^2+*z^2-1",
-            "--bounding-sphere",
-            "0,0,0,2",
-        ],
+        "mesh -q implicit:x^2+y^2+*z^2-1 --bounding-sphere 0,0,0,2",
     );
     let e = failure(&out, true);
     assert!(!e.contains("catalog surface"), "{e}");
@@ -547,48 +493,24 @@ fn expression_parse_error_is_one_line() {
 #[test]
 fn unknown_catalog_name_lists_the_names() {
     let d = scratch("bad_name");
-    let e = failure(
-        &xtask(&d, &["mesh", "-q", "implicit:sphree", "-o", "x.ply"]),
-        true,
-    );
+    let e = failure(&xtask_line(&d, "mesh -q implicit:sphree -o x.ply"), true);
     mentions(&e, &["sphree", "sphere", "torus", "--bounding-sphere"]);
 }
 
 #[test]
 fn bounding_sphere_crossed_by_the_surface() {
     let d = scratch("bad_bounding_sphere");
+    let mesh_in = |bs: &str| {
+        let line = format!("mesh -q implicit:x^2+y^2+z^2-1 --bounding-sphere {bs} -o x.ply");
+        failure(&xtask_line(&d, &line), true)
+    };
     for r in ["0.5", "1"] {
-        let bs = format!("0,0,0,{r}");
-        let out = xtask(
-            &d,
-            &[
-                "mesh",
-                "-q",
-                "implicit:x^2+y^2+z^2-1",
-                "--bounding-sphere",
-                &bs,
-                "-o",
-                "x.ply",
-            ],
-        );
-        let e = failure(&out, true);
+        let e = mesh_in(&format!("0,0,0,{r}"));
         mentions(&e, &["bounding sphere", &format!("radius {r}"), "enlarge"]);
     }
     // Malformed spheres.
     for (bs, needle) in [("0,0,0", "4 numbers"), ("0,0,a,1", "'a'")] {
-        let out = xtask(
-            &d,
-            &[
-                "mesh",
-                "-q",
-                "implicit:x^2+y^2+z^2-1",
-                "--bounding-sphere",
-                bs,
-                "-o",
-                "x.ply",
-            ],
-        );
-        mentions(&failure(&out, true), &["--bounding-sphere", needle]);
+        mentions(&mesh_in(bs), &["--bounding-sphere", needle]);
     }
 }
 
@@ -597,25 +519,11 @@ fn function_returning_nan_inside_the_ball() {
     let d = scratch("nan");
     // sqrt(x) is NaN for x < 0, i.e. in half of the ball.
     for expr in ["sqrt(x)+y^2+z^2-1", "ln(x)+y^2+z^2-1"] {
-        let spec = format!("implicit:{expr}");
-        let out = xtask(
-            &d,
-            &[
-                "mesh",
-                "-q",
-                &spec,
-                "--bounding-sphere",
-                "0,0,0,2",
-                "-o",
-                "x.ply",
-            ],
-        );
+        let line = format!("mesh -q implicit:{expr} --bounding-sphere 0,0,0,2 -o x.ply");
+        let out = xtask_line(&d, &line);
         mentions(&failure(&out, true), &["NaN", "fix the function"]);
     }
-    assert!(
-        !d.join("x.ply").exists(),
-        "a mesh was written for a NaN surface"
-    );
+    assert_absent(&d.join("x.ply"), "a mesh was written for a NaN surface");
 }
 
 #[test]
@@ -633,48 +541,23 @@ fn size_must_be_positive() {
             &["--epsilon", "epsilon must be in (0, 1)"],
         );
     }
-    let out = xtask(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0",
-            "-o",
-            "x.ply",
-        ],
-    );
+    let out = xtask_line(&d, "mesh -q implicit:sphere --size 0 -o x.ply");
     mentions(&failure(&out, true), &["--size 0", "positive"]);
-    let out = xtask(&d, &["mesh", "-q", "implicit:sphere", "--size", "abc"]);
+    let out = xtask_line(&d, "mesh -q implicit:sphere --size abc");
     mentions(&failure(&out, false), &["abc"]);
 }
 
 #[test]
 fn negative_size_with_a_space() {
     let d = scratch("bad_size_space");
-    let out = xtask(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "-1",
-            "-o",
-            "x.ply",
-        ],
-    );
+    let out = xtask_line(&d, "mesh -q implicit:sphere --size -1 -o x.ply");
     mentions(&failure(&out, true), &["--size -1", "positive"]);
 }
 
 #[test]
 fn missing_input_file() {
     let d = scratch("missing");
-    let e = failure(
-        &xtask(&d, &["mesh", "-q", "no_such_file.ply", "-o", "x.ply"]),
-        true,
-    );
+    let e = failure(&xtask_line(&d, "mesh -q no_such_file.ply -o x.ply"), true);
     mentions(&e, &["no_such_file.ply"]);
     let e = failure(&xtask(&d, &["verify", "no_such_file.off"]), true);
     mentions(&e, &["no_such_file.off"]);
@@ -683,42 +566,26 @@ fn missing_input_file() {
 #[test]
 fn files_that_are_not_meshes() {
     let d = scratch("not_mesh");
-    std::fs::write(d.join("a.ply"), "hello, I am not a mesh\n").unwrap();
-    std::fs::write(d.join("b.off"), "hello\n").unwrap();
-    std::fs::write(d.join("c.obj"), "garbage line\n").unwrap();
+    put(&d, "a.ply", "hello, I am not a mesh\n");
+    put(&d, "b.off", "hello\n");
+    put(&d, "c.obj", "garbage line\n");
     std::fs::write(d.join("d.stl"), [7u8; 100]).unwrap();
-    std::fs::write(d.join("e.txt"), "hello\n").unwrap();
+    put(&d, "e.txt", "hello\n");
     for f in ["a.ply", "b.off", "c.obj", "d.stl", "e.txt"] {
         for cmd in ["mesh", "verify"] {
             let out = xtask(&d, &[cmd, f]);
             mentions(&failure(&out, true), &[f]);
         }
     }
-    assert!(
-        !d.join("out").exists(),
-        "an output was written for a bad input"
-    );
+    assert_absent(&d.join("out"), "an output was written for a bad input");
 }
 
 #[test]
 fn truncated_binary_ply() {
     let d = scratch("truncated");
-    ok(&xtask(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0.2",
-            "--no-verify",
-            "-o",
-            "s.ply",
-        ],
-    ));
-    let bytes = std::fs::read(d.join("s.ply")).unwrap();
+    let bytes = sphere_ply(&d);
     assert!(bytes.starts_with(b"ply\nformat binary_little_endian"));
-    std::fs::write(d.join("cut.ply"), &bytes[..bytes.len() / 2]).unwrap();
+    put(&d, "cut.ply", &bytes[..bytes.len() / 2]);
     for cmd in ["mesh", "verify"] {
         let e = failure(&xtask(&d, &[cmd, "cut.ply"]), false);
         mentions(&e, &["cut.ply", "truncated"]);
@@ -728,40 +595,25 @@ fn truncated_binary_ply() {
 #[test]
 fn truncated_binary_ply_is_one_line() {
     let d = scratch("truncated_one_line");
-    ok(&xtask(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--size",
-            "0.2",
-            "--no-verify",
-            "-o",
-            "s.ply",
-        ],
-    ));
-    let bytes = std::fs::read(d.join("s.ply")).unwrap();
-    std::fs::write(d.join("cut.ply"), &bytes[..bytes.len() / 2]).unwrap();
+    let bytes = sphere_ply(&d);
+    put(&d, "cut.ply", &bytes[..bytes.len() / 2]);
     failure(&xtask(&d, &["verify", "cut.ply"]), true);
 }
 
 #[test]
 fn faces_indexing_missing_vertices() {
     let d = scratch("bad_index");
-    std::fs::write(
-        d.join("a.off"),
+    put(
+        &d,
+        "a.off",
         "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2 7\n",
-    )
-    .unwrap();
-    std::fs::write(
-        d.join("b.ply"),
-        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
-         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
-         0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n",
-    )
-    .unwrap();
-    std::fs::write(d.join("c.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap();
+    );
+    put(
+        &d,
+        "b.ply",
+        format!("{PLY_TRIANGLE_HEADER}0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"),
+    );
+    put(&d, "c.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
     for (f, idx, n) in [
         ("a.off", "7", "4"),
         ("b.ply", "5", "3"),
@@ -794,18 +646,10 @@ fn image_needs_an_iso_value() {
 #[test]
 fn initial_points_bad_line() {
     let d = scratch("initial_points");
-    std::fs::write(d.join("e0.xyz"), "1 0 0\n0 1 zz\n").unwrap();
-    let out = xtask(
+    put(&d, "e0.xyz", "1 0 0\n0 1 zz\n");
+    let out = xtask_line(
         &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "--initial-points",
-            "e0.xyz",
-            "-o",
-            "x.ply",
-        ],
+        "mesh -q implicit:sphere --initial-points e0.xyz -o x.ply",
     );
     mentions(&failure(&out, true), &["e0.xyz:2"]);
 }
@@ -813,16 +657,8 @@ fn initial_points_bad_line() {
 #[test]
 fn delaunay_random_sphere_is_valid() {
     let d = scratch("delaunay_random");
-    let args = [
-        "delaunay",
-        "--random",
-        "1000",
-        "--seed",
-        "1",
-        "--distribution",
-        "sphere",
-    ];
-    let s = ok(&xtask(&d, &args));
+    let line = "delaunay --random 1000 --seed 1 --distribution sphere";
+    let s = ok(&xtask_line(&d, line));
     let v: serde_json::Value = serde_json::from_str(s.trim()).expect("one JSON object");
     assert_eq!(v["valid"], true);
     assert_eq!(v["points"], 1000);
@@ -832,7 +668,7 @@ fn delaunay_random_sphere_is_valid() {
     // finite cells is at least V - 3.
     assert!(v["finite_cells"].as_u64().unwrap() >= 997, "{v}");
     // Same seed, same triangulation.
-    let s2 = ok(&xtask(&d, &args));
+    let s2 = ok(&xtask_line(&d, line));
     let v2: serde_json::Value = serde_json::from_str(s2.trim()).unwrap();
     assert_eq!(v["finite_cells"], v2["finite_cells"]);
 }
@@ -840,15 +676,12 @@ fn delaunay_random_sphere_is_valid() {
 #[test]
 fn delaunay_point_file() {
     let d = scratch("delaunay_file");
-    std::fs::write(
-        d.join("p.xyz"),
-        "# a tetrahedron and one point beyond a face\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n\n1 1 1\n",
-    )
-    .unwrap();
-    let s = ok(&xtask(
+    put(
         &d,
-        &["delaunay", "--input", "p.xyz", "--output", "t.txt"],
-    ));
+        "p.xyz",
+        "# a tetrahedron and one point beyond a face\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n\n1 1 1\n",
+    );
+    let s = ok(&xtask_line(&d, "delaunay --input p.xyz --output t.txt"));
     let v: serde_json::Value = serde_json::from_str(s.trim()).unwrap();
     assert_eq!(v["valid"], true);
     assert_eq!(v["points"], 5);
@@ -875,14 +708,11 @@ fn delaunay_bad_line_names_file_and_line() {
         ("0 0 0\n\n# c\n0 1\n", "p.xyz:4"),
         ("0 0 0\n1 0 nan\n", "p.xyz:2"),
     ] {
-        std::fs::write(d.join("p.xyz"), content).unwrap();
-        let out = xtask(&d, &["delaunay", "--input", "p.xyz", "--output", "t.txt"]);
+        put(&d, "p.xyz", content);
+        let out = xtask_line(&d, "delaunay --input p.xyz --output t.txt");
         mentions(&failure(&out, true), &[needle]);
     }
-    let out = xtask(
-        &d,
-        &["delaunay", "--input", "nope.xyz", "--output", "t.txt"],
-    );
+    let out = xtask_line(&d, "delaunay --input nope.xyz --output t.txt");
     mentions(&failure(&out, true), &["nope.xyz"]);
     let out = xtask(&d, &["delaunay"]);
     mentions(&failure(&out, true), &["--random"]);
@@ -900,7 +730,7 @@ fn mesh_point_set_xyz() {
         let t = i as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
         s.push_str(&format!("{} {} {}\n", r * t.cos(), r * t.sin(), z));
     }
-    std::fs::write(d.join("sph.xyz"), s).unwrap();
+    put(&d, "sph.xyz", s);
     let (stdout, report) = mesh_ok(&d, &["sph.xyz", "--size", "0.15"]);
     assert!(
         stdout.contains("closed manifold") && stdout.contains("genus [0]"),
@@ -918,8 +748,8 @@ fn mesh_point_set_xyz() {
         );
     }
     // A bad line is named with file:line.
-    std::fs::write(d.join("bad.xyz"), "1 2 3\n4 5\n").unwrap();
-    let e = failure(&xtask(&d, &["mesh", "-q", "bad.xyz", "-o", "x.ply"]), true);
+    put(&d, "bad.xyz", "1 2 3\n4 5\n");
+    let e = failure(&xtask_line(&d, "mesh -q bad.xyz -o x.ply"), true);
     mentions(&e, &["bad.xyz:2"]);
 }
 
@@ -955,40 +785,18 @@ fn mesh_cube_terminates_with_a_closed_manifold() {
 #[test]
 fn strict_exit_status_follows_the_verdict() {
     let dir = scratch("strict");
-    let args = [
-        "mesh",
-        "implicit:sphere",
-        "--size",
-        "0.05",
-        "--max-vertices",
-        "50",
-        "-o",
-        "s.ply",
-        "--report",
-        "s.json",
-        "--quiet",
-    ];
-    let lenient = xtask(&dir, &args);
+    let line =
+        "mesh implicit:sphere --size 0.05 --max-vertices 50 -o s.ply --report s.json --quiet";
+    let lenient = xtask_line(&dir, line);
     assert!(ok(&lenient).contains("stopped by max_vertices"));
-    let mut strict_args = args.to_vec();
-    strict_args.push("--strict");
-    let strict = xtask(&dir, &strict_args);
+    let strict = xtask_line(&dir, &format!("{line} --strict"));
     assert_no_panic(&strict);
     assert_eq!(strict.status.code(), Some(3), "{}", text(&strict.stderr));
     assert!(text(&strict.stderr).contains("--strict"));
     assert!(dir.join("s.ply").exists() && dir.join("s.json").exists());
-    let good = xtask(
+    let good = xtask_line(
         &dir,
-        &[
-            "mesh",
-            "implicit:sphere",
-            "--size",
-            "0.2",
-            "-o",
-            "g.ply",
-            "--quiet",
-            "--strict",
-        ],
+        "mesh implicit:sphere --size 0.2 -o g.ply --quiet --strict",
     );
     assert!(ok(&good).contains("verify: PASS"));
 }
@@ -1018,10 +826,7 @@ fn bad_time_limits_and_thread_counts_are_usage_errors() {
             mentions(&text(&out.stderr), &["--time-limit", "seconds"]);
         }
     }
-    let out = xtask(
-        &d,
-        &["--threads", "100000", "mesh", "-q", "implicit:sphere"],
-    );
+    let out = xtask_line(&d, "--threads 100000 mesh -q implicit:sphere");
     assert_eq!(out.status.code(), Some(2));
     mentions(&text(&out.stderr), &["--threads 100000", "at most 256"]);
 }
@@ -1035,7 +840,7 @@ fn outputs_are_atomic_and_never_overwrite_the_input() {
     let input = d.join("cube.off");
     std::fs::copy(root().join("fixtures/meshes/cube.off"), &input).unwrap();
     let before = std::fs::read(&input).unwrap();
-    let out = xtask(&d, &["mesh", "-q", "cube.off", "-o", "./cube.off"]);
+    let out = xtask_line(&d, "mesh -q cube.off -o ./cube.off");
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
     mentions(
         &text(&out.stderr),
@@ -1046,18 +851,7 @@ fn outputs_are_atomic_and_never_overwrite_the_input() {
         before,
         "the input was changed"
     );
-    let out = xtask(
-        &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:sphere",
-            "-o",
-            "m.ply",
-            "--report",
-            "m.ply",
-        ],
-    );
+    let out = xtask_line(&d, "mesh -q implicit:sphere -o m.ply --report m.ply");
     assert_eq!(out.status.code(), Some(1));
     mentions(&text(&out.stderr), &["-o and --report both name m.ply"]);
     assert!(!d.join("m.ply").exists());
@@ -1065,18 +859,9 @@ fn outputs_are_atomic_and_never_overwrite_the_input() {
     // A good previous output; then runs killed the moment their temporary file appears,
     // i.e. while the new mesh is being written: the final path still holds the previous
     // mesh. Up to five tries (a fast write can be missed by the polling); one catch is needed.
-    ok(&xtask(
+    ok(&xtask_line(
         &d,
-        &[
-            "mesh",
-            "-q",
-            "implicit:torus",
-            "--size",
-            "0.1",
-            "--no-verify",
-            "-o",
-            "t.ply",
-        ],
+        "mesh -q implicit:torus --size 0.1 --no-verify -o t.ply",
     ));
     let good = std::fs::read(d.join("t.ply")).unwrap();
     let is_tmp = |n: &str| n.starts_with(".t.ply.") && n.ends_with(".tmp.ply");
@@ -1122,7 +907,7 @@ fn outputs_are_atomic_and_never_overwrite_the_input() {
             // The run finished first: the new mesh is complete.
             let m = meshio::read(d.join("t.ply")).expect("a complete mesh");
             assert!(m.triangles.len() > 10_000);
-            std::fs::write(d.join("t.ply"), &good).unwrap();
+            put(&d, "t.ply", &good);
         }
         for e in std::fs::read_dir(&d).unwrap() {
             let n = e.unwrap().file_name().to_string_lossy().into_owned();
@@ -1142,21 +927,19 @@ fn outputs_are_atomic_and_never_overwrite_the_input() {
 #[test]
 fn an_empty_result_is_an_error() {
     let d = scratch("empty-result");
-    std::fs::write(
-        d.join("tri.ply"),
-        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
-         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
-         0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
-    )
-    .unwrap();
-    let out = xtask(&d, &["mesh", "-q", "tri.ply", "-o", "out.ply"]);
+    put(
+        &d,
+        "tri.ply",
+        format!("{PLY_TRIANGLE_HEADER}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+    );
+    let out = xtask_line(&d, "mesh -q tri.ply -o out.ply");
     assert_no_panic(&out);
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
     mentions(
         &text(&out.stderr),
         &["tri.ply", "the mesh is empty", "--as points"],
     );
-    assert!(!d.join("out.ply").exists(), "an empty mesh was written");
+    assert_absent(&d.join("out.ply"), "an empty mesh was written");
 }
 
 /// `delaunay --random N` beyond what memory can hold is a usage error before any allocation

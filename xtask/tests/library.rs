@@ -3,42 +3,28 @@
 
 use rdt_mesher::pipeline::{Input, InputOptions, Request, SizeRequest, run};
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+mod common;
+use common::{json, root, xtask};
 
 fn scratch(test: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("xtask-library")
-        .join(test);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
+    common::scratch_dir("xtask-library", test)
 }
 
 /// Runs `xtask mesh ARGS --strict` in `dir` writing `out.ply` and `r.json`; returns (the
 /// verdict passed, the report, the mesh).
 fn cli_mesh(dir: &Path, args: &[&str]) -> (bool, serde_json::Value, meshio::TriMesh) {
-    let out = Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .arg("mesh")
-        .args(args)
-        .args(["-q", "--strict", "-o", "out.ply", "--report", "r.json"])
-        .current_dir(dir)
-        .output()
-        .expect("cannot run the xtask binary");
+    let mut a = vec!["mesh"];
+    a.extend_from_slice(args);
+    a.extend_from_slice(&["-q", "--strict", "-o", "out.ply", "--report", "r.json"]);
+    let out = xtask(dir, &a);
     let code = out.status.code();
     assert!(
         code == Some(0) || code == Some(3),
         "exit {code:?}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let report = serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap())
-        .expect("a JSON report");
+    let report = json(&dir.join("r.json"));
     let mesh = meshio::read(dir.join("out.ply")).expect("the output mesh");
     (code == Some(0), report, mesh)
 }

@@ -29,6 +29,38 @@ pub struct VertexId(pub(crate) u32);
 #[repr(transparent)]
 pub struct CellId(pub(crate) u32);
 
+/// The index and raw-`u32` conversions that both ids share.
+macro_rules! u32_id {
+    ($id:ident, $index_doc:literal) => {
+        impl $id {
+            #[doc = $index_doc]
+            #[inline]
+            pub const fn index(self) -> usize {
+                self.0 as usize
+            }
+
+            /// The raw `u32` (for compact storage or output formats).
+            #[inline]
+            pub const fn to_u32(self) -> u32 {
+                self.0
+            }
+
+            #[doc = concat!("The id of raw value `x` (the inverse of [`", stringify!($id), "::to_u32`]).")]
+            #[inline]
+            pub const fn from_u32(x: u32) -> $id {
+                $id(x)
+            }
+        }
+    };
+}
+
+u32_id!(
+    VertexId,
+    "The index of this vertex in per-vertex arrays (meaningless for [`VertexId::INFINITE`] \
+     and [`VertexId::NONE`])."
+);
+u32_id!(CellId, "The slot index of this cell, for per-cell arrays.");
+
 impl VertexId {
     /// The vertex at infinity; every hull facet forms an infinite cell with it. It is the
     /// largest id (sorted vertex tuples put it last).
@@ -46,25 +78,6 @@ impl VertexId {
     pub const fn from_index(i: usize) -> VertexId {
         assert!(i < (u32::MAX - 1) as usize, "vertex index out of range");
         VertexId(i as u32)
-    }
-
-    /// The index of this vertex in per-vertex arrays (meaningless for
-    /// [`VertexId::INFINITE`] and [`VertexId::NONE`]).
-    #[inline]
-    pub const fn index(self) -> usize {
-        self.0 as usize
-    }
-
-    /// The raw `u32` (for compact storage or output formats).
-    #[inline]
-    pub const fn to_u32(self) -> u32 {
-        self.0
-    }
-
-    /// The id of raw value `x` (the inverse of [`VertexId::to_u32`]).
-    #[inline]
-    pub const fn from_u32(x: u32) -> VertexId {
-        VertexId(x)
     }
 
     /// Whether this is the infinite vertex.
@@ -85,24 +98,6 @@ impl CellId {
     pub const fn from_index(i: usize) -> CellId {
         assert!(i < u32::MAX as usize, "cell index out of range");
         CellId(i as u32)
-    }
-
-    /// The slot index of this cell, for per-cell arrays.
-    #[inline]
-    pub const fn index(self) -> usize {
-        self.0 as usize
-    }
-
-    /// The raw `u32`.
-    #[inline]
-    pub const fn to_u32(self) -> u32 {
-        self.0
-    }
-
-    /// The id of raw value `x` (the inverse of [`CellId::to_u32`]).
-    #[inline]
-    pub const fn from_u32(x: u32) -> CellId {
-        CellId(x)
     }
 }
 

@@ -69,33 +69,31 @@ impl Triangulation {
             Location::Cell(c) | Location::Outside(c) => c,
             Location::NoCells => return None,
         };
-        let mut best = VertexId::INFINITE;
-        let mut bd = f64::INFINITY;
-        for &v in &self.tds.cell(c).v {
-            if v != VertexId::INFINITE {
-                let d = self.pt(v).distance_squared(p);
-                if d < bd {
-                    bd = d;
-                    best = v;
-                }
+        // Keeps the nearer of `best` and the finite vertex `v`; true when `v` is nearer.
+        let offer = |v: VertexId, best: &mut (VertexId, f64)| {
+            if v == VertexId::INFINITE {
+                return false;
             }
+            let d = self.pt(v).distance_squared(p);
+            let nearer = d < best.1;
+            if nearer {
+                *best = (v, d);
+            }
+            nearer
+        };
+        let mut best = (VertexId::INFINITE, f64::INFINITY);
+        for &v in &self.tds.cell(c).v {
+            offer(v, &mut best);
         }
         loop {
             let mut improved = false;
-            for c in self.incident_cells(best) {
+            for c in self.incident_cells(best.0) {
                 for &w in &self.tds.cell(c).v {
-                    if w != VertexId::INFINITE {
-                        let d = self.pt(w).distance_squared(p);
-                        if d < bd {
-                            bd = d;
-                            best = w;
-                            improved = true;
-                        }
-                    }
+                    improved |= offer(w, &mut best);
                 }
             }
             if !improved {
-                return Some(best);
+                return Some(best.0);
             }
         }
     }

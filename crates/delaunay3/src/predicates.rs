@@ -58,6 +58,13 @@ fn orient3d_exact(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Sign {
     Sign::of(robust::orient3d(c3(a), c3(b), c3(c), c3(d)))
 }
 
+/// `m` over the six pairs of `[a, b, c, d]` in the order ab, bc, cd, da, ac, bd (the 2x2
+/// minors of the in-sphere determinant's expansion).
+#[inline(always)]
+fn six_pairs<P: Copy, T>([a, b, c, d]: [P; 4], m: impl Fn(P, P) -> T) -> (T, T, T, T, T, T) {
+    (m(a, b), m(b, c), m(c, d), m(d, a), m(a, c), m(b, d))
+}
+
 /// Exact in-sphere test; requires `orient3d(a, b, c, d) == Positive`. Positive: `e` inside.
 ///
 /// Three stages: Shewchuk's static f64 filter, a double-double evaluation with a rigorous
@@ -84,14 +91,7 @@ pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
     );
     let det = (dl * abc - cl * dab) + (bl * cda - al * bcd);
     let m = |p: DVec3, q: DVec3| (p.x * q.y).abs() + (q.x * p.y).abs();
-    let (pab, pbc, pcd, pda, pac, pbd) = (
-        m(ae, be),
-        m(be, ce),
-        m(ce, de),
-        m(de, ae),
-        m(ae, ce),
-        m(be, de),
-    );
+    let (pab, pbc, pcd, pda, pac, pbd) = six_pairs([ae, be, ce, de], m);
     let (az, bz, cz, dz) = (ae.z.abs(), be.z.abs(), ce.z.abs(), de.z.abs());
     let permanent = (pcd * bz + pbd * cz + pbc * dz) * al
         + (pda * cz + pac * dz + pcd * az) * bl
@@ -163,14 +163,7 @@ fn insphere_int(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Option<Sign
     let p = |k: usize| (v[3 * k], v[3 * k + 1], v[3 * k + 2]);
     let (ae, be, ce, de) = (p(0), p(1), p(2), p(3));
     let m = |p: (i128, i128, i128), q: (i128, i128, i128)| p.0 * q.1 - q.0 * p.1;
-    let (ab, bc, cd, da, ac, bd) = (
-        m(ae, be),
-        m(be, ce),
-        m(ce, de),
-        m(de, ae),
-        m(ae, ce),
-        m(be, de),
-    );
+    let (ab, bc, cd, da, ac, bd) = six_pairs([ae, be, ce, de], m);
     let abc = ae.2 * bc - be.2 * ac + ce.2 * ab;
     let bcd = be.2 * cd - ce.2 * bd + de.2 * bc;
     let cda = ce.2 * da + de.2 * ac + ae.2 * cd;
@@ -250,31 +243,10 @@ pub fn insphere_perturbed(q: &[DVec3; 4], p: DVec3) -> bool {
 /// The perturbed decision when `p` is exactly on the circumsphere of `q`.
 #[inline(never)]
 fn insphere_tie(q: &[DVec3; 4], p: DVec3) -> bool {
-    {
-        {
-            let all = [q[0], q[1], q[2], q[3], p];
-            let mut idx = [0usize, 1, 2, 3, 4];
-            idx.sort_unstable_by(|&i, &j| {
-                let (a, b) = (all[i], all[j]);
-                (a.x, a.y, a.z).partial_cmp(&(b.x, b.y, b.z)).unwrap()
-            });
-            // Two iterations suffice (Devillers & Teillaud) since q is not flat.
-            for &k in idx[3..].iter().rev() {
-                if k == 4 {
-                    return false;
-                }
-                let mut r = *q;
-                r[k] = p;
-                match orient3d(r[0], r[1], r[2], r[3]) {
-                    Sign::Positive => return true,
-                    Sign::Negative => return false,
-                    Sign::Zero => {}
-                }
-            }
-            debug_assert!(false, "insphere perturbation undecided");
-            false
-        }
-    }
+    let mut idx = [0usize, 1, 2, 3, 4];
+    sort_lexicographic(&mut idx, q, p);
+    // Two iterations suffice (Devillers & Teillaud) since q is not flat.
+    replace_largest(q, p, &idx[3..], "insphere perturbation undecided")
 }
 
 /// Perturbed "inside the circumcircle of a facet" test for a point `p` lying exactly on the
@@ -295,27 +267,39 @@ pub fn incircle_facet_perturbed(m: &[DVec3; 4], j: usize, p: DVec3) -> bool {
                 }
             }
             idx[3] = 4;
-            let pt = |k: usize| if k == 4 { p } else { m[k] };
-            idx.sort_unstable_by(|&a, &b| {
-                let (a, b) = (pt(a), pt(b));
-                (a.x, a.y, a.z).partial_cmp(&(b.x, b.y, b.z)).unwrap()
-            });
-            for &k in idx[1..].iter().rev() {
-                if k == 4 {
-                    return false;
-                }
-                let mut r = *m;
-                r[k] = p;
-                match orient3d(r[0], r[1], r[2], r[3]) {
-                    Sign::Positive => return true,
-                    Sign::Negative => return false,
-                    Sign::Zero => {}
-                }
-            }
-            debug_assert!(false, "incircle perturbation undecided");
-            false
+            sort_lexicographic(&mut idx, m, p);
+            replace_largest(m, p, &idx[1..], "incircle perturbation undecided")
         }
     }
+}
+
+/// Sorts indices into `q` (index 4 standing for `p`) by lexicographic order of their points.
+fn sort_lexicographic(idx: &mut [usize], q: &[DVec3; 4], p: DVec3) {
+    let pt = |k: usize| if k == 4 { p } else { q[k] };
+    idx.sort_unstable_by(|&a, &b| {
+        let (a, b) = (pt(a), pt(b));
+        (a.x, a.y, a.z).partial_cmp(&(b.x, b.y, b.z)).unwrap()
+    });
+}
+
+/// The symbolic perturbation's decision: from the lexicographically largest of `candidates`
+/// down, the first nonzero orientation of `q` with that vertex replaced by `p` (`false` when
+/// `p` itself, index 4, comes first).
+fn replace_largest(q: &[DVec3; 4], p: DVec3, candidates: &[usize], undecided: &str) -> bool {
+    for &k in candidates.iter().rev() {
+        if k == 4 {
+            return false;
+        }
+        let mut r = *q;
+        r[k] = p;
+        match orient3d(r[0], r[1], r[2], r[3]) {
+            Sign::Positive => return true,
+            Sign::Negative => return false,
+            Sign::Zero => {}
+        }
+    }
+    debug_assert!(false, "{undecided}");
+    false
 }
 
 #[cfg(test)]
@@ -396,13 +380,7 @@ mod tests {
             if orient3d(q[0], q[1], q[2], q[3]) == Sign::Negative {
                 q.swap(0, 1);
             }
-            let exact = Sign::of(robust::insphere(
-                c3(q[0]),
-                c3(q[1]),
-                c3(q[2]),
-                c3(q[3]),
-                c3(q[4]),
-            ));
+            let exact = robust_insphere(&q);
             assert_eq!(insphere(q[0], q[1], q[2], q[3], q[4]), exact, "{q:?}");
             let dd = insphere_dd(q[0], q[1], q[2], q[3], q[4]);
             if Sign::of(dd) == exact {
@@ -412,6 +390,12 @@ mod tests {
             assert_eq!(dd, insphere_dd_with::<false>(q[0], q[1], q[2], q[3], q[4]));
         }
         assert!(decided_by_dd > 19000);
+    }
+
+    /// `robust`'s exact in-sphere sign of `q[4]` against `q[0..4]`, the reference.
+    fn robust_insphere(q: &[DVec3]) -> Sign {
+        let [a, b, c, d, e] = [0, 1, 2, 3, 4].map(|k| c3(q[k]));
+        Sign::of(robust::insphere(a, b, c, d, e))
     }
 
     #[test]
@@ -438,13 +422,7 @@ mod tests {
                     continue;
                 }
             }
-            let exact = Sign::of(robust::insphere(
-                c3(q[0]),
-                c3(q[1]),
-                c3(q[2]),
-                c3(q[3]),
-                c3(q[4]),
-            ));
+            let exact = robust_insphere(&q);
             let fast = insphere_int(q[0], q[1], q[2], q[3], q[4]);
             if let Some(f) = fast {
                 assert_eq!(f, exact, "{q:?}");

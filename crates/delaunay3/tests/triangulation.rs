@@ -13,15 +13,7 @@ fn uniform(n: usize, seed: u64) -> Vec<DVec3> {
 #[test]
 fn random_points_one_by_one_and_bulk() {
     let pts = uniform(3000, 1);
-    let t = build_checked(&pts);
-    let mut b = Triangulation::new();
-    let ids = b.insert_bulk(&pts).unwrap();
-    assert!(b.is_valid().is_ok());
-    for (i, &v) in ids.iter().enumerate() {
-        assert_eq!(b.point(v), pts[i]);
-    }
-    // Unique triangulation: same tetrahedra whatever the insertion order.
-    assert_eq!(tets_by_points(&t), tets_by_points(&b));
+    let t = bulk_agrees_with_one_by_one(&pts);
     // Euler-type sanity for points in general position: ~6.5 tets per vertex.
     let ratio = t.num_finite_cells() as f64 / pts.len() as f64;
     assert!((5.0..8.0).contains(&ratio), "{ratio}");
@@ -310,14 +302,7 @@ fn exact_sphere_points() {
 
 #[test]
 fn grid_points_all_orders() {
-    let mut pts = Vec::new();
-    for x in 0..6 {
-        for y in 0..6 {
-            for z in 0..6 {
-                pts.push(DVec3::new(x as f64, y as f64, z as f64));
-            }
-        }
-    }
+    let pts = grid(6);
     let a = build_checked(&pts);
     let mut rev = pts.clone();
     rev.reverse();
@@ -388,14 +373,7 @@ fn hull_points_on_hull_planes() {
 fn larger_degenerate_inputs() {
     // A shuffled 12^3 grid, then exactly cospherical points around a grid point, then the
     // grid again (all duplicates): valid at the end, order-independent.
-    let mut pts = Vec::new();
-    for x in 0..12 {
-        for y in 0..12 {
-            for z in 0..12 {
-                pts.push(DVec3::new(x as f64, y as f64, z as f64));
-            }
-        }
-    }
+    let mut pts = grid(12);
     let mut r = Rng(5);
     for i in (1..pts.len()).rev() {
         pts.swap(i, (r.next_u64() % (i as u64 + 1)) as usize);
@@ -514,14 +492,7 @@ proptest! {
     fn prop_many_duplicates(base in prop::collection::vec(point(), 1..20),
                             picks in prop::collection::vec(0usize..1000, 0..200)) {
         let pts: Vec<DVec3> = picks.iter().map(|&i| base[i % base.len()]).collect();
-        let t = build_checked(&pts);
-        let mut b = Triangulation::new();
-        let ids = b.insert_bulk(&pts).unwrap();
-        prop_assert!(b.is_valid().is_ok());
-        for (i, &v) in ids.iter().enumerate() {
-            prop_assert_eq!(b.point(v), pts[i]);
-        }
-        prop_assert_eq!(tets_by_points(&t), tets_by_points(&b));
+        bulk_agrees_with_one_by_one(&pts);
     }
 
     #[test]

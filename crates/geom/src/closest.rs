@@ -35,38 +35,42 @@ pub enum Feature {
 pub fn closest_point_triangle_feature(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVec3, Feature) {
     let ab = b - a;
     let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
+    // The projections of `p - corner` on the two edges from `a`.
+    let dots = |corner: DVec3| {
+        let v = p - corner;
+        (ab.dot(v), ac.dot(v))
+    };
+    let (d1, d2) = dots(a);
     if d1 <= 0.0 && d2 <= 0.0 {
         return (a, Feature::A);
     }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
+    let (d3, d4) = dots(b);
     if d3 >= 0.0 && d4 <= d3 {
         return (b, Feature::B);
     }
+    // The point of edge `start + t dir` when `p` is in the edge's Voronoi region: `v` is the
+    // barycentric weight of the opposite corner, `s` and `e` the projections of `p` from the
+    // edge's two ends.
+    let edge = |v: f64, s: f64, e: f64, start: DVec3, dir: DVec3| {
+        (v <= 0.0 && s >= 0.0 && e <= 0.0).then(|| start + dir * (s / (s - e)))
+    };
     let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return (a + ab * v, Feature::Ab);
+    if let Some(q) = edge(vc, d1, d3, a, ab) {
+        return (q, Feature::Ab);
     }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
+    let (d5, d6) = dots(c);
     if d6 >= 0.0 && d5 <= d6 {
         return (c, Feature::C);
     }
     let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return (a + ac * w, Feature::Ca);
+    if let Some(q) = edge(vb, d2, d6, a, ac) {
+        return (q, Feature::Ca);
     }
     let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (b + (c - b) * w, Feature::Bc);
+    // (d4 - d3) / ((d4 - d3) - (d6 - d5)) is Ericson's (d4 - d3) / ((d4 - d3) + (d5 - d6)):
+    // negation is exact.
+    if let Some(q) = edge(va, d4 - d3, d6 - d5, b, c - b) {
+        return (q, Feature::Bc);
     }
     let denom = 1.0 / (va + vb + vc);
     let v = vb * denom;
@@ -109,15 +113,12 @@ pub fn closest_point_segment(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_util::{RIGHT_TRIANGLE, pt_within};
     use proptest::prelude::*;
-
-    fn pt() -> impl Strategy<Value = DVec3> {
-        prop::array::uniform3(-10.0f64..10.0).prop_map(DVec3::from_array)
-    }
 
     #[test]
     fn features_of_a_right_triangle() {
-        let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
+        let (a, b, c) = RIGHT_TRIANGLE;
         let f = |x: f64, y: f64| closest_point_triangle_feature(DVec3::new(x, y, 1.0), a, b, c);
         let (q, face) = f(0.2, 0.2);
         assert_eq!(face, Feature::Face);
@@ -139,7 +140,7 @@ mod tests {
         /// sampled point of the triangle.
         #[test]
         fn no_farther_than_any_point_of_the_triangle(
-            p in pt(), a in pt(), b in pt(), c in pt(), u in 0.0f64..1.0, v in 0.0f64..1.0,
+            p in pt_within(10.0), a in pt_within(10.0), b in pt_within(10.0), c in pt_within(10.0), u in 0.0f64..1.0, v in 0.0f64..1.0,
         ) {
             let q = closest_point_triangle(p, a, b, c);
             let d = (q - p).length();

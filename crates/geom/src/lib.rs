@@ -38,3 +38,18 @@ pub mod rng;
 pub use ball::SurfaceBall;
 pub use predicates::Sign;
 pub use rng::SplitMix64;
+
+/// Shared fixtures of the unit tests.
+#[cfg(test)]
+pub(crate) mod test_util {
+    use glam::DVec3;
+    use proptest::prelude::*;
+
+    /// A point with coordinates uniform in `[-r, r)`.
+    pub fn pt_within(r: f64) -> impl Strategy<Value = DVec3> {
+        prop::array::uniform3(-r..r).prop_map(DVec3::from_array)
+    }
+
+    /// The right triangle `(0, x, y)` in the plane z = 0, counter-clockwise seen from +z.
+    pub const RIGHT_TRIANGLE: (DVec3, DVec3, DVec3) = (DVec3::ZERO, DVec3::X, DVec3::Y);
+}

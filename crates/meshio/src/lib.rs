@@ -354,10 +354,7 @@ pub fn read_from<R: BufRead>(
             path: path.to_owned(),
         });
     }
-    mesh.validate().map_err(|source| MeshIoError::Invalid {
-        path: path.to_owned(),
-        source,
-    })?;
+    validate_for(&mesh, path)?;
     Ok(mesh)
 }
 
@@ -390,14 +387,19 @@ pub fn write_with(
     options: Options,
 ) -> Result<(), MeshIoError> {
     let path = path.as_ref();
-    mesh.validate().map_err(|source| MeshIoError::Invalid {
-        path: path.to_owned(),
-        source,
-    })?;
+    validate_for(mesh, path)?;
     let file = std::fs::File::create(path).map_err(|e| MeshIoError::io(path, e))?;
     let mut w = BufWriter::with_capacity(1 << 16, file);
     write_to(&mut w, mesh, format, options, path)?;
     w.flush().map_err(|e| MeshIoError::io(path, e))
+}
+
+/// [`TriMesh::validate`], the error naming `path`.
+fn validate_for(mesh: &TriMesh, path: &Path) -> Result<(), MeshIoError> {
+    mesh.validate().map_err(|source| MeshIoError::Invalid {
+        path: path.to_owned(),
+        source,
+    })
 }
 
 /// Write a mesh to any writer; `name` is used in error messages.
@@ -409,10 +411,7 @@ pub fn write_to<W: Write>(
     name: impl AsRef<Path>,
 ) -> Result<(), MeshIoError> {
     let path = name.as_ref();
-    mesh.validate().map_err(|source| MeshIoError::Invalid {
-        path: path.to_owned(),
-        source,
-    })?;
+    validate_for(mesh, path)?;
     let r = match format {
         Format::Ply => ply::write(w, mesh, options),
         Format::Off => off::write(w, mesh, options),
@@ -420,6 +419,35 @@ pub fn write_to<W: Write>(
         Format::Stl => stl::write(w, mesh, options),
     };
     r.map_err(|e| MeshIoError::io(path, e))
+}
+
+/// Writes one text line `{prefix}x y z` of the point `v` (coordinates by [`fmt_coord`]).
+pub(crate) fn write_point_line<W: std::io::Write>(
+    w: &mut W,
+    prefix: &str,
+    v: DVec3,
+    double: bool,
+) -> std::io::Result<()> {
+    let [x, y, z] = v.to_array().map(|c| fmt_coord(c, double));
+    writeln!(w, "{prefix}{x} {y} {z}")
+}
+
+/// Writes the text vertex lines (`{vertex_prefix}x y z`) then the triangle lines
+/// (`{face_prefix}i j k`, indices plus `base`) of `mesh`: the body of ASCII OFF, PLY and OBJ.
+pub(crate) fn write_text_body<W: std::io::Write>(
+    w: &mut W,
+    mesh: &TriMesh,
+    double: bool,
+    (vertex_prefix, face_prefix, base): (&str, &str, u32),
+) -> std::io::Result<()> {
+    for &v in &mesh.vertices {
+        write_point_line(w, vertex_prefix, v, double)?;
+    }
+    for t in &mesh.triangles {
+        let [i, j, k] = t.map(|i| i + base);
+        writeln!(w, "{face_prefix}{i} {j} {k}")?;
+    }
+    Ok(())
 }
 
 /// Shortest exact decimal of `x`, or of `x as f32` when `double` is false.

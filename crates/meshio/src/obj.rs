@@ -248,17 +248,5 @@ pub(crate) fn write<W: Write>(w: &mut W, mesh: &TriMesh, o: Options) -> std::io:
         mesh.vertices.len(),
         mesh.triangles.len()
     )?;
-    for v in &mesh.vertices {
-        writeln!(
-            w,
-            "v {} {} {}",
-            crate::fmt_coord(v.x, o.double),
-            crate::fmt_coord(v.y, o.double),
-            crate::fmt_coord(v.z, o.double)
-        )?;
-    }
-    for t in &mesh.triangles {
-        writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
-    }
-    Ok(())
+    crate::write_text_body(w, mesh, o.double, ("v ", "f ", 1))
 }

@@ -103,10 +103,7 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
     let mut vertices = Vec::with_capacity(nv.min(1 << 16));
     for i in 0..nv {
         let Some((ln, l)) = lines.next_line()? else {
-            return Err(MeshIoError::Truncated {
-                path: path.to_owned(),
-                detail: format!("the header announces {nv} vertices, the file has {i}"),
-            });
+            return Err(truncated(path, nv, "vertices", i));
         };
         let toks: Vec<&str> = l.split_whitespace().collect();
         let c: Vec<f64> = toks.iter().filter_map(|t| crate::parse_f64(t)).collect();
@@ -131,10 +128,7 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
     let mut idx = Vec::new();
     for i in 0..nf {
         let Some((ln, l)) = lines.next_line()? else {
-            return Err(MeshIoError::Truncated {
-                path: path.to_owned(),
-                detail: format!("the header announces {nf} faces, the file has {i}"),
-            });
+            return Err(truncated(path, nf, "faces", i));
         };
         let toks: Vec<&str> = l.split_whitespace().collect();
         let n: usize = toks[0].parse().map_err(|_| {
@@ -181,19 +175,15 @@ pub(crate) fn read<R: BufRead>(reader: &mut R, path: &Path) -> Result<TriMesh, M
     })
 }
 
+/// The file ends after `found` of the `announced` elements the header promised.
+fn truncated(path: &Path, announced: usize, what: &str, found: usize) -> MeshIoError {
+    MeshIoError::Truncated {
+        path: path.to_owned(),
+        detail: format!("the header announces {announced} {what}, the file has {found}"),
+    }
+}
+
 pub(crate) fn write<W: Write>(w: &mut W, mesh: &TriMesh, o: Options) -> std::io::Result<()> {
     writeln!(w, "OFF\n{} {} 0", mesh.vertices.len(), mesh.triangles.len())?;
-    for v in &mesh.vertices {
-        writeln!(
-            w,
-            "{} {} {}",
-            crate::fmt_coord(v.x, o.double),
-            crate::fmt_coord(v.y, o.double),
-            crate::fmt_coord(v.z, o.double)
-        )?;
-    }
-    for t in &mesh.triangles {
-        writeln!(w, "3 {} {} {}", t[0], t[1], t[2])?;
-    }
-    Ok(())
+    crate::write_text_body(w, mesh, o.double, ("", "3 ", 0))
 }

@@ -751,18 +751,7 @@ pub(crate) fn write<W: Write>(w: &mut W, mesh: &TriMesh, o: Options) -> std::io:
         }
         w.write_all(&buf)?;
     } else {
-        for v in &mesh.vertices {
-            writeln!(
-                w,
-                "{} {} {}",
-                crate::fmt_coord(v.x, o.double),
-                crate::fmt_coord(v.y, o.double),
-                crate::fmt_coord(v.z, o.double)
-            )?;
-        }
-        for t in &mesh.triangles {
-            writeln!(w, "3 {} {} {}", t[0], t[1], t[2])?;
-        }
+        crate::write_text_body(w, mesh, o.double, ("", "3 ", 0))?;
     }
     Ok(())
 }

@@ -274,14 +274,7 @@ pub(crate) fn write<W: Write>(w: &mut W, mesh: &TriMesh, o: Options) -> std::io:
                 n.x as f32, n.y as f32, n.z as f32
             )?;
             for &i in t {
-                let v = mesh.vertices[i as usize];
-                writeln!(
-                    w,
-                    "vertex {} {} {}",
-                    crate::fmt_coord(v.x, o.double),
-                    crate::fmt_coord(v.y, o.double),
-                    crate::fmt_coord(v.z, o.double)
-                )?;
+                crate::write_point_line(w, "vertex ", mesh.vertices[i as usize], o.double)?;
             }
             writeln!(w, "endloop\nendfacet")?;
         }

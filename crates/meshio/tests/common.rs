@@ -19,6 +19,11 @@ pub fn fixture(name: &str) -> PathBuf {
 /// An octahedron with irrational-looking coordinates (not exactly representable as f32).
 pub fn octahedron() -> TriMesh {
     let s = 1.0 / 3.0_f64;
+    // Two pyramids over the ring +x, +y, -x, -y: apex 4 (+z) then apex 5 (-z), outward.
+    let ring = [0, 2, 1, 3];
+    let up = (0..4).map(|i| [ring[i], ring[(i + 1) % 4], 4]);
+    let down = (0..4).map(|i| [ring[(i + 1) % 4], ring[i], 5]);
+    let triangles = up.chain(down).collect();
     TriMesh {
         vertices: vec![
             DVec3::new(1.0 + s, 0.1, -0.2),
@@ -28,16 +33,7 @@ pub fn octahedron() -> TriMesh {
             DVec3::new(0.0, 0.0, 1.234_567_890_123),
             DVec3::new(-0.0, 0.0, -1.0),
         ],
-        triangles: vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ],
+        triangles,
     }
 }
 

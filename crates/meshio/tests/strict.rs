@@ -18,6 +18,14 @@ fn err(name: &str, text: &[u8]) -> String {
     s
 }
 
+/// Read `text` as [`err`] does; the message must contain every `wanted` piece.
+fn rejects(name: &str, text: &[u8], wanted: &[&str]) {
+    let s = err(name, text);
+    for w in wanted {
+        assert!(s.contains(w), "{w:?} missing in: {s}");
+    }
+}
+
 fn ok(name: &str, text: &[u8]) -> meshio::TriMesh {
     let p = tmp(name);
     std::fs::write(&p, text).unwrap();
@@ -44,60 +52,79 @@ fn ply_ascii_valid_triangle_reads() {
 #[test]
 fn ply_ascii_vertex_with_an_extra_token_is_rejected() {
     // The header declares 3 properties; `0 0 1 9` has 4 values (was cut to 0 0 1).
-    let s = err("extra_v.ply", &ply("0 0 0\n1 0 0\n0 0 1 9\n3 0 1 2\n"));
-    assert!(s.contains("line 12: vertex 2 has 1 value(s) more"), "{s}");
-    assert!(s.contains("float x, float y, float z"), "{s}");
+    rejects(
+        "extra_v.ply",
+        &ply("0 0 0\n1 0 0\n0 0 1 9\n3 0 1 2\n"),
+        &[
+            "line 12: vertex 2 has 1 value(s) more",
+            "float x, float y, float z",
+        ],
+    );
 }
 
 #[test]
 fn ply_ascii_face_with_an_extra_index_is_rejected() {
     // `3 0 1 3 2`: the count says 3 indices, the line has 4.
-    let s = err("extra_f.ply", &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 3 2\n"));
-    assert!(s.contains("line 13: face 0 has 1 value(s) more"), "{s}");
+    rejects(
+        "extra_f.ply",
+        &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 3 2\n"),
+        &["line 13: face 0 has 1 value(s) more"],
+    );
 }
 
 #[test]
 fn ply_ascii_space_inside_a_number_is_rejected() {
     // `0 1 -0 5` was `0 1 -0.5` with a space: z became 0 and 5 was dropped.
-    let s = err("space.ply", &ply("0 0 0\n1 0 0\n0 1 -0 5\n3 0 1 2\n"));
-    assert!(s.contains("line 12: vertex 2 has 1 value(s) more"), "{s}");
+    rejects(
+        "space.ply",
+        &ply("0 0 0\n1 0 0\n0 1 -0 5\n3 0 1 2\n"),
+        &["line 12: vertex 2 has 1 value(s) more"],
+    );
     // A number cut the other way: too few values on the line.
-    let s = err("short.ply", &ply("0 0 0\n1 0 0\n0 1\n3 0 1 2\n"));
-    assert!(
-        s.contains("line 12: vertex 2 has too few values: property z is missing"),
-        "{s}"
+    rejects(
+        "short.ply",
+        &ply("0 0 0\n1 0 0\n0 1\n3 0 1 2\n"),
+        &["line 12: vertex 2 has too few values: property z is missing"],
     );
 }
 
 #[test]
 fn ply_ascii_bad_tokens_name_line_and_property() {
-    let s = err("tok.ply", &ply("0 0 0\n1 0x 0\n0 1 0\n3 0 1 2\n"));
-    assert!(
-        s.contains("line 11: vertex 1, property y: \"0x\" is not a valid float value"),
-        "{s}"
+    rejects(
+        "tok.ply",
+        &ply("0 0 0\n1 0x 0\n0 1 0\n3 0 1 2\n"),
+        &["line 11: vertex 1, property y: \"0x\" is not a valid float value"],
     );
-    let s = err("nan.ply", &ply("0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"));
-    assert!(s.contains("\"nan\" is not a valid float value"), "{s}");
-    let s = err("idx.ply", &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n"));
-    assert!(
-        s.contains("line 13: face 0, property vertex_indices: \"2.5\" is not a valid int value"),
-        "{s}"
+    rejects(
+        "nan.ply",
+        &ply("0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"),
+        &["\"nan\" is not a valid float value"],
     );
-    let s = err("count.ply", &ply("0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n"));
-    assert!(s.contains("\"300\" is not a valid uchar value"), "{s}");
+    rejects(
+        "idx.ply",
+        &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n"),
+        &["line 13: face 0, property vertex_indices: \"2.5\" is not a valid int value"],
+    );
+    rejects(
+        "count.ply",
+        &ply("0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n"),
+        &["\"300\" is not a valid uchar value"],
+    );
 }
 
 #[test]
 fn ply_data_after_the_last_element_is_rejected() {
-    let s = err("more.ply", &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"));
-    assert!(s.contains("line 14: data after the last element"), "{s}");
+    rejects(
+        "more.ply",
+        &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"),
+        &["line 14: data after the last element"],
+    );
     // Binary: bytes after the declared elements.
     let m = octahedron();
     let mut b = Vec::new();
     meshio::write_to(&mut b, &m, Format::Ply, meshio::Options::default(), "mem").unwrap();
     b.extend_from_slice(&[0, 0, 0]);
-    let s = err("more_bin.ply", &b);
-    assert!(s.contains("3 bytes after the last element"), "{s}");
+    rejects("more_bin.ply", &b, &["3 bytes after the last element"]);
 }
 
 #[test]
@@ -232,16 +259,16 @@ fn stl_ascii_garbled_keywords_are_rejected() {
 #[test]
 fn stl_ascii_facets_with_other_than_3_vertices_are_rejected() {
     let four = STL_FACET.replace("endloop", "vertex 1 1 0\nendloop");
-    let s = err("quad.stl", &stl(&four));
-    assert!(
-        s.contains("line 7: facet 0: expected 'endloop' (a facet has exactly 3 vertices)"),
-        "{s}"
+    rejects(
+        "quad.stl",
+        &stl(&four),
+        &["line 7: facet 0: expected 'endloop' (a facet has exactly 3 vertices)"],
     );
     let two = STL_FACET.replace("vertex 0 1 0\n", "");
-    let s = err("two_vertices.stl", &stl(&two));
-    assert!(
-        s.contains("line 6: facet 0: expected 'vertex x y z'"),
-        "{s}"
+    rejects(
+        "two_vertices.stl",
+        &stl(&two),
+        &["line 6: facet 0: expected 'vertex x y z'"],
     );
 }
 
@@ -261,14 +288,13 @@ fn binary_stl_size_must_be_84_plus_50n() {
     meshio::write_to(&mut b, &m, Format::Stl, meshio::Options::default(), "mem").unwrap();
     assert_eq!(b.len(), 84 + 50 * 8);
     b.push(0);
-    let s = err("long.stl", &b);
-    assert!(
-        s.contains("announces 8 facets, i.e. 84 + 50 * 8 = 484 bytes, but the file has 485"),
-        "{s}"
+    rejects(
+        "long.stl",
+        &b,
+        &["announces 8 facets, i.e. 84 + 50 * 8 = 484 bytes, but the file has 485"],
     );
     b.truncate(484 - 7);
-    let s = err("short.stl", &b);
-    assert!(s.contains("484 bytes), the file has 477 bytes"), "{s}");
+    rejects("short.stl", &b, &["484 bytes), the file has 477 bytes"]);
 }
 
 const OBJ_V: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
@@ -286,13 +312,16 @@ fn obj_junk_in_face_corners_is_rejected() {
         );
     }
     // Well-formed corners that refer to missing texture or normal lines.
-    let s = err("vt.obj", format!("{OBJ_V}f 1/1 2/2 3/1\n").as_bytes());
-    assert!(
-        s.contains("line 6: a face corner refers to texture (vt) index 2, which does not exist"),
-        "{s}"
+    rejects(
+        "vt.obj",
+        format!("{OBJ_V}f 1/1 2/2 3/1\n").as_bytes(),
+        &["line 6: a face corner refers to texture (vt) index 2, which does not exist"],
     );
-    let s = err("vn.obj", format!("{OBJ_V}f 1//1 2//1 3//-2\n").as_bytes());
-    assert!(s.contains("normal (vn) index -2"), "{s}");
+    rejects(
+        "vn.obj",
+        format!("{OBJ_V}f 1//1 2//1 3//-2\n").as_bytes(),
+        &["normal (vn) index -2"],
+    );
     // The valid forms still read.
     let m = ok(
         "corners.obj",
@@ -303,27 +332,27 @@ fn obj_junk_in_face_corners_is_rejected() {
 
 #[test]
 fn obj_vertex_lines_take_3_4_6_or_7_numbers() {
-    for v in [
-        "v 0 1 0 1 0",
-        "v 0 1",
-        "v 0 1 0 1 2 3 4 5",
-        "v 0 1 0 junk",
-        "v 0 1 0 1 nan 1",
+    // x y z, x y z w (w ignored), x y z r g b and x y z r g b a (colours ignored) read;
+    // other counts and non-numbers are errors naming the line.
+    for (v, valid) in [
+        ("v 0 1 0 1 0", false),
+        ("v 0 1", false),
+        ("v 0 1 0 1 2 3 4 5", false),
+        ("v 0 1 0 junk", false),
+        ("v 0 1 0 1 nan 1", false),
+        ("v 0 1 0", true),
+        ("v 0 1 0 0.5", true),
+        ("v 0 1 0 1 0.5 0", true),
+        ("v 0 1 0 1 0.5 0 1", true),
     ] {
         let text = OBJ_V.replace("v 0 1 0", v) + "f 1 2 3\n";
-        let s = err("v.obj", text.as_bytes());
-        assert!(s.contains("line 3: "), "{v}: {s}");
-    }
-    // x y z, x y z w (w ignored), x y z r g b and x y z r g b a (colours ignored).
-    for v in [
-        "v 0 1 0",
-        "v 0 1 0 0.5",
-        "v 0 1 0 1 0.5 0",
-        "v 0 1 0 1 0.5 0 1",
-    ] {
-        let text = OBJ_V.replace("v 0 1 0", v) + "f 1 2 3\n";
-        let m = ok("v.obj", text.as_bytes());
-        assert_eq!(m.vertices[2], glam::DVec3::new(0.0, 1.0, 0.0), "{v}");
+        if valid {
+            let m = ok("v.obj", text.as_bytes());
+            assert_eq!(m.vertices[2], glam::DVec3::new(0.0, 1.0, 0.0), "{v}");
+        } else {
+            let s = err("v.obj", text.as_bytes());
+            assert!(s.contains("line 3: "), "{v}: {s}");
+        }
     }
 }
 

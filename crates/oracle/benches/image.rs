@@ -8,6 +8,9 @@ use oracle::image::{ImageOptions, ImageSurface, synthetic};
 use oracle::roots::SplitMix64;
 use std::hint::black_box;
 
+mod common;
+use common::cycling;
+
 fn surface(n: usize) -> ImageSurface {
     let opts = ImageOptions {
         iso: Some(0.0),
@@ -23,13 +26,7 @@ fn bench(c: &mut Criterion) {
     let pts: Vec<DVec3> = (0..4096)
         .map(|_| (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5) * 5.0)
         .collect();
-    c.bench_function("image128/value", |b| {
-        let mut i = 0;
-        b.iter(|| {
-            i = (i + 1) & 4095;
-            black_box(s.value(black_box(pts[i])))
-        })
-    });
+    c.bench_function("image128/value", cycling(&pts, |p| s.value(p)));
     // Points in a 6-voxel box near the surface (cache-resident): the arithmetic cost.
     let h = 5.2 / 127.0;
     let local: Vec<DVec3> = (0..4096)
@@ -38,13 +35,7 @@ fn bench(c: &mut Criterion) {
                 + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5) * 6.0 * h
         })
         .collect();
-    c.bench_function("image128/value_local", |b| {
-        let mut i = 0;
-        b.iter(|| {
-            i = (i + 1) & 4095;
-            black_box(s.value(black_box(local[i])))
-        })
-    });
+    c.bench_function("image128/value_local", cycling(&local, |p| s.value(p)));
     // Sign-changing segments about 2 voxels long straddling the surface (like Voronoi edges of
     // a fine mesh), and 1/4 of the box long (coarse mesh).
     let seeds = s.seed_points(0);
@@ -65,23 +56,11 @@ fn bench(c: &mut Criterion) {
         segs.push(v);
     }
     for (name, v) in ["crossing_2voxels", "crossing_long"].iter().zip(&segs) {
-        c.bench_function(&format!("image128/{name}"), |b| {
-            let mut i = 0;
-            b.iter(|| {
-                i = (i + 1) % v.len();
-                let (a, fa, bb, fb) = v[i];
-                black_box(s.crossing(a, fa, bb, fb))
-            })
-        });
-        c.bench_function(&format!("image128/{name}_bisection"), |b| {
-            let mut i = 0;
-            let tol = s.tolerance();
-            b.iter(|| {
-                i = (i + 1) % v.len();
-                let (a, fa, bb, fb) = v[i];
-                black_box(oracle::roots::bisect(|p| s.value(p), a, fa, bb, fb, tol))
-            })
-        });
+        let crossing = |(a, fa, b, fb)| s.crossing(a, fa, b, fb);
+        c.bench_function(&format!("image128/{name}"), cycling(v, crossing));
+        let tol = s.tolerance();
+        let bisection = |(a, fa, b, fb)| oracle::roots::bisect(|p| s.value(p), a, fa, b, fb, tol);
+        c.bench_function(&format!("image128/{name}_bisection"), cycling(v, bisection));
     }
     let mut g = c.benchmark_group("image128/setup");
     g.sample_size(10);

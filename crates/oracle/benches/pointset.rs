@@ -9,6 +9,9 @@ use oracle::pointset::{PointSetParams, PointSetSurface};
 use oracle::roots::SplitMix64;
 use std::hint::black_box;
 
+mod common;
+use common::cycling;
+
 fn bench(c: &mut Criterion) {
     let mut rng = SplitMix64(1);
     // A bumpy closed surface r(u) = 1 + 0.2 sin(3x) sin(2y), 50k points, noise 0.2% of size.
@@ -37,19 +40,8 @@ fn bench(c: &mut Criterion) {
     let boxed: Vec<DVec3> = (0..1000)
         .map(|_| rng.unit_vector() * 1.3 * rng.next_f64())
         .collect();
-    let mut i = 0;
-    g.bench_function("value_near_surface", |b| {
-        b.iter(|| {
-            i = (i + 1) % near.len();
-            s.value(black_box(near[i]))
-        })
-    });
-    g.bench_function("value_bbox", |b| {
-        b.iter(|| {
-            i = (i + 1) % boxed.len();
-            s.value(black_box(boxed[i]))
-        })
-    });
+    g.bench_function("value_near_surface", cycling(&near, |p| s.value(p)));
+    g.bench_function("value_bbox", cycling(&boxed, |p| s.value(p)));
     // Crossings of short segments through the surface (as the mesher's dual Voronoi edges).
     let segs: Vec<(DVec3, f64, DVec3, f64)> = near
         .iter()
@@ -59,19 +51,11 @@ fn bench(c: &mut Criterion) {
         })
         .filter(|&(_, fa, _, fb)| (fa < 0.0) != (fb < 0.0))
         .collect();
-    g.bench_function("crossing_short_segment", |b| {
-        b.iter(|| {
-            i = (i + 1) % segs.len();
-            let (a, fa, q, fq) = segs[i];
-            s.crossing(black_box(a), fa, q, fq)
-        })
-    });
-    g.bench_function("project_near", |b| {
-        b.iter(|| {
-            i = (i + 1) % near.len();
-            s.project(black_box(near[i]))
-        })
-    });
+    g.bench_function(
+        "crossing_short_segment",
+        cycling(&segs, |(a, fa, q, fq)| s.crossing(a, fa, q, fq)),
+    );
+    g.bench_function("project_near", cycling(&near, |p| s.project(p)));
     g.finish();
 }
 

@@ -11,6 +11,9 @@ use oracle::polyhedron::PolyhedronSurface;
 use oracle::roots::SplitMix64;
 use std::hint::black_box;
 
+mod common;
+use common::cycling;
+
 /// Read a PLY triangle mesh with the project's reader.
 fn read_ply(path: &str) -> TriMesh {
     meshio::read(path).expect("fixture mesh")
@@ -50,66 +53,25 @@ fn bench(c: &mut Criterion) {
     g.bench_function("build", |b| {
         b.iter(|| PolyhedronSurface::new(black_box(&mesh)).unwrap())
     });
-    let mut i = 0;
-    g.bench_function("value_bbox", |b| {
-        b.iter(|| {
-            i = (i + 1) % boxed.len();
-            s.value(black_box(boxed[i]))
-        })
-    });
-    g.bench_function("value_near_surface", |b| {
-        b.iter(|| {
-            i = (i + 1) % near.len();
-            s.value(black_box(near[i]))
-        })
-    });
-    g.bench_function("winding_number_near_surface", |b| {
-        b.iter(|| {
-            i = (i + 1) % near.len();
-            s.winding_number(black_box(near[i]))
-        })
-    });
-    g.bench_function("winding_number_bbox", |b| {
-        b.iter(|| {
-            i = (i + 1) % boxed.len();
-            s.winding_number(black_box(boxed[i]))
-        })
-    });
+    g.bench_function("value_bbox", cycling(&boxed, |p| s.value(p)));
+    g.bench_function("value_near_surface", cycling(&near, |p| s.value(p)));
+    let winding = |p| s.winding_number(p);
+    g.bench_function("winding_number_near_surface", cycling(&near, winding));
+    g.bench_function("winding_number_bbox", cycling(&boxed, winding));
     let mut out = Vec::new();
-    g.bench_function("crossings_short", |b| {
-        b.iter(|| {
-            i = (i + 1) % short.len();
-            out.clear();
-            s.crossings(black_box(short[i].0), black_box(short[i].1), &mut out);
-            out.len()
-        })
-    });
-    g.bench_function("crossings_long", |b| {
-        b.iter(|| {
-            i = (i + 1) % long.len();
-            out.clear();
-            s.crossings(black_box(long[i].0), black_box(long[i].1), &mut out);
-            out.len()
-        })
-    });
-    g.bench_function("crossing_bipolar_short", |b| {
-        b.iter(|| {
-            i = (i + 1) % short.len();
-            let (a, bb) = short[i];
-            let (fa, fb) = (s.value(a), s.value(bb));
-            if (fa < 0.0) != (fb < 0.0) {
-                Some(s.crossing(a, fa, bb, fb))
-            } else {
-                None
-            }
-        })
-    });
-    g.bench_function("project_near", |b| {
-        b.iter(|| {
-            i = (i + 1) % near.len();
-            s.project(black_box(near[i]))
-        })
-    });
+    let mut crossings = |(a, b): (DVec3, DVec3)| {
+        out.clear();
+        s.crossings(a, b, &mut out);
+        out.len()
+    };
+    g.bench_function("crossings_short", cycling(&short, &mut crossings));
+    g.bench_function("crossings_long", cycling(&long, &mut crossings));
+    let bipolar = |(a, b): (DVec3, DVec3)| {
+        let (fa, fb) = (s.value(a), s.value(b));
+        ((fa < 0.0) != (fb < 0.0)).then(|| s.crossing(a, fa, b, fb))
+    };
+    g.bench_function("crossing_bipolar_short", cycling(&short, bipolar));
+    g.bench_function("project_near", cycling(&near, |p| s.project(p)));
     g.finish();
 }
 

@@ -295,10 +295,7 @@ fn load() -> Vec<CatalogEntry> {
             }
         })
         .collect();
-    let ball = |r: f64| BoundingSphere {
-        center: DVec3::ZERO,
-        radius: r,
-    };
+    let ball = BoundingSphere::at_origin;
     out.push(CatalogEntry {
         name: "trefoil",
         expression: None,

@@ -18,7 +18,7 @@
 //! use glam::DVec3;
 //! use oracle::{BoundingSphere, Surface, implicit::ImplicitSurface};
 //!
-//! let bs = BoundingSphere { center: DVec3::ZERO, radius: 2.0 };
+//! let bs = BoundingSphere::at_origin(2.0);
 //! // From a closure (solid where f < 0) ...
 //! let sphere = ImplicitSurface::from_fn(|p: DVec3| p.length_squared() - 1.0, bs).unwrap();
 //! // ... or from an expression, with an exact gradient.
@@ -34,6 +34,7 @@
 
 use crate::expr::{Expr, ExprError};
 use crate::roots;
+pub use crate::roots::central_difference;
 use crate::{BoundingSphere, Surface};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -485,12 +486,6 @@ impl Surface for ImplicitSurface {
     fn dm_inf_hint(&self) -> Option<f64> {
         self.dm_inf
     }
-}
-
-/// Central-difference gradient with step `h`.
-pub fn central_difference(f: &ValueFn, p: DVec3, h: f64) -> DVec3 {
-    let d = |e: DVec3| f(p + e * h) - f(p - e * h);
-    DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z)) / (2.0 * h)
 }
 
 /// `n` points of the Fibonacci lattice on the unit sphere (deterministic, near-uniform).

@@ -13,6 +13,19 @@ pub struct BoundingSphere {
 }
 
 impl BoundingSphere {
+    /// The sphere of radius `radius` centred at the origin.
+    ///
+    /// ```
+    /// let b = oracle::BoundingSphere::at_origin(2.0);
+    /// assert!(b.contains(glam::DVec3::X) && !b.contains(glam::DVec3::splat(2.0)));
+    /// ```
+    pub const fn at_origin(radius: f64) -> BoundingSphere {
+        BoundingSphere {
+            center: DVec3::ZERO,
+            radius,
+        }
+    }
+
     /// Whether `p` is in the closed ball.
     pub fn contains(&self, p: DVec3) -> bool {
         (p - self.center).length_squared() <= self.radius * self.radius

@@ -1,5 +1,7 @@
 //! Tests of the voxel-image oracle (`oracle::image`).
 
+mod common;
+
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use oracle::Surface;
 use oracle::image::{
@@ -18,6 +20,20 @@ fn tmpdir(name: &str) -> PathBuf {
 
 fn fixtures() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/images")
+}
+
+/// The nilearn motor-task map fixture at iso 3 (9 blobs, one with a cavity).
+fn nilearn_motor_at_iso_3() -> ImageSurface {
+    let path = fixtures().join("nilearn_motor_10426.nii.gz");
+    ImageSurface::open(path, &Default::default(), &at_iso(3.0)).unwrap()
+}
+
+/// Options with the iso value `iso` (bright foreground).
+fn at_iso(iso: f64) -> ImageOptions {
+    ImageOptions {
+        iso: Some(iso),
+        ..Default::default()
+    }
 }
 
 fn dark(iso: f64) -> ImageOptions {
@@ -188,14 +204,7 @@ fn diagonal_face_connections_use_the_asymptotic_decider() {
         v[idx(2, 2, 1)] = hi;
         // iso 0.6: saddle of face (1,1)-(2,2) is (hi*hi - 0)/(2hi) - iso = hi/2 - 0.6.
         let vol = Volume::new([4, 4, 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
-        let s = ImageSurface::new(
-            vol,
-            &ImageOptions {
-                iso: Some(0.6),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let s = ImageSurface::new(vol, &at_iso(0.6)).unwrap();
         assert_eq!(s.topology().inside_components, expect, "hi = {hi}");
         // Cross-check against the interpolant at the face centre.
         let inside_centre = s.value(DVec3::new(1.5, 1.5, 1.0)) < 0.0;
@@ -378,14 +387,7 @@ fn nifti_round_trips_every_type_both_endians_and_scaling() {
                 assert_eq!(back.affine(), vol.affine());
                 // Scaling applied at sampling time: value = -(0.5 raw - 10 - iso).
                 let iso = back.get(2, 1, 1) - 0.01 * (back.get(2, 1, 1) - back.get(1, 1, 1));
-                let s = ImageSurface::new(
-                    back.clone(),
-                    &ImageOptions {
-                        iso: Some(iso),
-                        ..Default::default()
-                    },
-                )
-                .unwrap();
+                let s = ImageSurface::new(back.clone(), &at_iso(iso)).unwrap();
                 let v = s.value(back.to_world(DVec3::new(2.0, 1.0, 1.0)));
                 assert!((v + (back.get(2, 1, 1) - iso)).abs() < 1e-9 * (1.0 + v.abs()));
             }
@@ -544,25 +546,11 @@ fn bad_input_gives_clear_errors() {
     v[1 + 3 * 2] = 1.0;
     v[2 + 3 * (1 + 3 * 2)] = f32::NAN;
     let vol = Volume::new([3, 3, 3], Voxels::F32(v), aff).unwrap();
-    let e = ImageSurface::new(
-        vol,
-        &ImageOptions {
-            iso: Some(0.5),
-            ..Default::default()
-        },
-    )
-    .unwrap_err();
+    let e = ImageSurface::new(vol, &at_iso(0.5)).unwrap_err();
     assert!(e.to_string().contains("voxel [2, 1, 2] is NaN"), "{e}");
     // Iso outside the data range.
     let vol = synthetic::sample_implicit(|p| p.x, [4, 4, 4], aff);
-    let e = ImageSurface::new(
-        vol.clone(),
-        &ImageOptions {
-            iso: Some(9.0),
-            ..Default::default()
-        },
-    )
-    .unwrap_err();
+    let e = ImageSurface::new(vol.clone(), &at_iso(9.0)).unwrap_err();
     assert_eq!(
         e.to_string(),
         "iso value 9 is outside the data range [0, 3] (or equal to an end): there is no surface; pick a value strictly inside the range"
@@ -661,14 +649,7 @@ fn real_looking_fixture_and_its_truncated_copy() {
     assert_eq!((slope, inter), (0.5, -100.0));
     assert!(vol.affine().matrix3.determinant() < 0.0);
     // "Skull" iso: bright shell above 250, closed; "brain" between 80 and 200.
-    let s = ImageSurface::new(
-        vol.clone(),
-        &ImageOptions {
-            iso: Some(250.0),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = ImageSurface::new(vol.clone(), &at_iso(250.0)).unwrap();
     assert_eq!(s.component_count(), 2, "outer and inner skull surfaces");
     let e = ImageSurface::new(vol, &ImageOptions::default()).unwrap_err();
     assert!(matches!(e, ImageError::IsoRequired { .. }));
@@ -748,11 +729,7 @@ fn tanglecube_64_topology_and_seeds() {
         // Within a fraction of a voxel of the analytic surface (|grad f| ≈ 10..30 there).
         let g = {
             let e = 1e-6;
-            DVec3::new(
-                synthetic::tanglecube(p + DVec3::X * e) - synthetic::tanglecube(p - DVec3::X * e),
-                synthetic::tanglecube(p + DVec3::Y * e) - synthetic::tanglecube(p - DVec3::Y * e),
-                synthetic::tanglecube(p + DVec3::Z * e) - synthetic::tanglecube(p - DVec3::Z * e),
-            ) / (2.0 * e)
+            oracle::roots::central_difference(synthetic::tanglecube, p, e)
         };
         let dist = synthetic::tanglecube(p).abs() / g.length();
         assert!(dist < 0.25 * h, "seed {p} is {dist} from the surface");
@@ -765,11 +742,7 @@ fn tanglecube_64_topology_and_seeds() {
 fn results_do_not_depend_on_thread_count() {
     let vol = synthetic::tanglecube_volume(40);
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        common::with_threads(threads, || {
             let s = ImageSurface::new(vol.clone(), &dark(0.0)).unwrap();
             (s.topology().clone(), s.seed_points(3), s.dm_inf_hint())
         })
@@ -800,14 +773,7 @@ fn large_512_u16_volume() {
         DAffine3::from_scale(DVec3::splat(0.5)),
     )
     .unwrap();
-    let s = ImageSurface::new(
-        vol,
-        &ImageOptions {
-            iso: Some(2000.0),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = ImageSurface::new(vol, &at_iso(2000.0)).unwrap();
     let t0 = std::time::Instant::now();
     assert_eq!(s.component_count(), 1);
     eprintln!("topology: {:?}", t0.elapsed());
@@ -849,14 +815,7 @@ fn real_nifti_from_env() {
         .ok()
         .map(|v| v.parse().unwrap())
         .unwrap_or(0.5 * (st.min + st.max));
-    let s = ImageSurface::new(
-        vol,
-        &ImageOptions {
-            iso: Some(iso),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = ImageSurface::new(vol, &at_iso(iso)).unwrap();
     let t0 = std::time::Instant::now();
     let t = s.topology();
     eprintln!(
@@ -890,14 +849,7 @@ fn real_statistical_map_from_nilearn() {
         .fold((0, f32::MIN), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
     let ijk = vol.unindex(imax);
     let world_max = vol.to_world(DVec3::new(ijk[0] as f64, ijk[1] as f64, ijk[2] as f64));
-    let s = ImageSurface::new(
-        vol,
-        &ImageOptions {
-            iso: Some(3.0),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = ImageSurface::new(vol, &at_iso(3.0)).unwrap();
     assert!(s.value(world_max) < 0.0);
     assert!(s.value(s.bounding_sphere().center + DVec3::X * s.bounding_sphere().radius) > 0.0);
     let n = s.component_count();
@@ -956,7 +908,7 @@ mod props {
         ) {
             prop_assume!(data.iter().min() != data.iter().max());
             let vol = Volume::new([4, 5, 3], Voxels::U16(data.clone()), aff).unwrap();
-            let s = ImageSurface::new(vol.clone(), &ImageOptions { iso: Some(500.5), ..Default::default() });
+            let s = ImageSurface::new(vol.clone(), &at_iso(500.5));
             prop_assume!(s.is_ok());
             let s = s.unwrap();
             for k in 0..3 { for j in 0..5 { for i in 0..4 {
@@ -1168,15 +1120,7 @@ fn stats_over_many_chunks() {
 /// farthest-point thinning of control points (64 by default) keeps every component seed.
 #[test]
 fn seed_points_keep_every_component_seed_within_the_budget() {
-    let s = ImageSurface::open(
-        fixtures().join("nilearn_motor_10426.nii.gz"),
-        &Default::default(),
-        &ImageOptions {
-            iso: Some(3.0),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = nilearn_motor_at_iso_3();
     let t = s.topology();
     assert!(t.component_seeds.len() >= 2 && t.extra_seeds.len() > 64);
     for seed in [0, 1, 99] {
@@ -1243,14 +1187,7 @@ fn single_voxel_blobs_get_seed_tetrahedra_around_them() {
         centres.push(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
     }
     let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
-    let s = ImageSurface::new(
-        vol,
-        &ImageOptions {
-            iso: Some(1.0),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = ImageSurface::new(vol, &at_iso(1.0)).unwrap();
     assert_eq!(s.component_count(), 8);
     let (tets, inside) = check_tets(&s);
     assert_eq!((tets, inside), (8, 8));
@@ -1281,15 +1218,7 @@ fn single_voxel_blobs_get_seed_tetrahedra_around_them() {
 /// (value < 0) except for the cavity's (value > 0).
 #[test]
 fn nilearn_components_get_seed_tetrahedra() {
-    let s = ImageSurface::open(
-        fixtures().join("nilearn_motor_10426.nii.gz"),
-        &Default::default(),
-        &ImageOptions {
-            iso: Some(3.0),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = nilearn_motor_at_iso_3();
     let t = s.topology();
     assert_eq!((t.inside_components, t.outside_components), (9, 2));
     assert_eq!(check_tets(&s), (10, 9));
@@ -1304,10 +1233,7 @@ fn normal_uncertainty_from_integer_rounding() {
     let ramp = |i: usize| 10.0 * i as f64;
     let idx = |p: usize| p % n;
     let affine = DAffine3::from_scale(DVec3::splat(0.5));
-    let opts = ImageOptions {
-        iso: Some(75.0),
-        ..Default::default()
-    };
+    let opts = at_iso(75.0);
     let u16v: Vec<u16> = (0..n * n * n).map(|p| ramp(idx(p)) as u16).collect();
     let f32v: Vec<f32> = (0..n * n * n).map(|p| ramp(idx(p)) as f32).collect();
     let s16 = ImageSurface::new(

@@ -1,6 +1,8 @@
 //! Implicit backend: expression parser/compiler, ImplicitSurface checks and oracles, root
 //! finding, catalog.
 
+mod common;
+
 use glam::DVec3;
 use oracle::catalog;
 use oracle::expr::{Expr, ExprErrorKind};
@@ -11,10 +13,7 @@ use proptest::prelude::*;
 use std::cell::Cell;
 
 fn ball(r: f64) -> BoundingSphere {
-    BoundingSphere {
-        center: DVec3::ZERO,
-        radius: r,
-    }
+    BoundingSphere::at_origin(r)
 }
 
 fn ev(src: &str, p: [f64; 3]) -> f64 {
@@ -23,45 +22,75 @@ fn ev(src: &str, p: [f64; 3]) -> f64 {
         .eval(DVec3::from_array(p))
 }
 
+/// Asserts `ev(src, p) == want` for every `(src, want)` (exact: the cases are exact or use the
+/// same libm call as the evaluator).
+fn assert_evals(p: [f64; 3], cases: &[(&str, f64)]) {
+    for &(src, want) in cases {
+        assert_eq!(ev(src, p), want, "{src} at {p:?}");
+    }
+}
+
+/// Asserts that `src` fails to parse with an arity error (`expected` arguments, `found` given).
+fn assert_arity(src: &str, expected: usize, found: usize) {
+    let kind = Expr::parse(src).unwrap_err().kind;
+    let arity = match &kind {
+        ExprErrorKind::Arity {
+            expected, found, ..
+        } => Some((*expected, *found)),
+        _ => None,
+    };
+    assert_eq!(arity, Some((expected, found)), "{src}: {kind:?}");
+}
+
 // ---------------------------------------------------------------- parser
 
 #[test]
 fn precedence_and_associativity() {
     let p = [3.0, 2.0, -1.0];
-    assert_eq!(ev("-x^2", p), -9.0);
-    assert_eq!(ev("(-x)^2", p), 9.0);
-    assert_eq!(ev("2^3^2", p), 512.0);
-    assert_eq!(ev("1-2-3", p), -4.0);
-    assert_eq!(ev("8/4/2", p), 1.0);
-    assert_eq!(ev("2+3*4", p), 14.0);
-    assert_eq!(ev("(2+3)*4", p), 20.0);
-    assert_eq!(ev("x^-1", p), 1.0 / 3.0);
-    assert_eq!(ev("2**3", p), 8.0);
-    assert_eq!(ev("- - x", p), 3.0);
-    assert_eq!(ev("+y", p), 2.0);
-    assert_eq!(ev("2*-y", p), -4.0);
-    assert_eq!(ev("-2^-2", p), -0.25);
-    assert_eq!(ev("x*y^2*z", p), -12.0);
-    assert_eq!(ev("x^2/y^2", p), 2.25);
+    assert_evals(
+        p,
+        &[
+            ("-x^2", -9.0),
+            ("(-x)^2", 9.0),
+            ("2^3^2", 512.0),
+            ("1-2-3", -4.0),
+            ("8/4/2", 1.0),
+            ("2+3*4", 14.0),
+            ("(2+3)*4", 20.0),
+            ("x^-1", 1.0 / 3.0),
+            ("2**3", 8.0),
+            ("- - x", 3.0),
+            ("+y", 2.0),
+            ("2*-y", -4.0),
+            ("-2^-2", -0.25),
+            ("x*y^2*z", -12.0),
+            ("x^2/y^2", 2.25),
+        ],
+    );
 }
 
 #[test]
 fn numbers_constants_functions() {
     let p = [0.5, -2.0, 4.0];
-    assert_eq!(ev("1e-3*1000", p), 1.0);
-    assert_eq!(ev("2.5E+2", p), 250.0);
-    assert_eq!(ev(".5+.5", p), 1.0);
-    assert_eq!(ev("pi", p), std::f64::consts::PI);
-    assert_eq!(ev("sqrt(z)", p), 2.0);
-    assert_eq!(ev("cbrt(-8)", p), -2.0);
-    assert_eq!(ev("ln(exp(2))", p), 2.0);
-    assert_eq!(ev("log(z)", p), 4f64.ln());
-    assert_eq!(ev("abs(y)", p), 2.0);
-    assert_eq!(ev("sign(y) + sign(0) + sign(x)", p), 0.0);
-    assert_eq!(ev("min(x, y)", p), -2.0);
-    assert_eq!(ev("max(x, y)", p), 0.5);
-    assert_eq!(ev("pow(2, 10)", p), 1024.0);
-    assert_eq!(ev("pow(z, 0.5)", p), 2.0);
+    assert_evals(
+        p,
+        &[
+            ("1e-3*1000", 1.0),
+            ("2.5E+2", 250.0),
+            (".5+.5", 1.0),
+            ("pi", std::f64::consts::PI),
+            ("sqrt(z)", 2.0),
+            ("cbrt(-8)", -2.0),
+            ("ln(exp(2))", 2.0),
+            ("log(z)", 4f64.ln()),
+            ("abs(y)", 2.0),
+            ("sign(y) + sign(0) + sign(x)", 0.0),
+            ("min(x, y)", -2.0),
+            ("max(x, y)", 0.5),
+            ("pow(2, 10)", 1024.0),
+            ("pow(z, 0.5)", 2.0),
+        ],
+    );
     assert_eq!(
         ev("sin(x)^2+cos(x)^2", p),
         0.5f64.sin().powi(2) + 0.5f64.cos().powi(2)
@@ -144,24 +173,8 @@ fn unknown_names_are_named() {
     assert_eq!(e.kind, ExprErrorKind::UnknownVariable("X".into()));
     let e = Expr::parse("x(2)").unwrap_err();
     assert_eq!(e.kind, ExprErrorKind::NotAFunction("x".into()));
-    let e = Expr::parse("min(x)").unwrap_err();
-    assert!(matches!(
-        e.kind,
-        ExprErrorKind::Arity {
-            expected: 2,
-            found: 1,
-            ..
-        }
-    ));
-    let e = Expr::parse("sin(x, y)").unwrap_err();
-    assert!(matches!(
-        e.kind,
-        ExprErrorKind::Arity {
-            expected: 1,
-            found: 2,
-            ..
-        }
-    ));
+    assert_arity("min(x)", 2, 1);
+    assert_arity("sin(x, y)", 1, 2);
 }
 
 #[test]
@@ -366,11 +379,7 @@ fn gradient_is_exact() {
             let (v, g) = x.eval_grad(p);
             assert_eq!(v, x.eval(p));
             let h = 1e-6;
-            let fd = DVec3::new(
-                x.eval(p + DVec3::X * h) - x.eval(p - DVec3::X * h),
-                x.eval(p + DVec3::Y * h) - x.eval(p - DVec3::Y * h),
-                x.eval(p + DVec3::Z * h) - x.eval(p - DVec3::Z * h),
-            ) / (2.0 * h);
+            let fd = oracle::roots::central_difference(|q| x.eval(q), p, h);
             let err = (g - fd).length();
             assert!(
                 err <= 1e-5 * (1.0 + g.length()) + 1e-6 * v.abs(),
@@ -718,26 +727,14 @@ fn seeds_find_every_component_and_are_deterministic() {
         }
     }
     // Deterministic: same seed, same points, whatever the thread count.
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let three = rayon::ThreadPoolBuilder::new()
-        .num_threads(3)
-        .build()
-        .unwrap();
-    let s1 = one.install(|| {
-        ImplicitSurface::from_fn(f, ball(2.0))
-            .unwrap()
-            .seed_points(1)
-    });
-    let s3 = three.install(|| {
-        ImplicitSurface::from_fn(f, ball(2.0))
-            .unwrap()
-            .seed_points(1)
-    });
-    assert_eq!(s1, seeds);
-    assert_eq!(s3, seeds);
+    for threads in [1, 3] {
+        let again = common::with_threads(threads, || {
+            ImplicitSurface::from_fn(f, ball(2.0))
+                .unwrap()
+                .seed_points(1)
+        });
+        assert_eq!(again, seeds, "{threads} threads");
+    }
     assert_ne!(
         s.seed_points(2),
         seeds,
@@ -783,10 +780,7 @@ fn projection_falls_back_to_rays_where_the_value_is_flat() {
     struct NanBeyond;
     impl Surface for NanBeyond {
         fn bounding_sphere(&self) -> BoundingSphere {
-            BoundingSphere {
-                center: DVec3::ZERO,
-                radius: 3.0,
-            }
+            BoundingSphere::at_origin(3.0)
         }
         fn value(&self, p: DVec3) -> f64 {
             if p.x > 1.5 {
@@ -1147,11 +1141,7 @@ fn trefoil_is_a_tube_of_constant_radius() {
         let g = s.gradient(p);
         assert!((g.length() - 1.0).abs() < 1e-9, "|grad| at {p}");
         let e = 1e-6;
-        let fd = DVec3::new(
-            f(p + DVec3::X * e) - f(p - DVec3::X * e),
-            f(p + DVec3::Y * e) - f(p - DVec3::Y * e),
-            f(p + DVec3::Z * e) - f(p - DVec3::Z * e),
-        ) / (2.0 * e);
+        let fd = oracle::roots::central_difference(f, p, e);
         if b.abs() < 0.13 {
             assert!((g - fd).length() < 1e-5, "grad at {p}: {g} vs {fd}");
         }

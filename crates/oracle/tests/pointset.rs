@@ -1,6 +1,8 @@
 //! Point-set oracle: normal estimation and orientation, IMLS zero set, signs far away, seeds,
 //! local feature size, `.xyz` reading and input errors.
 
+mod common;
+
 use glam::DVec3;
 use meshio::TriMesh;
 use oracle::Surface;
@@ -32,6 +34,12 @@ fn noisy_sphere(n: usize, center: DVec3, radius: f64, sigma: f64, seed: u64) -> 
 
 /// Construction (kNN, normals, far-field flood fill) and queries give the same bits with 1
 /// and 3 threads; the far field has the inside and the outside as separate regions.
+/// How many of the `estimated` normals have a cosine above `min_cos` with the `truth` ones.
+fn agreeing(estimated: &[DVec3], truth: &[DVec3], min_cos: f64) -> usize {
+    let agree = |(n, t): &(&DVec3, &DVec3)| n.dot(**t) > min_cos;
+    estimated.iter().zip(truth).filter(agree).count()
+}
+
 #[test]
 fn results_do_not_depend_on_thread_count() {
     let mut pts = noisy_sphere(6000, DVec3::ZERO, 1.0, 0.004, 9);
@@ -43,11 +51,7 @@ fn results_do_not_depend_on_thread_count() {
         10,
     ));
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        common::with_threads(threads, || {
             let s = PointSetSurface::new(&pts, None, &PointSetParams::default()).unwrap();
             let mut rng = SplitMix64(4);
             let vals: Vec<u64> = (0..3000)
@@ -73,20 +77,11 @@ fn noisy_sphere_without_normals() {
     assert!(s.stats().estimated_normals);
     assert_eq!(s.stats().components, 1);
     // Orientation: outward for > 99% of the points.
-    let good = s
-        .normals()
-        .iter()
-        .zip(&pts)
-        .filter(|(n, p)| n.dot(p.normalize()) > 0.0)
-        .count();
+    let radial: Vec<DVec3> = pts.iter().map(|p| p.normalize()).collect();
+    let good = agreeing(s.normals(), &radial, 0.0);
     assert!(good as f64 > 0.99 * pts.len() as f64, "{good} outward");
     // And accurate: within ~25 degrees of the true normal for 95% of the points.
-    let close = s
-        .normals()
-        .iter()
-        .zip(&pts)
-        .filter(|(n, p)| n.dot(p.normalize()) > 0.9)
-        .count();
+    let close = agreeing(s.normals(), &radial, 0.9);
     assert!(close as f64 > 0.95 * pts.len() as f64, "{close} accurate");
     // Zero set within a few sigma of the unit sphere at many projected points.
     let mut rng = SplitMix64(9);
@@ -162,12 +157,7 @@ fn two_spheres_with_given_and_estimated_normals() {
         .collect();
     let est = PointSetSurface::new(&pts, None, &PointSetParams::default()).unwrap();
     assert_eq!(est.stats().components, 2);
-    let good = est
-        .normals()
-        .iter()
-        .zip(&outward)
-        .filter(|(n, o)| n.dot(**o) > 0.0)
-        .count();
+    let good = agreeing(est.normals(), &outward, 0.0);
     assert!(good as f64 > 0.99 * pts.len() as f64, "{good}");
     let cloud = oracle::pointset::PointCloud {
         points: pts.clone(),
@@ -234,12 +224,7 @@ fn noisy_bunny_samples_without_normals() {
         nrm.push((b - a).cross(c - a).normalize());
     }
     let s = PointSetSurface::new(&pts, None, &PointSetParams::default()).unwrap();
-    let good = s
-        .normals()
-        .iter()
-        .zip(&nrm)
-        .filter(|(n, o)| n.dot(**o) > 0.0)
-        .count();
+    let good = agreeing(s.normals(), &nrm, 0.0);
     assert!(
         good as f64 > 0.97 * pts.len() as f64,
         "{good} of {} outward",

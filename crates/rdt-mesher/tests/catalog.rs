@@ -121,10 +121,7 @@ fn heart_terminates_and_is_a_manifold() {
 
 fn two_spheres() -> ImplicitSurface {
     let (c1, c2) = (DVec3::new(-1.5, 0.0, 0.0), DVec3::new(1.5, 0.0, 0.0));
-    let bs = BoundingSphere {
-        center: DVec3::ZERO,
-        radius: 3.0,
-    };
+    let bs = BoundingSphere::at_origin(3.0);
     ImplicitSurface::from_fn(move |p| (p - c1).length().min((p - c2).length()) - 1.0, bs).unwrap()
 }
 

@@ -6,7 +6,8 @@ use oracle::BoundingSphere;
 use rdt_mesher::{Criteria, MeshOptions, OracleKind, Sizing, mesh, topology};
 
 mod common;
-use common::analytic::{Analytic, sphere, torus};
+use common::analytic::{Analytic, ellipsoid, in_pool, sphere, torus};
+use common::uniform;
 
 /// Euler characteristic V - E + F of a triangle mesh.
 fn euler(m: &meshio::TriMesh) -> i64 {
@@ -52,12 +53,17 @@ fn check_closed_manifold(out: &rdt_mesher::MeshResult, genus: i64) {
     assert!(volume(&out.mesh) > 0.0, "mesh is inside out");
 }
 
+/// [`uniform`] options with each oracle, bipolar first.
+fn both_oracles(size: f64) -> [MeshOptions; 2] {
+    [OracleKind::Bipolar, OracleKind::Intersection].map(|oracle| MeshOptions {
+        oracle,
+        ..uniform(size)
+    })
+}
+
 #[test]
 fn sphere_bipolar_meets_all_criteria() {
-    let opts = MeshOptions {
-        criteria: Criteria::uniform(0.1),
-        ..Default::default()
-    };
+    let opts = uniform(0.1);
     let s = sphere();
     let out = mesh(&s, &opts).unwrap();
     assert!(out.stats.criteria_met, "{:?}", out.stats.unmet);
@@ -74,12 +80,8 @@ fn sphere_bipolar_meets_all_criteria() {
 
 #[test]
 fn torus_both_oracles_same_topology() {
-    for oracle in [OracleKind::Bipolar, OracleKind::Intersection] {
-        let opts = MeshOptions {
-            criteria: Criteria::uniform(0.08),
-            oracle,
-            ..Default::default()
-        };
+    for opts in both_oracles(0.08) {
+        let oracle = opts.oracle;
         let t = torus();
         let out = mesh(&t, &opts).unwrap();
         assert!(out.stats.criteria_met, "{oracle:?}: {:?}", out.stats.unmet);
@@ -96,16 +98,10 @@ fn two_disjoint_spheres_are_both_found() {
             let b = (p + DVec3::X * 1.5).length() - 0.5;
             a.min(b)
         },
-        BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 3.5,
-        },
+        BoundingSphere::at_origin(3.5),
     )
     .unwrap();
-    let opts = MeshOptions {
-        criteria: Criteria::uniform(0.1),
-        ..Default::default()
-    };
+    let opts = uniform(0.1);
     let out = mesh(&s, &opts).unwrap();
     assert!(out.stats.criteria_met, "{:?}", out.stats.unmet);
     // Two spheres: Euler characteristic 4, and vertices on both.
@@ -117,23 +113,13 @@ fn two_disjoint_spheres_are_both_found() {
 #[test]
 fn deterministic_bit_for_bit() {
     let opts = MeshOptions {
-        criteria: Criteria::uniform(0.12),
         seed: 7,
-        ..Default::default()
+        ..uniform(0.12)
     };
     let t = torus();
     let a = mesh(&t, &opts).unwrap();
     let b = mesh(&t, &opts).unwrap();
     assert_eq!(a.mesh, b.mesh);
-}
-
-/// Runs `f` on a rayon pool of `n` threads.
-fn in_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .unwrap()
-        .install(f)
 }
 
 /// An oracle slow enough (~5 us a value) that the mesher runs its batches of oracle calls on
@@ -154,10 +140,9 @@ fn parallel_oracle_batches_do_not_change_the_mesh() {
     };
     for oracle in [OracleKind::Bipolar, OracleKind::Intersection] {
         let opts = MeshOptions {
-            criteria: Criteria::uniform(0.15),
             oracle,
             seed: 3,
-            ..Default::default()
+            ..uniform(0.15)
         };
         let one = in_pool(1, || mesh(&slow_torus, &opts).unwrap());
         let four = in_pool(4, || mesh(&slow_torus, &opts).unwrap());
@@ -177,12 +162,8 @@ fn parallel_oracle_batches_do_not_change_the_mesh() {
 /// and on 4 threads, with both oracles.
 #[test]
 fn batched_refinement_is_independent_of_the_thread_count() {
-    for oracle in [OracleKind::Bipolar, OracleKind::Intersection] {
-        let opts = MeshOptions {
-            criteria: Criteria::uniform(0.03),
-            oracle,
-            ..Default::default()
-        };
+    for opts in both_oracles(0.03) {
+        let oracle = opts.oracle;
         let one = in_pool(1, || mesh(&torus(), &opts).unwrap());
         let four = in_pool(4, || mesh(&torus(), &opts).unwrap());
         assert!(one.stats.vertices > 5000, "{}", one.stats.vertices);
@@ -213,10 +194,7 @@ fn sign_only_function_meshes_with_bipolar() {
         center: DVec3::ZERO,
         radius: 2.0,
     };
-    let opts = MeshOptions {
-        criteria: Criteria::uniform(0.15),
-        ..Default::default()
-    };
+    let opts = uniform(0.15);
     let out = mesh(&s, &opts).unwrap();
     check_closed_manifold(&out, 0);
 }
@@ -224,9 +202,8 @@ fn sign_only_function_meshes_with_bipolar() {
 #[test]
 fn budget_stops_cleanly_and_reports() {
     let opts = MeshOptions {
-        criteria: Criteria::uniform(0.01),
         max_vertices: Some(500),
-        ..Default::default()
+        ..uniform(0.01)
     };
     let s = sphere();
     let out = mesh(&s, &opts).unwrap();
@@ -289,20 +266,8 @@ mod props {
         #[test]
         fn random_ellipsoids(ax in 0.4f64..1.2, ay in 0.4f64..1.2, az in 0.4f64..1.2,
                              cx in -0.5f64..0.5, seed in 0u64..1000) {
-            let c = DVec3::new(cx, -cx, 0.3 * cx);
-            let s = Analytic {
-                f: move |p: DVec3| {
-                    let q = p - c;
-                    (q.x / ax).powi(2) + (q.y / ay).powi(2) + (q.z / az).powi(2) - 1.0
-                },
-                center: c,
-                radius: 1.5,
-            };
-            let opts = MeshOptions {
-                criteria: Criteria::uniform(0.12),
-                seed,
-                ..Default::default()
-            };
+            let s = ellipsoid(DVec3::new(ax, ay, az), cx);
+            let opts = MeshOptions { seed, ..uniform(0.12) };
             let out = mesh(&s, &opts).unwrap();
             prop_assert!(out.stats.criteria_met, "{:?}", out.stats.unmet);
             check_closed_manifold(&out, 0);

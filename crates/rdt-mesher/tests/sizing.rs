@@ -38,27 +38,28 @@ fn range(v: &[DVec3], m: &MedialAxisEstimate) -> (f64, f64) {
         .fold((f64::INFINITY, 0.0), |(a, b), d| (a.min(d), b.max(d)))
 }
 
-#[test]
-fn dm_estimate_sphere_is_one() {
-    let (v, m) = medial("sphere", 1.0);
+/// Asserts that the d_M estimate over a uniform sample of catalog surface `name` (true
+/// d_M^inf `dm_inf`) lies in the open interval `(lo_min, hi_max)`.
+fn assert_dm_range(name: &str, dm_inf: f64, lo_min: f64, hi_max: f64) {
+    let (v, m) = medial(name, dm_inf);
     let (lo, hi) = range(&v, &m);
     assert!(
-        lo > 0.97 && hi < 1.03,
-        "sphere d_M estimate in [{lo}, {hi}], expected 1"
+        lo > lo_min && hi < hi_max,
+        "{name} d_M estimate in [{lo}, {hi}], expected within ({lo_min}, {hi_max})"
     );
 }
 
 #[test]
+fn dm_estimate_sphere_is_one() {
+    assert_dm_range("sphere", 1.0, 0.97, 1.03);
+}
+
+#[test]
 fn dm_estimate_torus_is_constant() {
-    let (v, m) = medial("torus", 0.3);
-    let (lo, hi) = range(&v, &m);
     // The lambda-medial axis of a sigma-sample (sigma = 0.027 here) is within O(sigma) of the
     // medial axis, on the sample's side: the lowest value depends on the sample (0.264 with
     // the scaffold, 0.27+ without), so allow 1.5 sigma below the true 0.3.
-    assert!(
-        lo > 0.3 - 1.5 * 0.027 && hi < 0.315,
-        "torus d_M estimate in [{lo}, {hi}], expected 0.3"
-    );
+    assert_dm_range("torus", 0.3, 0.3 - 1.5 * 0.027, 0.315);
 }
 
 #[test]
@@ -120,7 +121,7 @@ proptest! {
         sigma0 in 0.001..0.5f64,
     ) {
         let pts: Vec<DVec3> = pts.into_iter().map(|(x, y, z)| DVec3::new(x, y, z)).collect();
-        let bs = oracle::BoundingSphere { center: DVec3::ZERO, radius: 3.0 };
+        let bs = oracle::BoundingSphere::at_origin(3.0);
         // A degenerate (flat) sample may be refused; then nothing to check.
         if let Ok(m) = MedialAxisEstimate::new(&pts, 0.0, bs) {
             let f = adaptive_field(Arc::new(m), eps, sigma0);
@@ -159,9 +160,8 @@ fn two_pass_rejects_bad_parameters() {
 /// poles of the (denser) first-pass sample.
 #[test]
 fn two_pass_ellipsoid_is_sparser_and_certified() {
-    let s = catalog::surface("ellipsoid").unwrap();
     let eps = 0.2;
-    let tp = two_pass(&s, eps, 0.16, &MeshOptions::default(), &mut |_| {}).unwrap();
+    let (s, tp) = two_pass_of("ellipsoid", eps, 0.16);
     let (n1, n2) = (tp.first.stats.vertices, tp.second.stats.vertices);
     assert!(tp.first.stats.criteria_met && tp.second.stats.criteria_met);
     assert!(2 * n2 < n1, "second pass {n2} vs first {n1}");
@@ -169,6 +169,21 @@ fn two_pass_ellipsoid_is_sparser_and_certified() {
         tp.second.stats.nonmanifold_edges + tp.second.stats.nonmanifold_vertices,
         0
     );
+    let rep = certified_loose_epsilon(&tp, &s, eps);
+    assert_eq!(rep.status("closed"), Some(verify::Status::Pass));
+}
+
+/// The two-pass run on catalog surface `name` at `eps` with d_M^inf `dm_inf`, default options.
+fn two_pass_of(name: &str, eps: f64, dm_inf: f64) -> (oracle::ImplicitSurface, sizing::TwoPass) {
+    let s = catalog::surface(name).unwrap();
+    let tp = two_pass(&s, eps, dm_inf, &MeshOptions::default(), &mut |_| {}).unwrap();
+    (s, tp)
+}
+
+/// The verify report of the second pass of `tp` against `s` (the first pass's vertices as
+/// surface samples, d_M from the poles), asserting that the certificate at `eps`
+/// holds (the check itself says "no guarantee": eps is above epsilon_1).
+fn certified_loose_epsilon(tp: &sizing::TwoPass, s: &dyn Surface, eps: f64) -> verify::Report {
     let balls =
         verify::SurfaceBall::per_facet(tp.second.balls.iter().map(|b| (b.center, b.radius)));
     let vo = verify::Options {
@@ -180,7 +195,7 @@ fn two_pass_ellipsoid_is_sparser_and_certified() {
         surface_samples: Some(tp.first.mesh.vertices.clone()),
         ..Default::default()
     };
-    let rep = verify::check_against(&tp.second.mesh, &s, &vo);
+    let rep = verify::check_against(&tp.second.mesh, s, &vo);
     // The certificate holds; eps is above epsilon_1, so the check says "no guarantee" (INFO).
     assert!(
         rep.certificate.as_ref().unwrap().passed(),
@@ -193,14 +208,13 @@ fn two_pass_ellipsoid_is_sparser_and_certified() {
         "{}",
         rep.summary()
     );
-    assert_eq!(rep.status("closed"), Some(verify::Status::Pass));
+    rep
 }
 
 /// The sphere's d_M is constant: both passes are close in size.
 #[test]
 fn two_pass_sphere_sizes_are_close() {
-    let s = catalog::surface("sphere").unwrap();
-    let tp = two_pass(&s, 0.15, 1.0, &MeshOptions::default(), &mut |_| {}).unwrap();
+    let (_, tp) = two_pass_of("sphere", 0.15, 1.0);
     let (n1, n2) = (
         tp.first.stats.vertices as f64,
         tp.second.stats.vertices as f64,
@@ -348,9 +362,8 @@ fn skinny_facet_removal_from_random_sample() {
 /// tips of the medial axis that the lambda-medial axis leaves out.
 #[test]
 fn two_pass_chair_with_too_large_dm_inf_is_certified() {
-    let s = catalog::surface("chair").unwrap();
     let eps = 0.45;
-    let tp = two_pass(&s, eps, 0.1, &MeshOptions::default(), &mut |_| {}).unwrap();
+    let (s, tp) = two_pass_of("chair", eps, 0.1);
     let (n1, n2) = (tp.first.stats.vertices, tp.second.stats.vertices);
     assert!(tp.second.stats.criteria_met, "{:?}", tp.second.stats.unmet);
     assert!(3 * n2 < n1, "second pass {n2} vs first {n1}");
@@ -360,30 +373,7 @@ fn two_pass_chair_with_too_large_dm_inf_is_certified() {
         tp.dm_inf_estimate
     );
     assert!(tp.floor < tp.sigma0);
-    let balls =
-        verify::SurfaceBall::per_facet(tp.second.balls.iter().map(|b| (b.center, b.radius)));
-    let vo = verify::Options {
-        self_intersections: false,
-        samples_per_edge: 1,
-        surface_balls: Some(balls),
-        epsilon: Some(eps),
-        dm: verify::DmSource::Poles,
-        surface_samples: Some(tp.first.mesh.vertices.clone()),
-        ..Default::default()
-    };
-    let rep = verify::check_against(&tp.second.mesh, &s, &vo);
-    // The certificate holds; eps is above epsilon_1, so the check says "no guarantee" (INFO).
-    assert!(
-        rep.certificate.as_ref().unwrap().passed(),
-        "{}",
-        rep.summary()
-    );
-    assert_eq!(
-        rep.status("loose-epsilon"),
-        Some(verify::Status::Info),
-        "{}",
-        rep.summary()
-    );
+    let rep = certified_loose_epsilon(&tp, &s, eps);
     // Where the size is set by the estimate, some ball is at least 80% of it: the second pass
     // is not needlessly fine.
     let worst = rep.certificate.as_ref().unwrap().eps_achieved;

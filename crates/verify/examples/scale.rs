@@ -1,55 +1,18 @@
 //! Timing of `verify::check` on a large UV sphere (default ~1e6 triangles).
 //! `cargo run -p verify --release --example scale -- [n_lat]`
 use glam::DVec3;
-use meshio::TriMesh;
-use std::f64::consts::PI;
 use std::time::Instant;
 
-fn uv_sphere(n_lat: usize, n_lon: usize) -> TriMesh {
-    let mut v = vec![DVec3::Z];
-    for i in 1..n_lat {
-        let th = PI * i as f64 / n_lat as f64;
-        for j in 0..n_lon {
-            let ph = 2.0 * PI * j as f64 / n_lon as f64;
-            v.push(DVec3::new(
-                th.sin() * ph.cos(),
-                th.sin() * ph.sin(),
-                th.cos(),
-            ));
-        }
-    }
-    v.push(-DVec3::Z);
-    let south = (v.len() - 1) as u32;
-    let ring = |i: usize, j: usize| (1 + (i - 1) * n_lon + j % n_lon) as u32;
-    let mut t = Vec::new();
-    for j in 0..n_lon {
-        t.push([0, ring(1, j), ring(1, j + 1)]);
-        t.push([south, ring(n_lat - 1, j + 1), ring(n_lat - 1, j)]);
-    }
-    for i in 1..n_lat - 1 {
-        for j in 0..n_lon {
-            let (a, b, c, d) = (
-                ring(i, j),
-                ring(i, j + 1),
-                ring(i + 1, j),
-                ring(i + 1, j + 1),
-            );
-            t.push([a, c, d]);
-            t.push([a, d, b]);
-        }
-    }
-    TriMesh {
-        vertices: v,
-        triangles: t,
-    }
-}
+// The test suite's mesh builders (the UV sphere).
+#[path = "../tests/common.rs"]
+mod common;
 
 fn main() {
     let n_lat: usize = std::env::args()
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(500);
-    let mesh = uv_sphere(n_lat, 2 * n_lat);
+    let mesh = common::uv_sphere(DVec3::ZERO, 1.0, n_lat, 2 * n_lat);
     println!(
         "{} vertices, {} triangles, {} threads",
         mesh.vertices.len(),
@@ -98,10 +61,7 @@ fn main() {
 struct UnitSphere;
 impl oracle::Surface for UnitSphere {
     fn bounding_sphere(&self) -> oracle::BoundingSphere {
-        oracle::BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 2.0,
-        }
+        oracle::BoundingSphere::at_origin(2.0)
     }
     fn value(&self, p: DVec3) -> f64 {
         p.length() - 1.0

@@ -47,7 +47,7 @@ fn cube_with_a_face_removed_has_a_boundary() {
     let mut m = cube();
     m.triangles.drain(2..4); // the top face (two triangles)
     let r = check(&m, &opts());
-    assert_eq!(r.status("closed"), Some(Status::Fail), "{}", r.summary());
+    assert_status(&r, "closed", Status::Fail);
     let t = r.topology.as_ref().unwrap();
     assert_eq!(t.boundary_edges_total, 4);
     let mut b = t.boundary_edges.clone();
@@ -94,12 +94,7 @@ fn two_tetrahedra_sharing_a_vertex_are_not_vertex_manifold() {
     }
     let r = check(&m, &opts());
     let t = r.topology.as_ref().unwrap();
-    assert_eq!(
-        r.status("vertex-manifold"),
-        Some(Status::Fail),
-        "{}",
-        r.summary()
-    );
+    assert_status(&r, "vertex-manifold", Status::Fail);
     assert_eq!(t.non_manifold_vertices, vec![0]);
     assert!(t.is_closed() && t.is_edge_manifold() && t.is_consistently_oriented());
     assert_eq!(t.components.len(), 1, "joined at the vertex");
@@ -121,7 +116,7 @@ fn flipped_facet_is_an_orientation_error() {
     let mut m = cube();
     m.triangles[5].swap(0, 1);
     let r = check(&m, &opts());
-    assert_eq!(r.status("oriented"), Some(Status::Fail), "{}", r.summary());
+    assert_status(&r, "oriented", Status::Fail);
     let t = r.topology.as_ref().unwrap();
     assert_eq!(
         t.inconsistent_edges_total, 3,
@@ -147,12 +142,7 @@ fn interpenetrating_spheres_self_intersect_a_single_sphere_does_not() {
         uv_sphere(DVec3::new(1.0, 0.1, 0.05), 1.0, 12, 24),
     ]);
     let r = check(&two, &opts());
-    assert_eq!(
-        r.status("self-intersections"),
-        Some(Status::Fail),
-        "{}",
-        r.summary()
-    );
+    assert_status(&r, "self-intersections", Status::Fail);
     let si = r.self_intersections.as_ref().unwrap();
     assert!(
         si.pairs_total >= 24,
@@ -229,36 +219,31 @@ fn duplicate_unreferenced_degenerate_and_bad_input() {
     assert_eq!(r.status("duplicate-vertices"), Some(Status::Fail));
     assert_eq!(r.status("degenerate-triangles"), Some(Status::Fail));
 
-    let bad = TriMesh {
-        vertices: vec![DVec3::ZERO],
+    // Bad input: the `input` check FAILs with the reason, and nothing else is checked.
+    let one_triangle = |vertices: Vec<DVec3>| TriMesh {
+        vertices,
         triangles: vec![[0, 1, 2]],
     };
-    let r = check(&bad, &opts());
-    assert_eq!(r.status("input"), Some(Status::Fail));
-    assert!(
-        r.input_error
-            .as_ref()
-            .unwrap()
-            .contains("face 0 uses vertex index 1"),
-        "{r:?}"
-    );
-    assert!(r.topology.is_none());
-    let nan = TriMesh {
-        vertices: vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, f64::NAN, 0.0)],
-        triangles: vec![[0, 1, 2]],
-    };
-    assert_eq!(check(&nan, &opts()).status("input"), Some(Status::Fail));
-    let huge = TriMesh {
-        vertices: vec![DVec3::ZERO, DVec3::X * 1e300, DVec3::Y],
-        triangles: vec![[0, 1, 2]],
-    };
-    let r = check(&huge, &opts());
-    assert_eq!(r.status("input"), Some(Status::Fail));
-    assert!(
-        r.input_error
-            .unwrap()
-            .contains("vertex 1 has a coordinate outside the range")
-    );
+    for (bad, reason) in [
+        (
+            one_triangle(vec![DVec3::ZERO]),
+            "face 0 uses vertex index 1",
+        ),
+        (
+            one_triangle(vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, f64::NAN, 0.0)]),
+            "vertex 2",
+        ),
+        (
+            one_triangle(vec![DVec3::ZERO, DVec3::X * 1e300, DVec3::Y]),
+            "vertex 1 has a coordinate outside the range",
+        ),
+    ] {
+        let r = check(&bad, &opts());
+        assert_eq!(r.status("input"), Some(Status::Fail));
+        let why = r.input_error.as_deref().unwrap_or("");
+        assert!(why.contains(reason), "{reason:?} not in {why:?}");
+        assert!(r.topology.is_none());
+    }
 }
 
 #[test]

@@ -7,6 +7,18 @@ use oracle::{BoundingSphere, Surface};
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
+/// Asserts that check `name` of `r` has status `want` (the summary in the message).
+pub fn assert_status(r: &verify::Report, name: &str, want: verify::Status) {
+    assert_eq!(r.status(name), Some(want), "{name}: {}", r.summary());
+}
+
+/// The corners of each triangle of `m`, in order.
+pub fn corners(m: &TriMesh) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+    m.triangles
+        .iter()
+        .map(|t| t.map(|i| m.vertices[i as usize]))
+}
+
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../fixtures/meshes")
@@ -102,10 +114,7 @@ pub struct UnitSphere;
 
 impl Surface for UnitSphere {
     fn bounding_sphere(&self) -> BoundingSphere {
-        BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 2.0,
-        }
+        BoundingSphere::at_origin(2.0)
     }
     fn value(&self, p: DVec3) -> f64 {
         p.length() - 1.0
@@ -156,10 +165,7 @@ impl Torus {
 
 impl Surface for Torus {
     fn bounding_sphere(&self) -> BoundingSphere {
-        BoundingSphere {
-            center: DVec3::ZERO,
-            radius: 1.5 * (self.big + self.small),
-        }
+        BoundingSphere::at_origin(1.5 * (self.big + self.small))
     }
     fn value(&self, p: DVec3) -> f64 {
         (p - self.core_point(p)).length() - self.small

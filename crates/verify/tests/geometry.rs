@@ -66,13 +66,8 @@ fn hausdorff_of_a_uv_sphere_matches_the_exact_distance_within_5_percent() {
         // S -> mesh: exact nearest triangle (compare with brute force on a subset).
         let mut brute_max: f64 = 0.0;
         for s in samples.iter() {
-            let d = m
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|i| m.vertices[i as usize]);
-                    (closest_point_on_triangle(*s, a, b, c) - *s).length()
-                })
+            let d = corners(&m)
+                .map(|[a, b, c]| (closest_point_on_triangle(*s, a, b, c) - *s).length())
                 .fold(f64::INFINITY, f64::min);
             brute_max = brute_max.max(d);
         }
@@ -127,11 +122,8 @@ fn loose_epsilon_certificate_on_the_sphere() {
     // For a triangle inscribed in the unit sphere, the line through the circumcentre along
     // the normal passes through the origin: the surface Delaunay ball is centred at the
     // outward unit normal n and its radius is the chord |n - a| (d_M = 1 everywhere).
-    let radii: Vec<f64> = m
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+    let radii: Vec<f64> = corners(&m)
+        .map(|[a, b, c]| {
             let n = (b - a).cross(c - a).normalize();
             [a, b, c]
                 .iter()
@@ -212,12 +204,7 @@ fn theorem_4_7_holds_on_a_fine_sphere() {
 fn every_component_needs_vertices() {
     let m = uv_sphere(DVec3::ZERO, 1.0, 8, 16);
     let r = check_against(&m, &UnitSphere, &sphere_opts());
-    assert_eq!(
-        r.status("components-sampled"),
-        Some(Status::Pass),
-        "{}",
-        r.summary()
-    );
+    assert_status(&r, "components-sampled", Status::Pass);
     // A second component of S (a seed far from the mesh) that the mesh misses.
     let opts = Options {
         component_seeds: Some(vec![DVec3::X, DVec3::new(5.0, 0.0, 0.0)]),
@@ -366,12 +353,7 @@ fn torus_against_its_analytic_surface() {
     // A 64 x 24 grid is far from a loose 1/7-sample of this torus: no lemma 3.1 guarantee.
     assert_eq!(r.status("normals"), Some(Status::Info));
     assert_eq!(g.normals.inverted_facets, 0);
-    assert_eq!(
-        r.status("components-sampled"),
-        Some(Status::Pass),
-        "{}",
-        r.summary()
-    );
+    assert_status(&r, "components-sampled", Status::Pass);
     let c = r.certificate.as_ref().unwrap();
     assert_eq!(c.facets_without_ball, 0, "{}", r.summary());
     assert!(c.eps_achieved > 0.0 && c.eps_achieved < 1.0);

@@ -35,77 +35,34 @@ pub struct PaperTableArgs {
     pub no_verify: bool,
 }
 
-/// Paper's figures: first (time, size); intersection and bipolar second pass
-/// (engine s, engine %, calls, oracle s, oracle %, total s, size).
-type PaperRow = (Option<(f64, u64)>, [(f64, f64, f64, f64, f64, f64, u64); 2]);
+/// One second pass of the paper's Table 1: (engine s, engine %, calls, oracle s, oracle %,
+/// total s, size).
+type PaperPass = (f64, f64, f64, f64, f64, f64, u64);
+
+/// Paper's figures: first (time, size); intersection and bipolar second pass.
+type PaperRow = (Option<(f64, u64)>, [PaperPass; 2]);
+
+/// One row of [`PAPER`]: name, first pass (time, size) where given, the intersection then the
+/// bipolar second pass.
+type PaperEntry = (&'static str, Option<(f64, u64)>, PaperPass, PaperPass);
+
+/// The paper's Table 1, one surface a row.
+#[rustfmt::skip]
+const PAPER: &[PaperEntry] = &[
+    ("sphere", Some((0.29, 1146)), (0.032, 14.6, 8929.0, 0.19, 85.4, 0.22, 445), (0.033, 87.5, 3226.0, 0.005, 12.5, 0.038, 445)),
+    ("ellipsoid", Some((0.59, 1864)), (0.1, 6.3, 7410.0, 1.48, 93.7, 1.58, 380), (0.11, 91.7, 8170.0, 0.01, 8.3, 0.12, 380)),
+    ("torus", Some((1.21, 2234)), (0.05, 0.2, 58e3, 26.83, 99.8, 26.88, 1268), (0.055, 88.7, 63e3, 0.07, 11.3, 0.62, 1307)),
+    ("chair", Some((8.56, 17996)), (2.94, 0.5, 260e3, 618.3, 99.5, 621.3, 6619), (2.86, 89.4, 255e3, 0.34, 10.6, 3.2, 6461)),
+    ("tanglecube", Some((3.66, 7173)), (1.72, 2.9, 168e3, 73.24, 97.1, 74.96, 4225), (1.72, 90.8, 165e3, 0.18, 9.2, 1.9, 4242)),
+    ("trefoil", Some((8.32, 10312)), (6.02, 1.6, 545e3, 375.7, 98.4, 381.83, 8329), (5.9, 93.2, 592e3, 0.43, 6.8, 6.3, 8317)),
+    ("barth_octic", None, (5.92, 1.7, 547e3, 337.8, 98.3, 343.72, 13928), (6.16, 83.8, 603e3, 1.19, 16.2, 7.35, 14168)),
+    ("heart", None, (3.24, 7.0, 252e3, 42.96, 93.0, 46.19, 8445), (3.11, 91.8, 263e3, 0.28, 8.2, 3.39, 8539)),
+    ("klein_bottle", None, (0.076, 0.4, 101e3, 21.44, 99.6, 21.58, 3424), (0.082, 92.0, 102e3, 0.07, 8.0, 0.89, 3445)),
+];
 
 fn paper(name: &str) -> Option<PaperRow> {
-    Some(match name {
-        "sphere" => (
-            Some((0.29, 1146)),
-            [
-                (0.032, 14.6, 8929.0, 0.19, 85.4, 0.22, 445),
-                (0.033, 87.5, 3226.0, 0.005, 12.5, 0.038, 445),
-            ],
-        ),
-        "ellipsoid" => (
-            Some((0.59, 1864)),
-            [
-                (0.1, 6.3, 7410.0, 1.48, 93.7, 1.58, 380),
-                (0.11, 91.7, 8170.0, 0.01, 8.3, 0.12, 380),
-            ],
-        ),
-        "torus" => (
-            Some((1.21, 2234)),
-            [
-                (0.05, 0.2, 58e3, 26.83, 99.8, 26.88, 1268),
-                (0.055, 88.7, 63e3, 0.07, 11.3, 0.62, 1307),
-            ],
-        ),
-        "chair" => (
-            Some((8.56, 17996)),
-            [
-                (2.94, 0.5, 260e3, 618.3, 99.5, 621.3, 6619),
-                (2.86, 89.4, 255e3, 0.34, 10.6, 3.2, 6461),
-            ],
-        ),
-        "tanglecube" => (
-            Some((3.66, 7173)),
-            [
-                (1.72, 2.9, 168e3, 73.24, 97.1, 74.96, 4225),
-                (1.72, 90.8, 165e3, 0.18, 9.2, 1.9, 4242),
-            ],
-        ),
-        "trefoil" => (
-            Some((8.32, 10312)),
-            [
-                (6.02, 1.6, 545e3, 375.7, 98.4, 381.83, 8329),
-                (5.9, 93.2, 592e3, 0.43, 6.8, 6.3, 8317),
-            ],
-        ),
-        "barth_octic" => (
-            None,
-            [
-                (5.92, 1.7, 547e3, 337.8, 98.3, 343.72, 13928),
-                (6.16, 83.8, 603e3, 1.19, 16.2, 7.35, 14168),
-            ],
-        ),
-        "heart" => (
-            None,
-            [
-                (3.24, 7.0, 252e3, 42.96, 93.0, 46.19, 8445),
-                (3.11, 91.8, 263e3, 0.28, 8.2, 3.39, 8539),
-            ],
-        ),
-        "klein_bottle" => (
-            None,
-            [
-                (0.076, 0.4, 101e3, 21.44, 99.6, 21.58, 3424),
-                (0.082, 92.0, 102e3, 0.07, 8.0, 0.89, 3445),
-            ],
-        ),
-        _ => return None,
-    })
+    let &(_, first, intersection, bipolar) = PAPER.iter().find(|r| r.0 == name)?;
+    Some((first, [intersection, bipolar]))
 }
 
 /// Constant sigma of the singular surfaces (paper, figure 7) and whether the manifold patch is on.

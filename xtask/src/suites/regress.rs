@@ -64,53 +64,29 @@ struct SurfaceCase {
     sizes: [(&'static str, f64); 2],
 }
 
-/// (name, ~2k sigma, ~50k sigma).
+impl SurfaceCase {
+    const fn new(name: &'static str, sizes: [(&'static str, f64); 2]) -> SurfaceCase {
+        SurfaceCase { name, sizes }
+    }
+}
+
+/// (name, [(label, ~2k sigma), (label, ~50k sigma)]).
 const SURFACES: &[SurfaceCase] = &[
-    SurfaceCase {
-        name: "sphere",
-        sizes: [("2k", 0.065), ("50k", 0.013)],
-    },
-    SurfaceCase {
-        name: "ellipsoid",
-        sizes: [("2k", 0.042), ("50k", 0.0084)],
-    },
-    SurfaceCase {
-        name: "torus",
-        sizes: [("2k", 0.063), ("50k", 0.0126)],
-    },
-    SurfaceCase {
-        name: "double_torus",
-        sizes: [("2k", 0.043), ("50k", 0.0087)],
-    },
-    SurfaceCase {
-        name: "tanglecube",
-        sizes: [("2k", 0.18), ("50k", 0.036)],
-    },
-    SurfaceCase {
-        name: "chair",
-        sizes: [("2k", 0.29), ("50k", 0.058)],
-    },
-    SurfaceCase {
-        name: "blobs",
-        sizes: [("2k", 0.039), ("50k", 0.0078)],
-    },
-    SurfaceCase {
-        name: "heart",
-        sizes: [("2k", 0.062), ("12k", 0.025)],
-    },
-    SurfaceCase {
-        name: "two_spheres",
-        sizes: [("2k", 0.092), ("50k", 0.0184)],
-    },
+    SurfaceCase::new("sphere", [("2k", 0.065), ("50k", 0.013)]),
+    SurfaceCase::new("ellipsoid", [("2k", 0.042), ("50k", 0.0084)]),
+    SurfaceCase::new("torus", [("2k", 0.063), ("50k", 0.0126)]),
+    SurfaceCase::new("double_torus", [("2k", 0.043), ("50k", 0.0087)]),
+    SurfaceCase::new("tanglecube", [("2k", 0.18), ("50k", 0.036)]),
+    SurfaceCase::new("chair", [("2k", 0.29), ("50k", 0.058)]),
+    SurfaceCase::new("blobs", [("2k", 0.039), ("50k", 0.0078)]),
+    SurfaceCase::new("heart", [("2k", 0.062), ("12k", 0.025)]),
+    SurfaceCase::new("two_spheres", [("2k", 0.092), ("50k", 0.0184)]),
 ];
 
 /// Two disjoint unit spheres centered at (+-1.5, 0, 0): d_M^inf = 0.5 (the bisector plane).
 pub fn two_spheres() -> Result<ImplicitSurface> {
     let (c1, c2) = (DVec3::new(-1.5, 0.0, 0.0), DVec3::new(1.5, 0.0, 0.0));
-    let bs = BoundingSphere {
-        center: DVec3::ZERO,
-        radius: 3.0,
-    };
+    let bs = BoundingSphere::at_origin(3.0);
     ImplicitSurface::builder(move |p| (p - c1).length().min((p - c2).length()) - 1.0, bs)
         .dm_inf_hint(0.5)
         .build()

@@ -97,3 +97,31 @@ pub fn sphere_points(r2: i64, s: f64, o: DVec3) -> Vec<DVec3> {
     }
     v
 }
+
+/// Checks that bulk insertion of `pts` gives a valid triangulation with the same tetrahedra
+/// as one-by-one insertion ([`build_checked`], returned) and maps every input to its point.
+pub fn bulk_agrees_with_one_by_one(pts: &[DVec3]) -> Triangulation {
+    let t = build_checked(pts);
+    let mut b = Triangulation::new();
+    let ids = b.insert_bulk(pts).unwrap();
+    assert!(b.is_valid().is_ok());
+    for (i, &v) in ids.iter().enumerate() {
+        assert_eq!(b.point(v), pts[i]);
+    }
+    // Unique triangulation: same tetrahedra whatever the insertion order.
+    assert_eq!(tets_by_points(&t), tets_by_points(&b));
+    t
+}
+
+/// The integer grid `{0..n}^3`, x slowest, z fastest.
+pub fn grid(n: u32) -> Vec<DVec3> {
+    let mut pts = Vec::new();
+    for x in 0..n {
+        for y in 0..n {
+            for z in 0..n {
+                pts.push(DVec3::new(x as f64, y as f64, z as f64));
+            }
+        }
+    }
+    pts
+}

@@ -71,27 +71,17 @@ impl Bvh {
 
     /// Call `f(i)` for every item whose box overlaps `query` (closed boxes).
     pub fn for_each_overlap(&self, query: &Aabb, mut f: impl FnMut(u32)) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack = Vec::with_capacity(64);
-        stack.push(0u32);
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n as usize];
-            if !node.bounds.overlaps(query) {
-                continue;
-            }
-            if node.count > 0 {
-                for &i in &self.items[node.first as usize..(node.first + node.count) as usize] {
-                    if self.boxes[i as usize].overlaps(query) {
-                        f(i);
-                    }
+        let node = |n: u32| {
+            let nd = &self.nodes[n as usize];
+            (nd.bounds, nd.first, nd.count)
+        };
+        super::walk_overlapping_leaves(self.nodes.len(), query, node, |first, count| {
+            for &i in &self.items[first as usize..(first + count) as usize] {
+                if self.boxes[i as usize].overlaps(query) {
+                    f(i);
                 }
-            } else {
-                stack.push(node.first);
-                stack.push(node.first + 1);
             }
-        }
+        });
     }
 
     /// The item minimising `dist2(i)` (a squared distance from `p` that is at least the

@@ -135,6 +135,34 @@ pub(crate) fn keep_nearest<I: Copy + PartialOrd>(best: &mut Option<(I, f64)>, i:
     };
 }
 
+/// Depth-first box-overlap walk shared by both trees (children `first` and `first + 1`,
+/// the right one visited first): `node(n)` gives node `n`'s `(bounds, first, count)`, and
+/// `leaf(first, count)` is called for every leaf whose bounds overlap `query`.
+pub(crate) fn walk_overlapping_leaves(
+    num_nodes: usize,
+    query: &Aabb,
+    node: impl Fn(u32) -> (Aabb, u32, u32),
+    mut leaf: impl FnMut(u32, u32),
+) {
+    if num_nodes == 0 {
+        return;
+    }
+    let mut stack = Vec::with_capacity(64);
+    stack.push(0u32);
+    while let Some(n) = stack.pop() {
+        let (bounds, first, count) = node(n);
+        if !bounds.overlaps(query) {
+            continue;
+        }
+        if count > 0 {
+            leaf(first, count);
+        } else {
+            stack.push(first);
+            stack.push(first + 1);
+        }
+    }
+}
+
 /// Best-first nearest search: push the two children of a node so that the nearer one is
 /// visited first (pushed last).
 pub(crate) fn push_nearer_last(

@@ -412,32 +412,22 @@ impl TriangleBvh {
     /// Call `f(face id)` for every triangle whose box overlaps `query` (closed boxes), in
     /// traversal order.
     pub fn for_each_overlap(&self, query: &Aabb, mut f: impl FnMut(u32)) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack = Vec::with_capacity(64);
-        stack.push(0u32);
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n as usize];
+        let node = |n: u32| {
+            let nd = &self.nodes[n as usize];
             let bounds = Aabb {
-                min: node.lo,
-                max: node.hi,
+                min: nd.lo,
+                max: nd.hi,
             };
-            if !bounds.overlaps(query) {
-                continue;
-            }
-            if node.count > 0 {
-                let s = node.first as usize;
-                for k in s..s + node.count as usize {
-                    if Aabb::from_points(&self.tris[k]).overlaps(query) {
-                        f(self.face_ids[k]);
-                    }
+            (bounds, nd.first, nd.count)
+        };
+        super::walk_overlapping_leaves(self.nodes.len(), query, node, |first, count| {
+            let s = first as usize;
+            for k in s..s + count as usize {
+                if Aabb::from_points(&self.tris[k]).overlaps(query) {
+                    f(self.face_ids[k]);
                 }
-            } else {
-                stack.push(node.first);
-                stack.push(node.first + 1);
             }
-        }
+        });
     }
 }
 

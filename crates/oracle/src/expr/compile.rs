@@ -1,8 +1,8 @@
 //! Compilation of expressions (ours) to a flat SSA register program: constant folding,
 //! common-subexpression sharing, integer powers as multiplications.
 
-use super::eval::{Op, apply, func_op};
-use super::parser::{Ast, Func};
+use super::eval::{Op, apply};
+use super::parser::Ast;
 use std::collections::HashMap;
 
 /// One SSA instruction: `reg[first_temp + k] = op(reg[a], reg[b])`.
@@ -123,10 +123,10 @@ impl Builder {
                 } else {
                     a
                 };
-                if *f == Func::Pow {
+                if *f == Op::Powf {
                     self.pow(a, b)
                 } else {
-                    self.emit(func_op(*f), a, b)
+                    self.emit(*f, a, b)
                 }
             }
         }

@@ -42,7 +42,7 @@ pub use error::{ExprError, ExprErrorKind};
 
 use compile::{Ins, compile};
 use dual::dual;
-use eval::{apply, eval_ast};
+use eval::apply;
 use glam::DVec3;
 use parser::{Ast, parse_ast};
 use std::fmt;
@@ -155,7 +155,7 @@ impl Expr {
     /// Slow reference interpreter of the syntax tree (no folding, `powf` for every power); for
     /// tests of the compiler.
     pub fn eval_tree(&self, p: DVec3) -> f64 {
-        eval_ast(&self.ast, p.to_array())
+        self.ast.eval(p.to_array())
     }
 }
 

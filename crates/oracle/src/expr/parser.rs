@@ -1,44 +1,27 @@
 //! The recursive-descent parser of expressions (ours), with the grammar of [`super`].
 
 use super::error::{ExprError, ExprErrorKind, MAX_DEPTH};
+use super::eval::{Op, apply};
 use super::lexer::{Tok, tokenize};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Func {
-    Sqrt,
-    Cbrt,
-    Exp,
-    Ln,
-    Sin,
-    Cos,
-    Tan,
-    Atan,
-    Abs,
-    Sign,
-    Min,
-    Max,
-    Pow,
-}
-
-impl Func {
-    fn lookup(name: &str) -> Option<(Func, usize)> {
-        Some(match name {
-            "sqrt" => (Func::Sqrt, 1),
-            "cbrt" => (Func::Cbrt, 1),
-            "exp" => (Func::Exp, 1),
-            "ln" | "log" => (Func::Ln, 1),
-            "sin" => (Func::Sin, 1),
-            "cos" => (Func::Cos, 1),
-            "tan" => (Func::Tan, 1),
-            "atan" => (Func::Atan, 1),
-            "abs" => (Func::Abs, 1),
-            "sign" => (Func::Sign, 1),
-            "min" => (Func::Min, 2),
-            "max" => (Func::Max, 2),
-            "pow" => (Func::Pow, 2),
-            _ => return None,
-        })
-    }
+/// The instruction of the function `name` and its number of arguments.
+fn lookup(name: &str) -> Option<(Op, usize)> {
+    Some(match name {
+        "sqrt" => (Op::Sqrt, 1),
+        "cbrt" => (Op::Cbrt, 1),
+        "exp" => (Op::Exp, 1),
+        "ln" | "log" => (Op::Ln, 1),
+        "sin" => (Op::Sin, 1),
+        "cos" => (Op::Cos, 1),
+        "tan" => (Op::Tan, 1),
+        "atan" => (Op::Atan, 1),
+        "abs" => (Op::Abs, 1),
+        "sign" => (Op::Sign, 1),
+        "min" => (Op::Min, 2),
+        "max" => (Op::Max, 2),
+        "pow" => (Op::Powf, 2),
+        _ => return None,
+    })
 }
 
 /// Syntax tree (kept for the reference interpreter [`Expr::eval_tree`]).
@@ -48,7 +31,33 @@ pub(super) enum Ast {
     Var(u8),
     Neg(Box<Ast>),
     Bin(char, Box<Ast>, Box<Ast>),
-    Call(Func, Vec<Ast>),
+    Call(Op, Vec<Ast>),
+}
+
+impl Ast {
+    /// The reference interpreter of the syntax tree.
+    pub(super) fn eval(&self, p: [f64; 3]) -> f64 {
+        match self {
+            Ast::Num(v) => *v,
+            Ast::Var(i) => p[*i as usize],
+            Ast::Neg(e) => -e.eval(p),
+            Ast::Bin(op, l, r) => {
+                let (l, r) = (l.eval(p), r.eval(p));
+                match op {
+                    '+' => l + r,
+                    '-' => l - r,
+                    '*' => l * r,
+                    '/' => l / r,
+                    _ => l.powf(r),
+                }
+            }
+            Ast::Call(f, args) => {
+                let a = args[0].eval(p);
+                let b = args.get(1).map_or(0.0, |e| e.eval(p));
+                apply(*f, a, b)
+            }
+        }
+    }
 }
 
 struct Parser<'a> {
@@ -91,21 +100,25 @@ impl Parser<'_> {
     }
 
     fn expr(&mut self) -> Result<Ast, ExprError> {
-        let mut lhs = self.term()?;
-        while let Tok::Sym(c @ ('+' | '-')) = self.peek() {
-            let op = *c;
-            self.pos += 1;
-            let rhs = self.term()?;
-            lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs));
-        }
-        Ok(lhs)
+        self.left_assoc(['+', '-'], Self::term)
     }
     fn term(&mut self) -> Result<Ast, ExprError> {
-        let mut lhs = self.unary()?;
-        while let Tok::Sym(c @ ('*' | '/')) = self.peek() {
+        self.left_assoc(['*', '/'], Self::unary)
+    }
+    /// `operand (op operand)*` for the two operators `ops`, grouped from the left.
+    fn left_assoc(
+        &mut self,
+        ops: [char; 2],
+        operand: fn(&mut Self) -> Result<Ast, ExprError>,
+    ) -> Result<Ast, ExprError> {
+        let mut lhs = operand(self)?;
+        while let Tok::Sym(c) = self.peek() {
             let op = *c;
+            if !ops.contains(&op) {
+                break;
+            }
             self.pos += 1;
-            let rhs = self.unary()?;
+            let rhs = operand(self)?;
             lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs));
         }
         Ok(lhs)
@@ -148,7 +161,7 @@ impl Parser<'_> {
             Tok::Ident(name) => {
                 self.pos += 1;
                 if *self.peek() == Tok::Sym('(') {
-                    let Some((func, arity)) = Func::lookup(&name) else {
+                    let Some((func, arity)) = lookup(&name) else {
                         let kind = if matches!(name.as_str(), "x" | "y" | "z" | "pi") {
                             ExprErrorKind::NotAFunction(name)
                         } else {
@@ -182,7 +195,7 @@ impl Parser<'_> {
                     "y" => Ok(Ast::Var(1)),
                     "z" => Ok(Ast::Var(2)),
                     "pi" => Ok(Ast::Num(std::f64::consts::PI)),
-                    _ if Func::lookup(&name).is_some() => Err(ExprError::new(
+                    _ if lookup(&name).is_some() => Err(ExprError::new(
                         ExprErrorKind::Expected {
                             expected: format!("'(' after function '{name}'"),
                             found: self.peek().to_string(),

@@ -278,13 +278,7 @@ pub(crate) fn curvature_radius(s: &ImageSurface) -> Option<f64> {
     } else {
         0.0
     };
-    let gradient = |p: DVec3, h: f64| {
-        DVec3::new(
-            s.value(p + DVec3::X * h) - s.value(p - DVec3::X * h),
-            s.value(p + DVec3::Y * h) - s.value(p - DVec3::Y * h),
-            s.value(p + DVec3::Z * h) - s.value(p - DVec3::Z * h),
-        ) / (2.0 * h)
-    };
+    let gradient = |p: DVec3, h: f64| crate::roots::central_difference(|q| s.value(q), p, h);
     let normal = |p: DVec3, h: f64| -> Option<DVec3> {
         let g = gradient(p, h);
         let l = g.length();

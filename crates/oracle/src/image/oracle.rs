@@ -223,11 +223,7 @@ impl Surface for ImageSurface {
     fn gradient(&self, p: DVec3) -> DVec3 {
         let v = self.inv.transform_point3(p);
         let h = 1e-4;
-        let g = DVec3::new(
-            self.value_voxel(v + DVec3::X * h) - self.value_voxel(v - DVec3::X * h),
-            self.value_voxel(v + DVec3::Y * h) - self.value_voxel(v - DVec3::Y * h),
-            self.value_voxel(v + DVec3::Z * h) - self.value_voxel(v - DVec3::Z * h),
-        ) / (2.0 * h);
+        let g = crate::roots::central_difference(|q| self.value_voxel(q), v, h);
         self.inv_t * g
     }
 

@@ -43,6 +43,7 @@ use crate::BoundingSphere;
 use crate::roots::SplitMix64;
 use far::FarCache;
 use geom::bvh::TriangleBvh as Bvh;
+use geom::predicates::BadPoint;
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lfs::LfsSample;
@@ -361,18 +362,11 @@ fn validate(
             });
         }
     }
-    for (i, p) in points.iter().enumerate() {
-        if !p.is_finite() {
-            return Err(PointSetError::NonFinitePoint {
-                index: i,
-                x: p.x,
-                y: p.y,
-                z: p.z,
-            });
-        }
-        if let Some(c) = p.to_array().into_iter().find(|c| c.abs() > 1e60) {
-            return Err(PointSetError::OutOfRange { index: i, value: c });
-        }
+    if let Some((index, bad)) = geom::predicates::first_bad_point(points, 1e60) {
+        return Err(match bad {
+            BadPoint::NonFinite([x, y, z]) => PointSetError::NonFinitePoint { index, x, y, z },
+            BadPoint::TooLarge(value) => PointSetError::OutOfRange { index, value },
+        });
     }
     if let Some(ns) = normals {
         if ns.len() != n {

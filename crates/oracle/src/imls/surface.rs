@@ -124,14 +124,7 @@ impl Surface for PointSetSurface {
     /// Intersection oracle: sign changes of the value sampled at [`Surface::crossing_step`],
     /// each refined by [`Surface::crossing`].
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
-        crate::roots::sample_crossings(
-            |x| self.value(x),
-            |p0, f0, p1, f1| self.crossing(p0, f0, p1, f1),
-            a,
-            b,
-            self.crossing_step(),
-            out,
-        );
+        crate::roots::sample_crossings(self, a, b, out);
     }
 
     /// Half the median kernel radius: the IMLS surface does not oscillate at smaller scales,
@@ -220,11 +213,7 @@ mod tests {
             }
             near += 1;
             let h = 1e-6;
-            let fd = DVec3::new(
-                s.value(x + DVec3::X * h) - s.value(x - DVec3::X * h),
-                s.value(x + DVec3::Y * h) - s.value(x - DVec3::Y * h),
-                s.value(x + DVec3::Z * h) - s.value(x - DVec3::Z * h),
-            ) / (2.0 * h);
+            let fd = crate::roots::central_difference(|q| s.value(q), x, h);
             assert!(
                 (fd - g).length() < 1e-4 * g.length().max(1.0),
                 "{x}: {g} vs {fd}"

@@ -5,7 +5,7 @@ use crate::roots::{SplitMix64, bisect};
 use crate::{BoundingSphere, Surface};
 use geom::bvh::TriangleBvh as Bvh;
 use geom::closest::closest_point_segment;
-use geom::predicates::collinear;
+use geom::predicates::{BadPoint, collinear, first_bad_point};
 use glam::DVec3;
 use meshio::TriMesh;
 
@@ -366,18 +366,8 @@ fn validate(mesh: &TriMesh) -> Result<(), PolyhedronError> {
     if mesh.triangles.is_empty() {
         return Err(PolyhedronError::NoTriangles { vertices: nv });
     }
-    for (i, v) in mesh.vertices.iter().enumerate() {
-        if !v.is_finite() {
-            return Err(PolyhedronError::NonFinite {
-                index: i,
-                x: v.x,
-                y: v.y,
-                z: v.z,
-            });
-        }
-        if let Some(c) = v.to_array().into_iter().find(|c| c.abs() > MAX_COORD) {
-            return Err(PolyhedronError::OutOfRange { index: i, value: c });
-        }
+    if let Some((index, bad)) = first_bad_point(&mesh.vertices, MAX_COORD) {
+        return Err(PolyhedronError::bad_point(index, bad));
     }
     for (f, t) in mesh.triangles.iter().enumerate() {
         if let Some(&bad) = t.iter().find(|&&i| i as usize >= nv) {
@@ -389,6 +379,16 @@ fn validate(mesh: &TriMesh) -> Result<(), PolyhedronError> {
         }
     }
     Ok(())
+}
+
+impl PolyhedronError {
+    /// The error for vertex `index` failing the kernel's input check.
+    fn bad_point(index: usize, bad: BadPoint) -> Self {
+        match bad {
+            BadPoint::NonFinite([x, y, z]) => Self::NonFinite { index, x, y, z },
+            BadPoint::TooLarge(value) => Self::OutOfRange { index, value },
+        }
+    }
 }
 
 /// Weld exactly equal vertices: the canonical index of each vertex (the smallest index with

@@ -182,14 +182,7 @@ impl Surface for SmoothPolyhedron {
     /// Sign changes of the value sampled at [`Surface::crossing_step`], each refined by
     /// [`Surface::crossing`].
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
-        crate::roots::sample_crossings(
-            |x| self.value(x),
-            |p0, f0, p1, f1| self.crossing(p0, f0, p1, f1),
-            a,
-            b,
-            self.crossing_step(),
-            out,
-        );
+        crate::roots::sample_crossings(self, a, b, out);
     }
     fn crossing_step(&self) -> f64 {
         self.imls.crossing_step()

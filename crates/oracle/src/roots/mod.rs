@@ -55,3 +55,12 @@ pub use scan::{all_crossings, try_all_crossings};
 
 #[cfg(doc)]
 use crate::Surface;
+
+use glam::DVec3;
+
+/// Central-difference gradient of `f` at `p` with step `h` (one evaluation on each side of
+/// `p` along each axis).
+pub fn central_difference(f: impl Fn(DVec3) -> f64, p: DVec3, h: f64) -> DVec3 {
+    let d = |e: DVec3| f(p + e * h) - f(p - e * h);
+    DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z)) / (2.0 * h)
+}

@@ -4,6 +4,7 @@
 use super::bracket::nan_at;
 use super::illinois::try_find_root;
 use crate::OracleError;
+use crate::Surface;
 use glam::DVec3;
 
 /// All sign changes of `f` on `[a, b]` sampled at steps of at most `step`, each refined by
@@ -62,29 +63,28 @@ pub fn try_all_crossings(
     Ok(())
 }
 
-/// The sampling loop of the point-set and smoothed-polyhedron intersection oracles: `value`
-/// sampled at `n = ⌈|b − a| / step⌉` points `a.lerp(b, i / n)` (at most 2^20), and every sign
-/// change between consecutive samples refined by `refine` (their bipolar oracle), pushed in
-/// order from `a`. Nothing for a segment of non-finite length.
-pub(crate) fn sample_crossings(
-    value: impl Fn(DVec3) -> f64,
-    refine: impl Fn(DVec3, f64, DVec3, f64) -> DVec3,
+/// The sampling loop of the point-set and smoothed-polyhedron intersection oracles: the value
+/// of `s` sampled at `n = ⌈|b − a| / step⌉` points `a.lerp(b, i / n)` (`step` its
+/// [`Surface::crossing_step`], at most 2^20 samples), and every sign change between
+/// consecutive samples refined by its bipolar oracle [`Surface::crossing`], pushed in order
+/// from `a`. Nothing for a segment of non-finite length.
+pub(crate) fn sample_crossings<S: Surface + ?Sized>(
+    s: &S,
     a: DVec3,
     b: DVec3,
-    step: f64,
     out: &mut Vec<DVec3>,
 ) {
     let len = (b - a).length();
     if !len.is_finite() {
         return;
     }
-    let n = ((len / step).ceil() as usize).clamp(1, 1 << 20);
-    let (mut p0, mut f0) = (a, value(a));
+    let n = ((len / s.crossing_step()).ceil() as usize).clamp(1, 1 << 20);
+    let (mut p0, mut f0) = (a, s.value(a));
     for i in 1..=n {
         let p1 = a.lerp(b, i as f64 / n as f64);
-        let f1 = value(p1);
+        let f1 = s.value(p1);
         if (f0 < 0.0) != (f1 < 0.0) {
-            out.push(refine(p0, f0, p1, f1));
+            out.push(s.crossing(p0, f0, p1, f1));
         }
         (p0, f0) = (p1, f1);
     }

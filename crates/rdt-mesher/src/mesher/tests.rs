@@ -180,15 +180,7 @@ fn scaffold_changes_speed_not_the_result() {
 /// Analytic surfaces through `oracle`'s trait only (shared with the integration tests).
 #[path = "../../tests/common/analytic.rs"]
 mod analytic;
-use analytic::{Analytic, sphere, torus};
-
-fn in_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .unwrap()
-        .install(f)
-}
+use analytic::{ellipsoid, in_pool, sphere, torus};
 
 /// Run the refinement on `s`, then check Del(E), the Voronoi cache and Del_S(E) against a
 /// recomputation from scratch.
@@ -245,15 +237,7 @@ mod props {
         fn random_ellipsoids_keep_del_s_exact(ax in 0.4f64..1.2, ay in 0.4f64..1.2,
                                               az in 0.4f64..1.2, cx in -0.5f64..0.5,
                                               seed in 0u64..1000) {
-            let c = DVec3::new(cx, -cx, 0.3 * cx);
-            let s = Analytic {
-                f: move |p: DVec3| {
-                    let q = p - c;
-                    (q.x / ax).powi(2) + (q.y / ay).powi(2) + (q.z / az).powi(2) - 1.0
-                },
-                center: c,
-                radius: 1.5,
-            };
+            let s = ellipsoid(DVec3::new(ax, ay, az), cx);
             let opts = MeshOptions {
                 criteria: Criteria::uniform(0.12),
                 seed,

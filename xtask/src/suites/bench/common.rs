@@ -33,6 +33,15 @@ pub struct Row {
     pub extra: serde_json::Value,
 }
 
+/// The mesher's default options with CGAL Surface_mesher's criteria at `r`
+/// (`rdt_mesher::pipeline::cgal_criteria`: angle 30, radius = distance = `r`).
+pub fn cgal_mesh_options(r: f64) -> rdt_mesher::MeshOptions {
+    rdt_mesher::MeshOptions {
+        criteria: rdt_mesher::pipeline::cgal_criteria(r),
+        ..Default::default()
+    }
+}
+
 pub fn median(v: &mut [f64]) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     if v.is_empty() {

@@ -21,11 +21,9 @@
 //! `mesh` computes it on first use only).
 
 use super::cgal::{CgalBaseline, cgal_criteria_args};
-use super::common::{BenchArgs, Row, median};
+use super::common::{BenchArgs, Row, cgal_mesh_options, median};
 use anyhow::{Context, Result};
 use oracle::image::{ImageOptions, ImageSurface, NiftiWriteOptions, synthetic};
-use rdt_mesher::MeshOptions;
-use rdt_mesher::pipeline::cgal_criteria;
 use std::time::Instant;
 
 pub fn bench_image(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
@@ -50,10 +48,7 @@ pub fn bench_image(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             dark_foreground: true,
             ..Default::default()
         };
-        let opts = MeshOptions {
-            criteria: cgal_criteria(r),
-            ..Default::default()
-        };
+        let opts = cgal_mesh_options(r);
         let mut cgal = CgalBaseline::new(
             a.vs_cgal,
             "cgal_image_mesher",

@@ -2,10 +2,8 @@
 //! CGAL's Surface_mesher with `--vs-cgal`.
 
 use super::cgal::{CgalBaseline, cgal_criteria_args};
-use super::common::{BenchArgs, Row, median};
+use super::common::{BenchArgs, Row, cgal_mesh_options, median};
 use anyhow::Result;
-use rdt_mesher::MeshOptions;
-use rdt_mesher::pipeline::cgal_criteria;
 use std::time::Instant;
 
 /// The catalog sphere and torus with CGAL Surface_mesher's criteria (angle 30, radius r,
@@ -17,10 +15,7 @@ pub fn bench_mesh(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
     }
     for (name, r) in cases {
         let surf = oracle::catalog::surface(name)?;
-        let opts = MeshOptions {
-            criteria: cgal_criteria(r),
-            ..Default::default()
-        };
+        let opts = cgal_mesh_options(r);
         let mut cgal = CgalBaseline::new(
             a.vs_cgal,
             "cgal_surface_mesher",
