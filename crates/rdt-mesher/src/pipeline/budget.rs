@@ -92,6 +92,21 @@ impl Budgets {
     /// The budget `f` exceeds, if any: the vertex budget when it was not requested (a
     /// requested one stops the run instead: see [`Request::max_vertices`]), else the memory
     /// budget.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{AreaEstimate, AreaSource, Budget, Budgets, Forecast, Request};
+    /// let sphere = AreaEstimate { area: 4.0 * std::f64::consts::PI, source: AreaSource::InputTriangles };
+    /// let b = Budgets::of(&Request::default());
+    /// assert_eq!(b.exceeded_by(&Forecast::at(sphere, 0.05)), None);
+    /// // A thousandth of the radius forecasts about 8 million vertices: over the default budget.
+    /// assert_eq!(
+    ///     b.exceeded_by(&Forecast::at(sphere, 0.001)),
+    ///     Some(Budget::Vertices(rdt_mesher::pipeline::DEFAULT_MAX_VERTICES))
+    /// );
+    /// // A requested vertex budget stops the run instead; memory still refuses.
+    /// let given = Budgets::of(&Request { max_vertices: Some(100), ..Request::default() });
+    /// assert!(matches!(given.exceeded_by(&Forecast::at(sphere, 0.001)), Some(Budget::Memory(_))));
+    /// ```
     pub fn exceeded_by(&self, f: &Forecast) -> Option<Budget> {
         if !self.vertices_given && f.vertices > self.max_vertices as u64 {
             Some(Budget::Vertices(self.max_vertices))
