@@ -193,9 +193,11 @@ fn guarantee_failures(
         let unmet: Vec<String> = st.unmet.iter().map(|u| u.to_string()).collect();
         failures.push(format!("unmet: {}", unmet.join("; ")));
     }
-    let required = MANIFOLD_CHECKS
-        .into_iter()
-        .chain(["angles", "hausdorff", "components-sampled"]);
+    let required = super::regress_images::MANIFOLD_CHECKS.into_iter().chain([
+        "angles",
+        "hausdorff",
+        "components-sampled",
+    ]);
     // The certificate must hold (an INFO "no guarantee" above epsilon_1 is its PASS there).
     if dm_known && !rep.certificate.as_ref().is_some_and(|c| c.passed()) {
         failures.push("the loose epsilon-sample certificate does not hold".to_string());
@@ -207,16 +209,6 @@ fn guarantee_failures(
     }
     failures
 }
-
-/// The verify checks of a closed, embedded, oriented manifold mesh (both regression suites
-/// require them).
-pub(super) const MANIFOLD_CHECKS: [&str; 5] = [
-    "closed",
-    "edge-manifold",
-    "vertex-manifold",
-    "oriented",
-    "self-intersections",
-];
 
 fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
     let case = format!("{}-{}", j.surface.name, j.size);

@@ -28,6 +28,16 @@ use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
 use rdt_mesher::{Criteria, DecisionKind, MeshOptions, MeshResult};
 use std::path::Path;
 
+/// The verify checks of a closed, embedded, oriented manifold mesh (both regression suites
+/// require them).
+pub(super) const MANIFOLD_CHECKS: [&str; 5] = [
+    "closed",
+    "edge-manifold",
+    "vertex-manifold",
+    "oriented",
+    "self-intersections",
+];
+
 /// One row of the image suite.
 #[derive(Debug, serde::Serialize)]
 pub struct ImageRow {
@@ -170,7 +180,7 @@ fn checks(
     let mut fails = Vec::new();
     let mut gaps = Vec::new();
     let rep = verify::check(&r.mesh, &verify::Options::default());
-    for name in super::regress::MANIFOLD_CHECKS {
+    for name in MANIFOLD_CHECKS {
         if rep.status(name) != Some(verify::Status::Pass) {
             let detail = rep
                 .check(name)
