@@ -10,17 +10,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{json, root, xtask};
+use common::{json, root, xtask, xtask_line};
 
 /// A fresh, empty scratch directory for one test (under cargo's per-target tmp dir).
 fn scratch(test: &str) -> PathBuf {
     common::scratch_dir("xtask-cli", test)
-}
-
-/// Runs `xtask` with the space-separated words of `line` (no quoting: arguments that hold
-/// spaces go through [`xtask`]).
-fn xtask_line(dir: &Path, line: &str) -> Output {
-    xtask(dir, &line.split_whitespace().collect::<Vec<_>>())
 }
 
 /// The header of an ASCII PLY file with 3 vertices and 1 face.
@@ -173,14 +167,7 @@ fn check_sphere_run(dir: &Path, stdout: &str, report: &serde_json::Value, certif
         });
     }
     assert!(bad.is_empty(), "checks that did not pass: {bad:#?}");
-    for name in [
-        "closed",
-        "edge-manifold",
-        "vertex-manifold",
-        "oriented",
-        "self-intersections",
-        "angles",
-    ] {
+    for name in common::MANIFOLD_CHECKS.into_iter().chain(["angles"]) {
         assert_eq!(status_of(report, name), "PASS", "check {name}");
     }
     if certified {

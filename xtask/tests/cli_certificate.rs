@@ -1,59 +1,25 @@
 //! The certificate's messages on the command line (issue 15): the verify line never says a
 //! bare PASS beside an unmet criterion, the SKIP hint names each command's flag, the
 //! certificate says "no guarantee" above epsilon_1, and image Hausdorff figures are measured.
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
+
+mod common;
+use common::{has, json, lacks, line_starting, root, stdout, xtask, xtask_line};
 
 fn scratch(test: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("xtask-cli-certificate")
-        .join(test);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
-fn xtask(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("cannot run the xtask binary")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
+    common::scratch_dir("xtask-cli-certificate", test)
 }
 
 #[test]
 fn budget_stop_is_never_a_bare_pass() {
     let d = scratch("budget");
-    let o = xtask(
+    let o = xtask_line(
         &d,
-        &[
-            "mesh",
-            "implicit:sphere",
-            "--size",
-            "0.02",
-            "--max-vertices",
-            "3000",
-            "-o",
-            "s.ply",
-            "--report",
-            "r.json",
-        ],
+        "mesh implicit:sphere --size 0.02 --max-vertices 3000 -o s.ply --report r.json",
     );
     let s = stdout(&o);
     assert!(!s.lines().any(|l| l.starts_with("verify: PASS (")), "{s}");
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(d.join("r.json")).unwrap()).unwrap();
+    let r = json(&d.join("r.json"));
     let facets = r["stats"]["unmet_facets"].as_array().unwrap();
     assert!(!facets.is_empty() && facets.len() <= 20, "{facets:?}");
     assert_eq!(facets[0]["criterion"], "size");
@@ -64,63 +30,31 @@ fn budget_stop_is_never_a_bare_pass() {
 #[test]
 fn skip_hint_names_the_flags_of_each_command() {
     let d = scratch("hint");
-    let o = xtask(
+    let o = xtask_line(
         &d,
-        &[
-            "mesh",
-            "implicit:x^2+y^2+z^2-1",
-            "--bounding-sphere",
-            "0,0,0,2",
-            "--size",
-            "0.3",
-            "-o",
-            "s.ply",
-        ],
+        "mesh implicit:x^2+y^2+z^2-1 --bounding-sphere 0,0,0,2 --size 0.3 -o s.ply",
     );
     assert!(o.status.success());
-    let v = xtask(
+    let v = xtask_line(
         &d,
-        &[
-            "verify",
-            "s.ply",
-            "--against",
-            "implicit:x^2+y^2+z^2-1",
-            "--bounding-sphere",
-            "0,0,0,2",
-        ],
+        "verify s.ply --against implicit:x^2+y^2+z^2-1 --bounding-sphere 0,0,0,2",
     );
     let s = stdout(&v);
-    let line = s
-        .lines()
-        .find(|l| l.starts_with("SKIP loose-epsilon"))
-        .unwrap_or_else(|| panic!("{s}"));
-    assert!(
-        line.contains("verify: --dm poles") && line.contains("mesh: --epsilon"),
-        "{line}"
-    );
-    assert!(!line.contains("mesh: --dm"), "{line}");
+    let line = line_starting(&s, "SKIP loose-epsilon");
+    has(line, &["verify: --dm poles", "mesh: --epsilon"]);
+    lacks(line, &["mesh: --dm"]);
 }
 
 #[test]
 fn certificate_above_epsilon_1_is_no_guarantee() {
     let d = scratch("range");
     // The sphere at size 0.3: eps = 0.3 with d_M = 1.
-    assert!(
-        xtask(
-            &d,
-            &["mesh", "implicit:sphere", "--size", "0.3", "-o", "s.ply"]
-        )
-        .status
-        .success()
-    );
-    let v = xtask(&d, &["verify", "s.ply", "--against", "implicit:sphere"]);
+    let o = xtask_line(&d, "mesh implicit:sphere --size 0.3 -o s.ply");
+    assert!(o.status.success());
+    let v = xtask_line(&d, "verify s.ply --against implicit:sphere");
     let s = stdout(&v);
-    assert!(!s.contains("PASS loose-epsilon"), "{s}");
-    assert!(
-        s.contains("INFO loose-epsilon") && s.contains("no guarantee at eps"),
-        "{s}"
-    );
-    assert!(!s.contains("PASS theorem-4.7"), "{s}");
+    lacks(&s, &["PASS loose-epsilon", "PASS theorem-4.7"]);
+    has(&s, &["INFO loose-epsilon", "no guarantee at eps"]);
 }
 
 #[test]
@@ -134,21 +68,17 @@ fn image_hausdorff_is_measured_exactly() {
     );
     let s = stdout(&m);
     // A criterion is unmet (a control point off the mesh): not a bare PASS.
-    assert!(
-        s.contains("verify: PASS with unmet criteria (control points: 1"),
-        "{s}"
-    );
+    has(&s, &["verify: PASS with unmet criteria (control points: 1"]);
     let v = xtask(&d, &["verify", "p.ply", "--against", img, "--iso", "3"]);
     let s = stdout(&v);
-    let line = s
-        .lines()
-        .find(|l| l.starts_with("INFO hausdorff"))
-        .unwrap_or_else(|| panic!("{s}"));
-    assert!(
-        line.contains("exact distance to the trilinear level set"),
-        "{line}"
+    let line = line_starting(&s, "INFO hausdorff");
+    has(
+        line,
+        &[
+            "exact distance to the trilinear level set",
+            "points of S on the voxel edges",
+        ],
     );
-    assert!(line.contains("points of S on the voxel edges"), "{line}");
     // Marching cubes at iso 3 (skimage, affine applied) measures 6.109 from its vertices to
     // this mesh and 1.745 from the mesh to its triangles (the trilinear surface is closer).
     let two_sided: f64 = line

@@ -3,39 +3,13 @@
 //! notes and result lines, the report's fields, `--help`.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
+mod common;
+use common::{fixture, has, root, stderr, stdout, xtask as run};
 
 fn dir(test: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("cli-defaults")
-        .join(test);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn fixture(p: &str) -> String {
-    root()
-        .join("fixtures")
-        .join(p)
-        .to_str()
-        .unwrap()
-        .to_string()
-}
-
-fn run(d: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(args)
-        .current_dir(d)
-        .output()
-        .expect("cannot run the xtask binary")
+    common::scratch_dir("cli-defaults", test)
 }
 
 /// `xtask mesh -q WORDS` (split at spaces).
@@ -45,33 +19,20 @@ fn mesh(d: &Path, words: &str) -> Output {
     run(d, &args)
 }
 
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+/// `xtask mesh -q WORDS` that must succeed; its (stdout, stderr).
+fn mesh_ok(d: &Path, words: &str) -> (String, String) {
+    let o = mesh(d, words);
+    assert!(o.status.success(), "{}", stderr(&o));
+    (stdout(&o), stderr(&o))
 }
 
 /// The one `error:` line of a failed run (no other line but notes and the forecast), with
 /// its exit status.
 fn one_error(o: &Output) -> (String, Option<i32>) {
-    assert!(!o.status.success(), "expected a failure: {}", stdout(o));
-    let err = stderr(o);
-    assert!(!err.contains("panicked"), "{err}");
-    let lines: Vec<&str> = err
-        .lines()
-        .filter(|l| !l.trim().is_empty() && !l.starts_with("note:") && !l.starts_with("forecast:"))
-        .collect();
-    assert_eq!(lines.len(), 1, "expected ONE error line:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    (lines[0].to_string(), o.status.code())
-}
-
-fn has(text: &str, needles: &[&str]) {
-    for n in needles {
-        assert!(text.contains(n), "missing {n:?} in:\n{text}");
-    }
+    (
+        common::one_error_line(o, &["note:", "forecast:"]),
+        o.status.code(),
+    )
 }
 
 /// No Rust Debug text: no `Name { field: ...` struct dumps, no `Some(..)` / `None` options.
@@ -98,9 +59,7 @@ fn report(d: &Path, name: &str) -> serde_json::Value {
 #[test]
 fn default_torus_keeps_the_theorem_size_and_prints_a_forecast() {
     let d = dir("torus");
-    let o = mesh(&d, "-o t.ply --report t.json");
-    assert!(o.status.success(), "{}", stderr(&o));
-    let err = stderr(&o);
+    let (out, err) = mesh_ok(&d, "-o t.ply --report t.json");
     has(
         &err,
         &[
@@ -108,7 +67,7 @@ fn default_torus_keeps_the_theorem_size_and_prints_a_forecast() {
             "forecast: about 11k vertices",
         ],
     );
-    has(&stdout(&o), &["10785 vertices", "genus [1]"]);
+    has(&out, &["10785 vertices", "genus [1]"]);
     let r = report(&d, "t.json");
     assert_eq!(r["sigma"], 0.09 * 0.3);
     let v = r["forecast"]["vertices"].as_u64().unwrap();
@@ -128,9 +87,7 @@ fn default_torus_keeps_the_theorem_size_and_prints_a_forecast() {
 fn image_default_is_tied_to_the_voxel_spacing_and_says_so() {
     let d = dir("phantom");
     let file = fixture("images/phantom_i16_32.nii.gz");
-    let o = mesh(&d, &format!("{file} --iso 300 --report r.json -o p.ply"));
-    assert!(o.status.success(), "{}", stderr(&o));
-    let err = stderr(&o);
+    let (out, err) = mesh_ok(&d, &format!("{file} --iso 300 --report r.json -o p.ply"));
     has(
         &err,
         &[
@@ -168,7 +125,7 @@ fn image_default_is_tied_to_the_voxel_spacing_and_says_so() {
     assert!((f / v - 1.0).abs() < 0.1, "forecast {f} vs {v}");
     assert_eq!(r["genus"], serde_json::json!([0, 0]));
     assert_eq!(r["genus_summary"], "[0 x 2]");
-    has(&stdout(&o), &["2 components, genus [0 x 2]"]);
+    has(&out, &["2 components, genus [0 x 2]"]);
 }
 
 /// A requested size over the default vertex budget is refused before meshing: one line with
@@ -222,16 +179,12 @@ fn a_size_over_budget_is_refused_at_once_with_the_size_that_fits() {
 #[test]
 fn a_requested_vertex_budget_stops_the_run_with_a_valid_mesh() {
     let d = dir("stop");
-    let o = mesh(
+    let (out, err) = mesh_ok(
         &d,
         "implicit:sphere --size 0.01 --max-vertices 3000 -o s.ply --report s.json",
     );
-    assert!(o.status.success(), "{}", stderr(&o));
-    has(&stderr(&o), &["will stop there with criteria unmet"]);
-    has(
-        &stdout(&o),
-        &["stopped by max_vertices (3000)", "unmet: size"],
-    );
+    has(&err, &["will stop there with criteria unmet"]);
+    has(&out, &["stopped by max_vertices (3000)", "unmet: size"]);
     let r = report(&d, "s.json");
     assert!(!r["stats"]["unmet"].as_array().unwrap().is_empty());
     assert_eq!(r["budgets"]["max_vertices"], 3000);
@@ -244,25 +197,23 @@ fn a_requested_vertex_budget_stops_the_run_with_a_valid_mesh() {
 #[test]
 fn numeric_flags_are_checked_with_an_example() {
     let d = dir("flags");
-    for (flag, value, example) in [
-        ("--size", "-inf", "e.g. --size 0.05"),
-        ("--size", "nan", "e.g. --size 0.05"),
-        ("--size", "0", "e.g. --size 0.05"),
-        ("--angle", "100", "e.g. --angle 30"),
-        ("--angle", "-1", "e.g. --angle 30"),
-        ("--distance", "-1", "e.g. --distance 0.01"),
-        ("--epsilon", "2", "e.g. --epsilon 0.09"),
-        ("--dm-inf", "0", "e.g. --dm-inf 0.3"),
-        ("--certify-epsilon", "inf", "e.g. --certify-epsilon 0.09"),
-        ("--max-vertices", "0", "e.g. --max-vertices 200000"),
-        ("--max-memory", "0", "e.g. 2G"),
-        ("--max-memory", "2X", "e.g. 2G"),
-        ("--max-memory", "-1G", "e.g. 2G"),
-    ] {
-        let o = mesh(&d, &format!("implicit:sphere {flag} {value} -o x.ply"));
-        let (e, code) = one_error(&o);
-        assert_eq!(code, Some(2), "{flag} {value}: {e}");
-        has(&e, &[&format!("{flag} {value}"), example]);
+    let bad: [(&str, &[&str], &str); 8] = [
+        ("--size", &["-inf", "nan", "0"], "e.g. --size 0.05"),
+        ("--angle", &["100", "-1"], "e.g. --angle 30"),
+        ("--distance", &["-1"], "e.g. --distance 0.01"),
+        ("--epsilon", &["2"], "e.g. --epsilon 0.09"),
+        ("--dm-inf", &["0"], "e.g. --dm-inf 0.3"),
+        ("--certify-epsilon", &["inf"], "e.g. --certify-epsilon 0.09"),
+        ("--max-vertices", &["0"], "e.g. --max-vertices 200000"),
+        ("--max-memory", &["0", "2X", "-1G"], "e.g. 2G"),
+    ];
+    for (flag, values, example) in bad {
+        for value in values {
+            let o = mesh(&d, &format!("implicit:sphere {flag} {value} -o x.ply"));
+            let (e, code) = one_error(&o);
+            assert_eq!(code, Some(2), "{flag} {value}: {e}");
+            has(&e, &[&format!("{flag} {value}"), example]);
+        }
     }
     let ok = mesh(&d, "implicit:sphere --size 0.3 --max-memory 1.5G -o x.ply");
     assert!(ok.status.success(), "{}", stderr(&ok));
@@ -286,9 +237,7 @@ fn missing_iso_names_the_flag_and_the_range() {
 fn mesh_input_notes_are_words_and_stats_are_structured() {
     let d = dir("cube");
     let cube = fixture("meshes/cube.off");
-    let o = mesh(&d, &format!("{cube} -o c.ply --report c.json"));
-    assert!(o.status.success(), "{}", stderr(&o));
-    let (out, err) = (stdout(&o), stderr(&o));
+    let (out, err) = mesh_ok(&d, &format!("{cube} -o c.ply --report c.json"));
     no_debug_text(&out);
     no_debug_text(&err);
     has(
@@ -317,12 +266,10 @@ fn many_components_give_a_short_line_and_bounded_report_lists() {
         *x = u8::from(r2 < 9.0);
     }
     std::fs::write(d.join("balls.raw"), &v).unwrap();
-    let o = mesh(
+    let (out, _) = mesh_ok(
         &d,
         "balls.raw --dims 30,30,30 --dtype u8 --size 1 -o b.ply --report b.json",
     );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let out = stdout(&o);
     let line = out.lines().find(|l| l.contains("vertices")).unwrap();
     has(line, &["27 components, genus [0 x 27]"]);
     assert!(line.len() < 220, "{} characters: {line}", line.len());

@@ -2,40 +2,27 @@
 //! each as a literal input: degenerate `delaunay` inputs are errors, not empty "valid"
 //! triangulations; a mesh output without a mesh extension is refused before any work.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
+use std::process::Output;
+
+mod common;
+use common::xtask;
 
 /// A fresh, empty scratch directory for one test (under cargo's per-target tmp dir).
 fn scratch(test: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("xtask-cli-reliability")
-        .join(test);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn xtask(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("cannot run the xtask binary")
+    common::scratch_dir("xtask-cli-reliability", test)
 }
 
 /// Asserts exit status 1, no panic, and ONE `error:` line on stderr (apart from notes);
 /// returns it.
 fn one_error(out: &Output) -> String {
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(out.status.code(), Some(1), "stderr:\n{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    let lines: Vec<&str> = err
-        .lines()
-        .filter(|l| !l.trim().is_empty() && !l.starts_with("note:"))
-        .collect();
-    assert_eq!(lines.len(), 1, "one error line expected:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    lines[0].to_string()
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "stderr:\n{}",
+        common::stderr(out)
+    );
+    common::one_error_line(out, &["note:"])
 }
 
 /// issue 17: `delaunay` on an empty file or 0, 1, 3, collinear, coplanar or duplicate points

@@ -33,6 +33,27 @@ fn sample(n: usize, f: impl Fn(DVec3) -> f64) -> Volume {
     .expect("a valid generated volume")
 }
 
+/// The case `name` at `iso`: `n`^3 voxels with values `f(voxel index position)`.
+fn case(name: &'static str, iso: f64, n: usize, f: impl Fn(DVec3) -> f64) -> Hard {
+    Hard {
+        name,
+        volume: sample(n, f),
+        iso,
+    }
+}
+
+/// `n`^3 values drawn in voxel order by `draw` from the seed `seed`, looked up by voxel index
+/// position.
+fn random_table(
+    n: usize,
+    seed: u64,
+    draw: impl Fn(&mut SplitMix64) -> f64,
+) -> impl Fn(DVec3) -> f64 {
+    let mut rng = SplitMix64(seed);
+    let vals: Vec<f64> = (0..n * n * n).map(|_| draw(&mut rng)).collect();
+    move |p| vals[p.x as usize + n * (p.y as usize + n * p.z as usize)]
+}
+
 /// Every generated case.
 pub fn all() -> Vec<Hard> {
     vec![
@@ -56,17 +77,12 @@ fn blobs() -> Hard {
             (c, 0.3 + 2.7 * rng.next_f64() * rng.next_f64())
         })
         .collect();
-    let volume = sample(n, |p| {
+    case("blobs", 0.5, n, |p| {
         blobs
             .iter()
             .map(|(c, r)| (-(p - *c).length_squared() / (r * r)).exp())
             .fold(0.0, f64::max)
-    });
-    Hard {
-        name: "blobs",
-        volume,
-        iso: 0.5,
-    }
+    })
 }
 
 /// A tilted slab 0.7 voxel thick, curved (its voxel samples break it up).
@@ -74,17 +90,12 @@ fn sheet() -> Hard {
     let n = 28;
     let nrm = DVec3::new(0.3, 0.5, 1.0).normalize();
     let c = DVec3::splat(13.5);
-    let volume = sample(n, |p| {
+    case("sheet", 0.0, n, |p| {
         let q = p - c;
         let d = q.dot(nrm) - 0.02 * q.length_squared();
         let r = (q - nrm * q.dot(nrm)).length();
         if r > 11.0 { 0.0 } else { 1.0 - d.abs() / 0.35 }
-    });
-    Hard {
-        name: "sheet",
-        volume,
-        iso: 0.0,
-    }
+    })
 }
 
 /// A helix-shaped tube of radius 0.4 voxel.
@@ -100,33 +111,19 @@ fn tube() -> Hard {
             )
         })
         .collect();
-    let volume = sample(n, |p| {
+    case("tube", 0.0, n, |p| {
         let d = pts
             .iter()
             .map(|q| q.distance(p))
             .fold(f64::INFINITY, f64::min);
         0.4 - d
-    });
-    Hard {
-        name: "tube",
-        volume,
-        iso: 0.0,
-    }
+    })
 }
 
 /// Uniform noise on 20^3 voxels at the median.
 fn noise() -> Hard {
-    let mut rng = SplitMix64(5);
     let n = 20;
-    let vals: Vec<f64> = (0..n * n * n).map(|_| rng.next_f64()).collect();
-    let volume = sample(n, |p| {
-        vals[p.x as usize + n * (p.y as usize + n * p.z as usize)]
-    });
-    Hard {
-        name: "noise",
-        volume,
-        iso: 0.5,
-    }
+    case("noise", 0.5, n, random_table(n, 5, |rng| rng.next_f64()))
 }
 
 /// A checkerboard of +-1 perturbed by up to 0.1 (every face a saddle near the iso value 0),
@@ -135,38 +132,27 @@ fn noise() -> Hard {
 fn checkerboard() -> Hard {
     let n = 14;
     let c = DVec3::splat(6.5);
-    let mut rng = SplitMix64(3);
-    let jitter: Vec<f64> = (0..n * n * n).map(|_| 0.2 * rng.next_f64() - 0.1).collect();
-    let volume = sample(n, |p| {
+    let jitter = random_table(n, 3, |rng| 0.2 * rng.next_f64() - 0.1);
+    case("checker", 0.0, n, |p| {
         if p.distance(c) > 5.5 {
             return -1.0;
         }
-        let j = jitter[p.x as usize + n * (p.y as usize + n * p.z as usize)];
-        j + if (p.x + p.y + p.z) as i64 % 2 == 0 {
-            1.0
-        } else {
-            -1.0
-        }
-    });
-    Hard {
-        name: "checker",
-        volume,
-        iso: 0.0,
-    }
+        jitter(p)
+            + if (p.x + p.y + p.z) as i64 % 2 == 0 {
+                1.0
+            } else {
+                -1.0
+            }
+    })
 }
 
 /// A smooth integer-valued volume (values 0 to 4) meshed at 2, one of its values.
 fn integer_levels() -> Hard {
     let n = 24;
     let c = DVec3::splat(11.5);
-    let volume = sample(n, |p| {
+    case("integer", 2.0, n, |p| {
         let q = p - c;
         let f = 4.0 * (1.0 - q.length() / 12.0) + 0.8 * (q.x * 0.7).sin() * (q.y * 0.5).cos();
         f.round().clamp(0.0, 4.0)
-    });
-    Hard {
-        name: "integer",
-        volume,
-        iso: 2.0,
-    }
+    })
 }

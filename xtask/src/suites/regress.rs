@@ -193,16 +193,11 @@ fn guarantee_failures(
         let unmet: Vec<String> = st.unmet.iter().map(|u| u.to_string()).collect();
         failures.push(format!("unmet: {}", unmet.join("; ")));
     }
-    let required = vec![
-        "closed",
-        "edge-manifold",
-        "vertex-manifold",
-        "oriented",
-        "self-intersections",
+    let required = super::regress_images::MANIFOLD_CHECKS.into_iter().chain([
         "angles",
         "hausdorff",
         "components-sampled",
-    ];
+    ]);
     // The certificate must hold (an INFO "no guarantee" above epsilon_1 is its PASS there).
     if dm_known && !rep.certificate.as_ref().is_some_and(|c| c.passed()) {
         failures.push("the loose epsilon-sample certificate does not hold".to_string());
@@ -513,14 +508,7 @@ pub fn run(a: &RegressArgs) -> Result<()> {
     // The image cases (issue 14): closed manifolds on real and hard volumes.
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let images = super::regress_images::run(&root, a.quick, a.filter.as_deref())?;
-    for r in images.iter().filter(|r| !r.failures.is_empty()) {
-        outln!(
-            "FAIL {} size {}: {}",
-            r.case,
-            r.size_voxels,
-            r.failures.join("; ")
-        );
-    }
+    super::regress_images::print_lines(&images, "FAIL", |r| &r.failures);
     let image_fails = images.iter().filter(|r| !r.failures.is_empty()).count();
     if let Some(p) = &a.json {
         let j =

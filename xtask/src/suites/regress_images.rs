@@ -28,6 +28,16 @@ use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
 use rdt_mesher::{Criteria, DecisionKind, MeshOptions, MeshResult};
 use std::path::Path;
 
+/// The verify checks of a closed, embedded, oriented manifold mesh (both regression suites
+/// require them).
+pub(super) const MANIFOLD_CHECKS: [&str; 5] = [
+    "closed",
+    "edge-manifold",
+    "vertex-manifold",
+    "oriented",
+    "self-intersections",
+];
+
 /// One row of the image suite.
 #[derive(Debug, serde::Serialize)]
 pub struct ImageRow {
@@ -170,13 +180,7 @@ fn checks(
     let mut fails = Vec::new();
     let mut gaps = Vec::new();
     let rep = verify::check(&r.mesh, &verify::Options::default());
-    for name in [
-        "closed",
-        "edge-manifold",
-        "vertex-manifold",
-        "oriented",
-        "self-intersections",
-    ] {
+    for name in MANIFOLD_CHECKS {
         if rep.status(name) != Some(verify::Status::Pass) {
             let detail = rep
                 .check(name)
@@ -338,13 +342,19 @@ pub fn run(root: &Path, quick: bool, filter: Option<&str>) -> Result<Vec<ImageRo
             }
         );
     }
-    for r in rows.iter().filter(|r| !r.gaps.is_empty()) {
+    print_lines(&rows, "GAP", |r| &r.gaps);
+    Ok(rows)
+}
+
+/// Prints `TAG case size S: a; b` for each row whose `items` (its failures or gaps) are not
+/// empty.
+pub fn print_lines(rows: &[ImageRow], tag: &str, items: impl Fn(&ImageRow) -> &Vec<String>) {
+    for r in rows.iter().filter(|r| !items(r).is_empty()) {
         outln!(
-            "GAP {} size {}: {}",
+            "{tag} {} size {}: {}",
             r.case,
             r.size_voxels,
-            r.gaps.join("; ")
+            items(r).join("; ")
         );
     }
-    Ok(rows)
 }
