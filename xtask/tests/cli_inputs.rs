@@ -1,0 +1,67 @@
+//! Numeric and list flags of the command line (issues 15 and 17): a negative or out-of-range
+//! value is one `error:` line naming the flag with a valid example, not clap's `-- -1` hint.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn xtask(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_TARGET_TMPDIR")))
+        .output()
+        .expect("cannot run the xtask binary")
+}
+
+/// Asserts a usage error (status 2, no panic) whose stderr is ONE `error:` line; returns it.
+fn usage_error(out: &Output) -> String {
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "stderr:\n{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "one error line expected:\n{err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    lines[0].to_string()
+}
+
+#[test]
+fn numeric_flags_name_the_flag_and_an_example() {
+    let cases: [(&[&str], &str); 8] = [
+        (
+            &["mesh", "x.nii", "--spacing", "-1,1,1"],
+            "--spacing -1,1,1: spacing must be three positive finite numbers",
+        ),
+        (
+            &["mesh", "x.nii", "--spacing", "1e308,1e308,1e308"],
+            "--spacing 1e308,1e308,1e308: spacing must be",
+        ),
+        (&["mesh", "x.nii", "--spacing", "1,1"], "--spacing 1,1: "),
+        (
+            &["mesh", "x.nii", "--spacing", "nan,1,1"],
+            "--spacing nan,1,1: ",
+        ),
+        (
+            &["mesh", "x.raw", "--dims", "-4,4,4", "--dtype", "u8"],
+            "--dims -4,4,4: dims must be three positive whole numbers, e.g. --dims",
+        ),
+        (
+            &["verify", "m.ply", "--min-angle", "-3"],
+            "--min-angle -3: the facet angle bound must be in [0, 60]",
+        ),
+        (
+            &["verify", "m.ply", "--samples-per-edge", "-1"],
+            "--samples-per-edge -1: must be a positive whole number",
+        ),
+        (
+            &["verify", "m.ply", "--epsilon", "-0.1"],
+            "--epsilon -0.1: ",
+        ),
+    ];
+    for (args, needle) in cases {
+        let e = usage_error(&xtask(args));
+        assert!(e.contains(needle), "{args:?}: {needle:?} missing in {e}");
+        assert!(!e.contains("-- -"), "{args:?}: clap's hint in {e}");
+        assert!(!e.contains("determinant"), "{args:?}: {e}");
+    }
+    let e = usage_error(&xtask(&["mesh", "x.nii", "--spacing", "-1,1,1"]));
+    assert!(e.ends_with("e.g. --spacing 1,1,1"), "{e}");
+}
