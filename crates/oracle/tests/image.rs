@@ -243,7 +243,10 @@ fn trailing_bytes_after_float_voxels_are_ignored_with_a_note() {
     assert_eq!(long.voxels(), clean.voxels());
     assert_eq!(long.affine(), clean.affine());
     let n = &long.notes()[..];
-    assert!(n.len() == 1 && n[0].contains("e.nii: 5 byte(s) after the voxel data"), "{n:?}");
+    assert!(
+        n.len() == 1 && n[0].contains("e.nii: 5 byte(s) after the voxel data"),
+        "{n:?}"
+    );
     // One byte short of the header's size is still an error.
     b.truncate(b.len() - 6);
     std::fs::write(&path, &b).unwrap();
@@ -1410,7 +1413,10 @@ mod strict_nifti {
         assert_eq!(v.voxels(), ball().voxels());
         assert_eq!(v.notes().len(), 1);
         let note = &v.notes()[0];
-        assert!(note.contains("long.nii: 3 byte(s) after the voxel data"), "{note}");
+        assert!(
+            note.contains("long.nii: 3 byte(s) after the voxel data"),
+            "{note}"
+        );
         assert!(note.contains("ignored"), "{note}");
         assert!(ball().notes().is_empty());
         b.truncate(352 + 511);
