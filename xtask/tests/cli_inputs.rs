@@ -65,3 +65,37 @@ fn numeric_flags_name_the_flag_and_an_example() {
     let e = usage_error(&xtask(&["mesh", "x.nii", "--spacing", "-1,1,1"]));
     assert!(e.ends_with("e.g. --spacing 1,1,1"), "{e}");
 }
+
+/// issue 17: a .nii with bytes after its voxel data is read as nibabel reads it, with a
+/// `note:` naming the file and the count of ignored bytes.
+#[test]
+fn nifti_trailing_bytes_are_a_note() {
+    use oracle::image::{NiftiWriteOptions, synthetic, write_nifti};
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("xtask-cli-inputs");
+    std::fs::create_dir_all(&d).unwrap();
+    let aff = glam::DAffine3::from_translation(glam::DVec3::splat(-7.5));
+    let ball = synthetic::sample_binary(|p| p.length() - 5.0, [16; 3], aff);
+    let p = d.join("ball.nii");
+    write_nifti(&p, &ball, &NiftiWriteOptions::new()).unwrap();
+    let mut b = std::fs::read(&p).unwrap();
+    b.extend_from_slice(b"garbage");
+    std::fs::write(&p, &b).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args([
+            "mesh",
+            "ball.nii",
+            "--size",
+            "2",
+            "-o",
+            "ball.ply",
+            "--no-verify",
+        ])
+        .current_dir(&d)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let note = "note: ball.nii: 7 byte(s) after the voxel data (vox_offset 352 + 4096 bytes";
+    assert!(err.lines().any(|l| l.starts_with(note)), "{err}");
+    assert!(d.join("ball.ply").exists());
+}
