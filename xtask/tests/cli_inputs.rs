@@ -99,3 +99,43 @@ fn nifti_trailing_bytes_are_a_note() {
     assert!(err.lines().any(|l| l.starts_with(note)), "{err}");
     assert!(d.join("ball.ply").exists());
 }
+
+/// issue 15: `verify --report` bounds its per-component list as `mesh --report` does: the
+/// first 20 entries and `components_total`.
+#[test]
+fn verify_report_lists_are_bounded() {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("xtask-cli-inputs-verify");
+    std::fs::create_dir_all(&d).unwrap();
+    let n = 25;
+    let mut off = format!("OFF\n{} {} 0\n", 4 * n, 4 * n);
+    for i in 0..n {
+        for [x, y, z] in [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]] {
+            off += &format!("{} {y} {z}\n", x + 3 * i);
+        }
+    }
+    for i in 0..n {
+        for [a, b, c] in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+            off += &format!("3 {} {} {}\n", 4 * i + a, 4 * i + b, 4 * i + c);
+        }
+    }
+    std::fs::write(d.join("tets.off"), off).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(["verify", "tets.off", "--report", "r.json"])
+        .current_dir(&d)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("r.json")).unwrap()).unwrap();
+    let topo = &r["topology"];
+    assert_eq!(topo["components"].as_array().unwrap().len(), 20, "{topo}");
+    assert_eq!(topo["components_total"], 25, "{topo}");
+    // Short lists are kept whole (the 13 checks).
+    assert!(r["checks"].as_array().unwrap().len() > 10);
+    assert!(r.get("checks_total").is_none());
+}

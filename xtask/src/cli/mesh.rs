@@ -292,8 +292,8 @@ fn write_mesh(out_path: &Path, out: &Outcome) -> Result<()> {
     })
 }
 
-/// Write a JSON report atomically.
-fn write_json(r: &Path, report: &serde_json::Value) -> Result<()> {
+/// Write a JSON report atomically (also `verify --report`).
+pub(super) fn write_json(r: &Path, report: &serde_json::Value) -> Result<()> {
     let text = serde_json::to_string_pretty(report)?;
     super::output::write_atomically(r, |tmp| {
         std::fs::write(tmp, &text).with_context(|| format!("cannot write report {}", r.display()))

@@ -105,9 +105,10 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
     };
     out!("{}", report.summary());
     if let Some(p) = &a.report {
-        report
-            .write_json(p)
-            .with_context(|| format!("writing {}", p.display()))?;
+        // Per-component and per-item lists bounded as in `mesh --report`.
+        let mut v: serde_json::Value = serde_json::from_str(&report.to_json())?;
+        super::mesh_report::bound_lists(&mut v, super::mesh_report::LIST_LIMIT);
+        super::mesh::write_json(p, &v).with_context(|| format!("writing {}", p.display()))?;
     }
     if !report.passed() {
         anyhow::bail!(
