@@ -315,7 +315,7 @@ fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageErr
             path,
             "bitpix",
             format!(
-                "= {} but datatype {} ({dtype:?}) has {} bits a voxel: the header is damaged \
+                "= {} but datatype {} ({dtype}) has {} bits a voxel: the header is damaged \
                  (rewrite it with bitpix = {})",
                 h.bitpix,
                 h.datatype,
