@@ -242,7 +242,7 @@ fn trailing_bytes_after_float_voxels_are_ignored_with_a_note() {
     let long = read_nifti(&path).unwrap();
     assert_eq!(long.voxels(), clean.voxels());
     assert_eq!(long.affine(), clean.affine());
-    let n = &long.notes()[..];
+    let n = long.notes();
     assert!(
         n.len() == 1 && n[0].contains("e.nii: 5 byte(s) after the voxel data"),
         "{n:?}"
