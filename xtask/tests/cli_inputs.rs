@@ -4,12 +4,16 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn xtask(args: &[&str]) -> Output {
+fn xtask_in(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_xtask"))
         .args(args)
-        .current_dir(Path::new(env!("CARGO_TARGET_TMPDIR")))
+        .current_dir(dir)
         .output()
         .expect("cannot run the xtask binary")
+}
+
+fn xtask(args: &[&str]) -> Output {
+    xtask_in(Path::new(env!("CARGO_TARGET_TMPDIR")), args)
 }
 
 /// Asserts a usage error (status 2, no panic) whose stderr is ONE `error:` line; returns it.
@@ -80,8 +84,9 @@ fn nifti_trailing_bytes_are_a_note() {
     let mut b = std::fs::read(&p).unwrap();
     b.extend_from_slice(b"garbage");
     std::fs::write(&p, &b).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args([
+    let out = xtask_in(
+        &d,
+        &[
             "mesh",
             "ball.nii",
             "--size",
@@ -89,10 +94,8 @@ fn nifti_trailing_bytes_are_a_note() {
             "-o",
             "ball.ply",
             "--no-verify",
-        ])
-        .current_dir(&d)
-        .output()
-        .unwrap();
+        ],
+    );
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
     let note = "note: ball.nii: 7 byte(s) after the voxel data (vox_offset 352 + 4096 bytes";
@@ -119,11 +122,7 @@ fn verify_report_lists_are_bounded() {
         }
     }
     std::fs::write(d.join("tets.off"), off).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(["verify", "tets.off", "--report", "r.json"])
-        .current_dir(&d)
-        .output()
-        .unwrap();
+    let out = xtask_in(&d, &["verify", "tets.off", "--report", "r.json"]);
     assert_eq!(
         out.status.code(),
         Some(0),
