@@ -6,7 +6,9 @@
 //! `property TYPE NAME` and `property list COUNT_TYPE ITEM_TYPE NAME` lines, and `end_header`.
 //! ASCII data holds one element per line with exactly the values its properties declare
 //! (blank lines are skipped; nothing but blank lines may follow the last element); binary data
-//! holds exactly the bytes the header declares. Errors name the line (header and ASCII data) or
+//! holds exactly the bytes the header declares. Float values may be `nan` or `inf` (as trimesh
+//! reads them) except the vertices' x, y and z; other properties' values are ignored (normals
+//! with a non-finite component are dropped). Errors name the line (header and ASCII data) or
 //! the element (binary) and what was expected, in plain words.
 
 use std::io::{BufRead, Write};
@@ -66,8 +68,9 @@ impl Scalar {
             Scalar::F64 => "double",
         }
     }
-    /// Parse an ASCII token as this type (floats: digits, sign, `.` and exponent only, so
-    /// `nan` and `inf` are not numbers; `float` is parsed as `f32`, as a reader in `f32` would).
+    /// Parse an ASCII token as this type (floats: digits, sign, `.` and exponent, or `nan`,
+    /// `inf`, `infinity` in any case, as numpy and trimesh read them; x, y and z must then
+    /// be finite, see [`read_record`]; `float` is parsed as `f32`, as a reader in `f32` would).
     fn parse_token(self, tok: &str) -> Option<f64> {
         fn int<T: std::str::FromStr + Into<f64>>(t: &str) -> Option<f64> {
             t.parse::<T>().ok().map(Into::into)
@@ -81,7 +84,9 @@ impl Scalar {
             Scalar::U32 => int::<u32>(tok),
             Scalar::F32 | Scalar::F64 => {
                 let numeric = |c: char| c.is_ascii_digit() || "+-.eE".contains(c);
-                if !tok.chars().all(numeric) {
+                let word = tok.trim_start_matches(['+', '-']).to_ascii_lowercase();
+                let special = ["nan", "inf", "infinity"].contains(&word.as_str());
+                if !(special || tok.chars().all(numeric)) {
                     return None;
                 }
                 if self == Scalar::F32 {
@@ -363,6 +368,8 @@ enum Fail {
     Token(String, Scalar),
     /// A list count is negative.
     NegativeCount(f64),
+    /// A NaN or infinite x, y or z.
+    NonFinite(f64),
     Io(std::io::Error),
 }
 
@@ -414,6 +421,9 @@ fn read_record<V: Values>(
             Kind::Scalar(t) => {
                 let x = v.next(t).map_err(|f| (k, f))?;
                 if let Slot::Coord(c) = slot {
+                    if c < 3 && !x.is_finite() {
+                        return Err((k, Fail::NonFinite(x)));
+                    }
                     rec.coords[c] = x;
                 }
             }
@@ -533,6 +543,11 @@ impl<R: BufRead> DataReader<'_, R> {
                 "{at}, property {}: {t:?} is not a valid {} value",
                 p.name,
                 ty.name()
+            )),
+            Fail::NonFinite(x) => self.bad(format!(
+                "{at}, property {}: {x} is not a finite coordinate; x, y and z must be finite \
+                 numbers (other properties may be nan or inf)",
+                p.name
             )),
             Fail::NegativeCount(n) => self.bad(format!(
                 "{at}, property {}: list count {n} is negative",
@@ -675,9 +690,12 @@ pub(crate) fn read_points_and_faces<R: BufRead>(
     }
     data.finish()?;
     crate::check_vertex_coords(path, &points)?;
+    // Normals with a NaN or infinite component are ignored (estimated downstream), as the
+    // values of every other non-coordinate property are.
+    let normals_ok = normals.iter().all(|n| n.is_finite());
     let cloud = PointCloud {
         points,
-        normals: with_normals.then_some(normals),
+        normals: (with_normals && normals_ok).then_some(normals),
     };
     Ok((cloud, faces))
 }

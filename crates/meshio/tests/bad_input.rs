@@ -175,7 +175,7 @@ fn non_finite_coordinates() {
         m.validate(),
         Err(InvalidMesh::NonFinite { vertex: 2, .. })
     ));
-    // Binary PLY (ASCII PLY has no NaN literal).
+    // Binary PLY.
     let mut bytes = Vec::new();
     let ok = TriMesh {
         vertices: vec![DVec3::ZERO, DVec3::X, DVec3::Y],
@@ -189,7 +189,7 @@ fn non_finite_coordinates() {
     std::fs::write(&p, &bytes).unwrap();
     let (_, s) = err_of(&p);
     assert!(
-        s.contains("vertex 2 has a non-finite coordinate (0, 1, inf)"),
+        s.contains("vertex 2, property z: inf is not a finite coordinate"),
         "{s}"
     );
 }

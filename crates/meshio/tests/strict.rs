@@ -95,10 +95,20 @@ fn ply_ascii_bad_tokens_name_line_and_property() {
         &ply("0 0 0\n1 0x 0\n0 1 0\n3 0 1 2\n"),
         &["line 11: vertex 1, property y: \"0x\" is not a valid float value"],
     );
+    // nan/inf are numbers (numpy and trimesh read them), but x, y and z must be finite.
+    for (tok, shown) in [("nan", "NaN"), ("-INF", "-inf"), ("Infinity", "inf")] {
+        rejects(
+            "nan.ply",
+            &ply(&format!("0 0 0\n1 {tok} 0\n0 1 0\n3 0 1 2\n")),
+            &[&format!(
+                "line 11: vertex 1, property y: {shown} is not a finite coordinate"
+            )],
+        );
+    }
     rejects(
-        "nan.ply",
-        &ply("0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"),
-        &["\"nan\" is not a valid float value"],
+        "nanx.ply",
+        &ply("0 0 0\n1 0 0\n0 1 0x\n3 0 1 2\n"),
+        &["\"0x\" is not a valid float value"],
     );
     rejects(
         "idx.ply",
@@ -495,4 +505,30 @@ fn obj_and_off_hash_inside_a_number_is_not_a_comment() {
     );
     let off = "OFF # header\n3 1 0\n0 0 0\t# a\n1 0 0\n0 1 0\n3 0 1 2 #\n";
     assert_eq!(ok("hash_ok.off", off.as_bytes()).triangles, vec![[0, 1, 2]]);
+}
+
+/// issue 17: NaN or inf in a float property other than x, y, z (trimesh reads them) is read,
+/// its value ignored; the mesh is the same as without the property.
+#[test]
+fn ply_non_finite_values_of_other_properties_are_ignored() {
+    let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+property float z\nproperty float nx\nproperty float quality\nproperty uchar red\n\
+element face 1\nproperty list uchar int vertex_indices\nproperty float quality\nend_header\n";
+    let body = "0 0 0 nan inf 1\n1 0 0 -inf NaN 2\n0 1 0 0 Infinity 3\n3 0 1 2 nan\n";
+    let m = ok("other-nan.ply", format!("{head}{body}").as_bytes());
+    let plain = ok("plain.ply", &ply("0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+    assert_eq!(m, plain);
+    // A non-finite normal: the point set is read, its normals ignored (estimated instead).
+    let head = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n\
+property float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n";
+    let p = tmp("normals-nan.ply");
+    std::fs::write(&p, format!("{head}0 0 0 0 0 1\n1 0 0 nan 0 1\n")).unwrap();
+    let c = meshio::read_point_cloud(&p).unwrap();
+    assert_eq!(c.points.len(), 2);
+    assert!(c.normals.is_none());
+    std::fs::write(&p, format!("{head}0 0 0 0 0 1\n1 0 0 0 1 0\n")).unwrap();
+    assert_eq!(
+        meshio::read_point_cloud(&p).unwrap().normals.unwrap().len(),
+        2
+    );
 }

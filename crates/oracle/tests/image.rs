@@ -226,6 +226,34 @@ fn oblique_affine() -> DAffine3 {
     DAffine3::from_mat3_translation(m, DVec3::new(3.0, -2.0, 1.0) - m * c)
 }
 
+/// issue 17: a .nii with bytes after its (non-u8) voxel data reads the same voxels as
+/// without them (nibabel ignores them), with a note naming the file and the count.
+#[test]
+fn trailing_bytes_after_float_voxels_are_ignored_with_a_note() {
+    let dir = tmpdir("trailing-f32");
+    let vol = synthetic::sample_implicit(world_ellipsoid, [10, 9, 6], oblique_affine());
+    let path = dir.join("e.nii");
+    write_nifti(&path, &vol, &NiftiWriteOptions::new()).unwrap();
+    let clean = read_nifti(&path).unwrap();
+    assert!(clean.notes().is_empty());
+    let mut b = std::fs::read(&path).unwrap();
+    b.extend_from_slice(&[0xff; 5]);
+    std::fs::write(&path, &b).unwrap();
+    let long = read_nifti(&path).unwrap();
+    assert_eq!(long.voxels(), clean.voxels());
+    assert_eq!(long.affine(), clean.affine());
+    let n = long.notes();
+    assert!(
+        n.len() == 1 && n[0].contains("e.nii: 5 byte(s) after the voxel data"),
+        "{n:?}"
+    );
+    // One byte short of the header's size is still an error.
+    b.truncate(b.len() - 6);
+    std::fs::write(&path, &b).unwrap();
+    let e = read_nifti(&path).unwrap_err();
+    assert!(matches!(e, ImageError::Truncated { .. }), "{e}");
+}
+
 #[test]
 fn oblique_anisotropic_sform_matches_analytic_surface_in_world_space() {
     let dir = tmpdir("oblique");
@@ -1379,19 +1407,18 @@ mod strict_nifti {
     #[test]
     fn data_length_must_match_dims_and_datatype() {
         let mut b = ball_bytes();
+        // Bytes after the voxel data: read as nibabel reads them (ignored), with a note.
         b.extend_from_slice(&[1, 2, 3]);
-        let (e, s) = err("long.nii", &b);
+        let v = read("long.nii", &b).unwrap();
+        assert_eq!(v.voxels(), ball().voxels());
+        assert_eq!(v.notes().len(), 1);
+        let note = &v.notes()[0];
         assert!(
-            matches!(
-                e,
-                ImageError::DataLength {
-                    expected: 512,
-                    actual: 515,
-                    ..
-                }
-            ),
-            "{s}"
+            note.contains("long.nii: 3 byte(s) after the voxel data"),
+            "{note}"
         );
+        assert!(note.contains("ignored"), "{note}");
+        assert!(ball().notes().is_empty());
         b.truncate(352 + 511);
         let (e, s) = err("short.nii", &b);
         assert!(matches!(e, ImageError::Truncated { .. }), "{s}");

@@ -34,7 +34,10 @@ pub enum MeshError {
     NoCriterion,
     /// No point of S to start from.
     #[error(
-        "no point of the surface was found inside the bounding sphere (center {center:?}, radius {radius}); check the bounding sphere or pass seed points"
+        "no point of the surface was found inside the bounding sphere (center ({}, {}, {}), radius {radius}); check the bounding sphere or pass seed points",
+        .center.x,
+        .center.y,
+        .center.z
     )]
     NoSeeds {
         /// Center of the surface's bounding sphere.

@@ -22,17 +22,17 @@ pub struct SurfaceOptions {
     #[arg(long, allow_negative_numbers = true)]
     pub iso: Option<f64>,
     /// Image: mesh the boundary of this label.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub label: Option<i64>,
     /// Image: the inside is where the intensity is below the iso value (default: above).
     #[arg(long)]
     pub dark_foreground: bool,
     /// Image stacks and raw volumes: voxel spacing `sx,sy,sz` in world units.
-    #[arg(long)]
-    pub spacing: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_spacing)]
+    pub spacing: Option<[f64; 3]>,
     /// Raw volume: dimensions `nx,ny,nz`.
-    #[arg(long)]
-    pub dims: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_dims)]
+    pub dims: Option<[usize; 3]>,
     /// Raw volume: voxel type (u8, i8, u16, i16, u32, i32, f32, f64).
     #[arg(long)]
     pub dtype: Option<String>,
@@ -59,32 +59,40 @@ pub fn parse_vec3(s: &str, what: &str) -> Result<Vec<f64>> {
         .collect()
 }
 
-fn triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3]> {
+/// Three comma-separated values of `T` each accepted by `ok`, or None.
+fn triple<T: std::str::FromStr>(s: &str, ok: impl Fn(&T) -> bool) -> Option<[T; 3]> {
     let v: Vec<T> = s
         .split(',')
-        .map(|t| {
-            t.trim().parse::<T>().map_err(|_| {
-                anyhow::anyhow!(
-                    "{what}: '{t}' is not valid (expected three comma-separated values, e.g. 1,1,2)"
-                )
-            })
-        })
-        .collect::<Result<_>>()?;
-    let n = v.len();
-    v.try_into()
-        .map_err(|_| anyhow::anyhow!("{what}: expected three comma-separated values, got {n}"))
+        .map(|t| t.trim().parse::<T>().ok().filter(&ok))
+        .collect::<Option<_>>()?;
+    v.try_into().ok()
+}
+
+/// `--spacing sx,sy,sz`: three positive finite voxel sizes within the image reader's limits
+/// (so the affine built from them is usable).
+pub fn parse_spacing(s: &str) -> Result<[f64; 3], String> {
+    let (lo, hi) = (1e-12, 1e12);
+    triple::<f64>(s, |v| (lo..=hi).contains(v)).ok_or_else(|| {
+        format!(
+            "--spacing {s}: spacing must be three positive finite numbers (each in \
+             [{lo:e}, {hi:e}]), e.g. --spacing 1,1,1"
+        )
+    })
+}
+
+/// `--dims nx,ny,nz`: three positive whole numbers.
+pub fn parse_dims(s: &str) -> Result<[usize; 3], String> {
+    triple::<usize>(s, |v| *v > 0).ok_or_else(|| {
+        format!("--dims {s}: dims must be three positive whole numbers, e.g. --dims 64,64,32")
+    })
 }
 
 /// Voxel spacing and raw-volume options of an image input.
 pub fn image_load_options(o: &SurfaceOptions) -> Result<LoadOptions> {
-    let spacing = o
-        .spacing
-        .as_deref()
-        .map(|s| triple::<f64>(s, "--spacing"))
-        .transpose()?;
+    let spacing = o.spacing;
     let raw = match (&o.dims, &o.dtype) {
         (Some(d), Some(t)) => Some(RawOptions {
-            dims: triple::<usize>(d, "--dims")?,
+            dims: *d,
             dtype: t
                 .parse::<Dtype>()
                 .map_err(|e| anyhow::anyhow!("--dtype {t}: {e}"))?,

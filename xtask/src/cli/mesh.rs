@@ -76,7 +76,7 @@ pub struct MeshArgs {
     #[arg(long)]
     pub no_scaffold: bool,
     /// Seed for every random choice.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true)]
     pub seed: u64,
     /// Vertex budget: stop at this many sample points (the mesh so far is written, unmet
     /// criteria reported). Default 2,000,000, and then a --size or --epsilon forecasting more
@@ -98,7 +98,7 @@ pub struct MeshArgs {
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// Bounding sphere `cx,cy,cz,r` for an expression.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub bounding_sphere: Option<String>,
     /// Start from this sample E_0 (`x y z` per line), section 6.4.1.
     #[arg(long)]
@@ -292,8 +292,8 @@ fn write_mesh(out_path: &Path, out: &Outcome) -> Result<()> {
     })
 }
 
-/// Write a JSON report atomically.
-fn write_json(r: &Path, report: &serde_json::Value) -> Result<()> {
+/// Write a JSON report atomically (also `verify --report`).
+pub(super) fn write_json(r: &Path, report: &serde_json::Value) -> Result<()> {
     let text = serde_json::to_string_pretty(report)?;
     super::output::write_atomically(r, |tmp| {
         std::fs::write(tmp, &text).with_context(|| format!("cannot write report {}", r.display()))

@@ -12,10 +12,10 @@ pub struct VerifyArgs {
     #[arg(long)]
     pub against: Option<String>,
     /// Bounding sphere `cx,cy,cz,r` for an implicit expression.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub bounding_sphere: Option<String>,
     /// Requested epsilon of the loose epsilon-sample certificate.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::output::epsilon("--epsilon"))]
     pub epsilon: Option<f64>,
     /// Where the certificate takes d_M from (with --against): `auto` (the surface's d_M^inf,
     /// when its backend knows one), `poles` (estimated from the Voronoi poles of the mesh's
@@ -23,13 +23,13 @@ pub struct VerifyArgs {
     #[arg(long, default_value = "auto", allow_hyphen_values = true)]
     pub dm: String,
     /// FAIL if the two-sided Hausdorff estimate exceeds this distance.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::output::positive("--max-hausdorff", "the Hausdorff bound", "0.01"))]
     pub max_hausdorff: Option<f64>,
     /// FAIL if a facet angle is below this bound (degrees).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_min_angle)]
     pub min_angle: Option<f64>,
     /// Mesh samples per triangle edge for the distance estimates.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, allow_hyphen_values = true, value_parser = parse_samples)]
     pub samples_per_edge: usize,
     /// Write the JSON report here.
     #[arg(long)]
@@ -39,6 +39,27 @@ pub struct VerifyArgs {
 }
 
 /// `--dm`: `auto`, `poles` or a positive finite number.
+/// `--min-angle DEG`: in [0, 60] (no triangle has all angles above 60 degrees).
+fn parse_min_angle(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().unwrap_or(f64::NAN);
+    if !(0.0..=60.0).contains(&v) {
+        return Err(format!(
+            "--min-angle {s}: the facet angle bound must be in [0, 60] degrees, e.g. --min-angle 30"
+        ));
+    }
+    Ok(v)
+}
+
+/// `--samples-per-edge N`: a positive whole number.
+fn parse_samples(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n > 0 => Ok(n),
+        _ => Err(format!(
+            "--samples-per-edge {s}: must be a positive whole number, e.g. --samples-per-edge 4"
+        )),
+    }
+}
+
 fn parse_dm(v: &str) -> Result<verify::DmSource> {
     match v {
         "auto" => Ok(verify::DmSource::Auto),
@@ -84,9 +105,10 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
     };
     out!("{}", report.summary());
     if let Some(p) = &a.report {
-        report
-            .write_json(p)
-            .with_context(|| format!("writing {}", p.display()))?;
+        // Per-component and per-item lists bounded as in `mesh --report`.
+        let mut v: serde_json::Value = serde_json::from_str(&report.to_json())?;
+        super::mesh_report::bound_lists(&mut v, super::mesh_report::LIST_LIMIT);
+        super::mesh::write_json(p, &v).with_context(|| format!("writing {}", p.display()))?;
     }
     if !report.passed() {
         anyhow::bail!(

@@ -461,7 +461,10 @@ pub fn run(a: &RegressArgs) -> Result<()> {
     }
     let jobs = jobs(a);
     if jobs.is_empty() {
-        bail!("no case matches --filter {:?}", a.filter);
+        bail!(
+            "no case matches --filter {}",
+            a.filter.as_deref().unwrap_or("(none)")
+        );
     }
     let bar = if a.quiet {
         ProgressBar::hidden()

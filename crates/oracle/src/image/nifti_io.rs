@@ -315,7 +315,7 @@ fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageErr
             path,
             "bitpix",
             format!(
-                "= {} but datatype {} ({dtype:?}) has {} bits a voxel: the header is damaged \
+                "= {} but datatype {} ({dtype}) has {} bits a voxel: the header is damaged \
                  (rewrite it with bitpix = {})",
                 h.bitpix,
                 h.datatype,
@@ -438,8 +438,9 @@ fn pair_paths(path: &Path) -> (PathBuf, PathBuf) {
 /// follows [`nifti_affine`] and must pass the volume's transform checks.
 ///
 /// Strict: a gzip stream is read to its end (checksums and lengths checked), `sizeof_hdr` must
-/// be 348, `vox_offset` a whole number (at least 352 in a `.nii`), and the data after it exactly
-/// `dim` x datatype bytes. Errors name the field: truncated or corrupt data, NIfTI-2 or
+/// be 348, `vox_offset` a whole number (at least 352 in a `.nii`), and the data after it at least
+/// `dim` x datatype bytes (bytes after those are ignored, as nibabel does, with a
+/// [`Volume::notes`] entry). Errors name the field: truncated or corrupt data, NIfTI-2 or
 /// garbage, 2D images (`dim[3] = 1`), 4D series (`dim[4] > 1`), unsupported types (complex,
 /// RGB, 64-bit integers), bad `pixdim` or scaling, unusable transforms.
 pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
@@ -492,28 +493,34 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             ),
         });
     }
-    if avail > need {
-        return Err(ImageError::DataLength {
-            path: img_path,
-            offset: lay.offset as u64,
-            expected: need as u64,
-            actual: avail as u64,
-        });
-    }
+    // nibabel reads the voxels it needs and ignores what follows; so do we, with a note.
+    let extra = (avail > need).then(|| {
+        format!(
+            "{}: {} byte(s) after the voxel data (vox_offset {} + {need} bytes for dim and \
+             datatype) ignored, as nibabel does",
+            img_path.display(),
+            avail - need,
+            lay.offset
+        )
+    });
     let (slope, inter) = scaling(&hdr_path, &h)?;
     let (affine, field) = checked_affine(&hdr_path, &h)?;
     let big = h.endianness == nifti::Endianness::Big;
     let voxels = if lay.dtype == Dtype::U8 {
         let mut d = dbytes;
+        d.truncate(lay.offset + need);
         d.drain(..lay.offset);
         Voxels::U8(d)
     } else {
-        Voxels::from_bytes(lay.dtype, &dbytes[lay.offset..], big)
+        Voxels::from_bytes(lay.dtype, &dbytes[lay.offset..lay.offset + need], big)
     };
     check_affine(&affine, Some(&hdr_path), field)?;
-    let vol = Volume::new(lay.dims, voxels, affine)?
+    let mut vol = Volume::new(lay.dims, voxels, affine)?
         .with_scaling(slope, inter)
         .with_source(path);
+    if let Some(note) = extra {
+        vol = vol.with_note(note);
+    }
     Ok(vol)
 }
 

@@ -222,6 +222,7 @@ pub struct Volume {
     slope: f64,
     inter: f64,
     source: Option<PathBuf>,
+    notes: Vec<String>,
 }
 
 impl Volume {
@@ -247,6 +248,7 @@ impl Volume {
             slope: 1.0,
             inter: 0.0,
             source: None,
+            notes: Vec::new(),
         })
     }
 
@@ -267,6 +269,17 @@ impl Volume {
     pub fn with_source(mut self, path: impl Into<PathBuf>) -> Volume {
         self.source = Some(path.into());
         self
+    }
+
+    /// Add a note for the user about how the file was read (e.g. bytes ignored).
+    pub fn with_note(mut self, note: String) -> Volume {
+        self.notes.push(note);
+        self
+    }
+
+    /// Notes of the reader (the CLI prints each as `note: ...`).
+    pub fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     pub fn dims(&self) -> [usize; 3] {

@@ -397,6 +397,7 @@ fn open_image(spec: &str, opts: &InputOptions) -> Result<Input<'static>, Pipelin
     let img = ImageSurface::open(path, &opts.load, &opts.image)
         .map_err(|e| PipelineError::backend(format!("opening image {spec}"), e))?;
     let comps = img.component_count();
+    let img_notes = img.volume().notes().to_vec();
     // Room among the control points for a seed tetrahedron on every small component.
     let img = img.with_seed_budget(None);
     let budget = img.seed_budget();
@@ -424,6 +425,7 @@ fn open_image(spec: &str, opts: &InputOptions) -> Result<Input<'static>, Pipelin
     );
     input.components = Some(comps as u32);
     input.max_control_points = budget;
+    input.notes.extend(img_notes);
     input.notes.push(note);
     input.stats.image = Some(image_stats);
     input.area = Some(area);

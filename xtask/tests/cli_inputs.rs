@@ -1,0 +1,140 @@
+//! Numeric and list flags of the command line (issues 15 and 17): a negative or out-of-range
+//! value is one `error:` line naming the flag with a valid example, not clap's `-- -1` hint.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn xtask_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("cannot run the xtask binary")
+}
+
+fn xtask(args: &[&str]) -> Output {
+    xtask_in(Path::new(env!("CARGO_TARGET_TMPDIR")), args)
+}
+
+/// Asserts a usage error (status 2, no panic) whose stderr is ONE `error:` line; returns it.
+fn usage_error(out: &Output) -> String {
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "stderr:\n{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "one error line expected:\n{err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    lines[0].to_string()
+}
+
+#[test]
+fn numeric_flags_name_the_flag_and_an_example() {
+    let cases: [(&[&str], &str); 8] = [
+        (
+            &["mesh", "x.nii", "--spacing", "-1,1,1"],
+            "--spacing -1,1,1: spacing must be three positive finite numbers",
+        ),
+        (
+            &["mesh", "x.nii", "--spacing", "1e308,1e308,1e308"],
+            "--spacing 1e308,1e308,1e308: spacing must be",
+        ),
+        (&["mesh", "x.nii", "--spacing", "1,1"], "--spacing 1,1: "),
+        (
+            &["mesh", "x.nii", "--spacing", "nan,1,1"],
+            "--spacing nan,1,1: ",
+        ),
+        (
+            &["mesh", "x.raw", "--dims", "-4,4,4", "--dtype", "u8"],
+            "--dims -4,4,4: dims must be three positive whole numbers, e.g. --dims",
+        ),
+        (
+            &["verify", "m.ply", "--min-angle", "-3"],
+            "--min-angle -3: the facet angle bound must be in [0, 60]",
+        ),
+        (
+            &["verify", "m.ply", "--samples-per-edge", "-1"],
+            "--samples-per-edge -1: must be a positive whole number",
+        ),
+        (
+            &["verify", "m.ply", "--epsilon", "-0.1"],
+            "--epsilon -0.1: ",
+        ),
+    ];
+    for (args, needle) in cases {
+        let e = usage_error(&xtask(args));
+        assert!(e.contains(needle), "{args:?}: {needle:?} missing in {e}");
+        assert!(!e.contains("-- -"), "{args:?}: clap's hint in {e}");
+        assert!(!e.contains("determinant"), "{args:?}: {e}");
+    }
+    let e = usage_error(&xtask(&["mesh", "x.nii", "--spacing", "-1,1,1"]));
+    assert!(e.ends_with("e.g. --spacing 1,1,1"), "{e}");
+}
+
+/// issue 17: a .nii with bytes after its voxel data is read as nibabel reads it, with a
+/// `note:` naming the file and the count of ignored bytes.
+#[test]
+fn nifti_trailing_bytes_are_a_note() {
+    use oracle::image::{NiftiWriteOptions, synthetic, write_nifti};
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("xtask-cli-inputs");
+    std::fs::create_dir_all(&d).unwrap();
+    let aff = glam::DAffine3::from_translation(glam::DVec3::splat(-7.5));
+    let ball = synthetic::sample_binary(|p| p.length() - 5.0, [16; 3], aff);
+    let p = d.join("ball.nii");
+    write_nifti(&p, &ball, &NiftiWriteOptions::new()).unwrap();
+    let mut b = std::fs::read(&p).unwrap();
+    b.extend_from_slice(b"garbage");
+    std::fs::write(&p, &b).unwrap();
+    let out = xtask_in(
+        &d,
+        &[
+            "mesh",
+            "ball.nii",
+            "--size",
+            "2",
+            "-o",
+            "ball.ply",
+            "--no-verify",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let note = "note: ball.nii: 7 byte(s) after the voxel data (vox_offset 352 + 4096 bytes";
+    assert!(err.lines().any(|l| l.starts_with(note)), "{err}");
+    assert!(d.join("ball.ply").exists());
+}
+
+/// issue 15: `verify --report` bounds its per-component list as `mesh --report` does: the
+/// first 20 entries and `components_total`.
+#[test]
+fn verify_report_lists_are_bounded() {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("xtask-cli-inputs-verify");
+    std::fs::create_dir_all(&d).unwrap();
+    let n = 25;
+    let mut off = format!("OFF\n{} {} 0\n", 4 * n, 4 * n);
+    for i in 0..n {
+        for [x, y, z] in [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]] {
+            off += &format!("{} {y} {z}\n", x + 3 * i);
+        }
+    }
+    for i in 0..n {
+        for [a, b, c] in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+            off += &format!("3 {} {} {}\n", 4 * i + a, 4 * i + b, 4 * i + c);
+        }
+    }
+    std::fs::write(d.join("tets.off"), off).unwrap();
+    let out = xtask_in(&d, &["verify", "tets.off", "--report", "r.json"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("r.json")).unwrap()).unwrap();
+    let topo = &r["topology"];
+    assert_eq!(topo["components"].as_array().unwrap().len(), 20, "{topo}");
+    assert_eq!(topo["components_total"], 25, "{topo}");
+    // Short lists are kept whole (the 13 checks).
+    assert!(r["checks"].as_array().unwrap().len() > 10);
+    assert!(r.get("checks_total").is_none());
+}
