@@ -2,14 +2,13 @@
 //! value is one `error:` line naming the flag with a valid example, not clap's `-- -1` hint.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
+
+mod common;
+use common::one_error_line;
 
 fn xtask_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("cannot run the xtask binary")
+    common::xtask(dir, args)
 }
 
 fn xtask(args: &[&str]) -> Output {
@@ -18,13 +17,9 @@ fn xtask(args: &[&str]) -> Output {
 
 /// Asserts a usage error (status 2, no panic) whose stderr is ONE `error:` line; returns it.
 fn usage_error(out: &Output) -> String {
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(out.status.code(), Some(2), "stderr:\n{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "one error line expected:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    lines[0].to_string()
+    let line = one_error_line(out, &[]);
+    assert_eq!(out.status.code(), Some(2), "{line}");
+    line
 }
 
 #[test]
