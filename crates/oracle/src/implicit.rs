@@ -391,7 +391,7 @@ impl ImplicitSurface {
                         return None;
                     }
                 }
-                roots::try_find_root(f, a, fa, b, fb, tol).ok()
+                roots::try_find_root(f, roots::Ends::new(a, fa, b, fb), tol).ok()
             })
             .collect();
         let comp = g.clusters(&cells);
@@ -421,15 +421,11 @@ impl Surface for ImplicitSurface {
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
         let f = |p: DVec3| (self.f)(p);
         let r = if self.sign_only {
-            roots::try_bisect(f, a, fa, b, fb, self.tolerance)
+            roots::try_bisect(f, roots::Ends::new(a, fa, b, fb), self.tolerance)
         } else {
-            roots::try_find_root(f, a, fa, b, fb, self.tolerance)
+            roots::try_find_root(f, roots::Ends::new(a, fa, b, fb), self.tolerance)
         };
         r.unwrap_or(DVec3::NAN)
-    }
-    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
-        let f = |p: DVec3| (self.f)(p);
-        roots::all_crossings(f, a, b, self.crossing_step, self.tolerance, out)
     }
     fn crossing_step(&self) -> f64 {
         self.crossing_step

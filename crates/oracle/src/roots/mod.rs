@@ -39,13 +39,15 @@ mod illinois;
 mod newton;
 pub(crate) mod rng;
 pub(crate) mod scan;
+#[cfg(test)]
+mod tests;
 
 pub use crate::surface::{
     nearest_crossing_on_rays, project_newton, project_robust, random_line_seeds,
 };
 pub use bisect::{bisect, try_bisect};
 pub(crate) use bracket::ParamBracket;
-pub use bracket::is_sign_value;
+pub use bracket::{Ends, is_sign_value};
 pub(crate) use illinois::illinois;
 pub use illinois::try_find_root;
 pub(crate) use newton::newton_bracketed;
