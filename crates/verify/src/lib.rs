@@ -152,6 +152,21 @@ impl Default for Options {
     }
 }
 
+impl Options {
+    /// The certificate of a two-pass run: `epsilon` checked against the second pass's surface
+    /// Delaunay `balls`, with the first pass's vertices `first_pass` as the S -> mesh samples
+    /// and d_M from their poles; every other option at its default.
+    pub fn two_pass(epsilon: f64, balls: Vec<SurfaceBall>, first_pass: Vec<DVec3>) -> Options {
+        Options {
+            surface_samples: Some(first_pass),
+            epsilon: Some(epsilon),
+            dm: DmSource::Poles,
+            surface_balls: Some(balls),
+            ..Default::default()
+        }
+    }
+}
+
 /// Outcome of one check.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq, Eq)]
 pub enum Status {
@@ -422,6 +437,16 @@ fn input_checks(r: &mut Report, mesh: &TriMesh) -> bool {
     );
     true
 }
+
+/// The names of the checks that together say a mesh is a closed, oriented 2-manifold without
+/// self-intersections (each must be [`Status::Pass`]).
+pub const CLOSED_MANIFOLD_CHECKS: [&str; 5] = [
+    "closed",
+    "edge-manifold",
+    "vertex-manifold",
+    "oriented",
+    "self-intersections",
+];
 
 /// Combinatorial checks (closed, manifold, oriented, components, degeneracies).
 fn topology_checks(r: &mut Report, mesh: &TriMesh, ml: usize) {
