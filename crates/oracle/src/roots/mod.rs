@@ -6,7 +6,7 @@
 //! - **Side**: a value `f` is *inside* when `f < 0` and *outside* when `f >= 0` (zero
 //!   included), the bipolar convention of [`crate::Surface::crossing`].
 //! - **Bracket**: two ends `a`, `b` (or two parameters `t0 < t1` along a segment) whose values
-//!   are on opposite sides. Every step keeps this invariant: a probe replaces the end on its
+//!   are on opposite sides; every finder takes it as [`Ends`] (ends and their values). Every step keeps this invariant: a probe replaces the end on its
 //!   side, so a sign change stays between the ends.
 //! - **Tolerance** `tol`: an absolute length in space; `ttol = tol / |b − a|` is the same in
 //!   parameter units.
