@@ -154,7 +154,10 @@ pub struct ImplicitSurface {
 impl fmt::Debug for ImplicitSurface {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("ImplicitSurface")
-            .field("expr", &self.func.expr.as_ref().map(|e| e.source().to_string()))
+            .field(
+                "expr",
+                &self.func.expr.as_ref().map(|e| e.source().to_string()),
+            )
             .field("bounding_sphere", &self.bs)
             .field("dm_inf", &self.dm_inf)
             .field("tolerance", &self.tolerance)
