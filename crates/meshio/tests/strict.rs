@@ -445,24 +445,31 @@ fn off_counts_and_tokens_are_checked() {
     }
 }
 
+/// Asserts that `OBJ_V` (five lines), then `line` (line 6), then a face, read as `file`,
+/// is rejected with an error containing `msg`, for each of `lines`.
+fn assert_line_6_rejected(file: &str, lines: &[&str], msg: &str) {
+    for line in lines {
+        let text = format!("{OBJ_V}{line}\nf 1 2 3\n");
+        let s = err(file, text.as_bytes());
+        assert!(s.contains(msg), "{line}: {s}");
+    }
+}
+
 /// scripts/mutate.py found these accepted with exit 0: a garbled keyword after the first
 /// statement was ignored (`f/ 1 2 3`, `1//1 2//2 3//3`, `vertex 1 2 3`: a face or vertex
 /// silently dropped), and `vt` / `vn` lines were not read (`vn 0 0 double`).
 #[test]
 fn obj_unknown_statements_and_bad_vt_vn_are_rejected() {
-    for line in [
+    let statements = [
         "f/ 1 2 3",
         "f// 1 2 3",
         "1//1 2//2 3//3",
         "vertex 1 2 3",
         "OFF",
         "11865475",
-    ] {
-        let text = format!("{OBJ_V}{line}\nf 1 2 3\n");
-        let s = err("kw.obj", text.as_bytes());
-        assert!(s.contains("line 6: unknown OBJ statement"), "{line}: {s}");
-    }
-    for line in [
+    ];
+    assert_line_6_rejected("kw.obj", &statements, "line 6: unknown OBJ statement");
+    let vt_vn = [
         "vn 0 0 double",
         "vn 0 0",
         "vn 0 0 1 1",
@@ -470,11 +477,8 @@ fn obj_unknown_statements_and_bad_vt_vn_are_rejected() {
         "vt",
         "vt 0 0 0 0",
         "vt x",
-    ] {
-        let text = format!("{OBJ_V}{line}\nf 1 2 3\n");
-        let s = err("vtvn.obj", text.as_bytes());
-        assert!(s.contains("line 6: expected 'v"), "{line}: {s}");
-    }
+    ];
+    assert_line_6_rejected("vtvn.obj", &vt_vn, "line 6: expected 'v");
     // The specification's other statements and well-formed vt / vn lines still read.
     let text = format!(
         "{OBJ_V}vt 0.5\nvt 0 1\nvn 0 0 1\ng a\ns off\nusemtl m\nlod 1\nbevel off\n\

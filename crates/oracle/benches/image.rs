@@ -59,7 +59,9 @@ fn bench(c: &mut Criterion) {
         let crossing = |(a, fa, b, fb)| s.crossing(a, fa, b, fb);
         c.bench_function(&format!("image128/{name}"), cycling(v, crossing));
         let tol = s.tolerance();
-        let bisection = |(a, fa, b, fb)| oracle::roots::bisect(|p| s.value(p), a, fa, b, fb, tol);
+        let bisection = |(a, fa, b, fb)| {
+            oracle::roots::bisect(|p| s.value(p), oracle::roots::Ends::new(a, fa, b, fb), tol)
+        };
         c.bench_function(&format!("image128/{name}_bisection"), cycling(v, bisection));
     }
     let mut g = c.benchmark_group("image128/setup");

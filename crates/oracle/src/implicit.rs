@@ -126,13 +126,20 @@ pub fn parse_bounding_sphere(text: &str) -> Result<BoundingSphere, ImplicitError
     })
 }
 
+/// The function `f` of an implicit surface with its exact gradient and its source expression,
+/// when known (shared, cheap to clone).
+#[derive(Clone)]
+struct Function {
+    f: Arc<ValueFn>,
+    grad: Option<Arc<GradientFn>>,
+    expr: Option<Arc<Expr>>,
+}
+
 /// An implicit surface `f = 0` with its bounding sphere; implements [`Surface`]. Cheap to clone
 /// (shared function and precomputed grid).
 #[derive(Clone)]
 pub struct ImplicitSurface {
-    f: Arc<ValueFn>,
-    grad: Option<Arc<GradientFn>>,
-    expr: Option<Arc<Expr>>,
+    func: Function,
     bs: BoundingSphere,
     dm_inf: Option<f64>,
     tolerance: f64,
@@ -147,7 +154,10 @@ pub struct ImplicitSurface {
 impl fmt::Debug for ImplicitSurface {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("ImplicitSurface")
-            .field("expr", &self.expr.as_ref().map(|e| e.source().to_string()))
+            .field(
+                "expr",
+                &self.func.expr.as_ref().map(|e| e.source().to_string()),
+            )
             .field("bounding_sphere", &self.bs)
             .field("dm_inf", &self.dm_inf)
             .field("tolerance", &self.tolerance)
@@ -160,9 +170,7 @@ impl fmt::Debug for ImplicitSurface {
 
 /// Options of an [`ImplicitSurface`], checked by [`ImplicitBuilder::build`].
 pub struct ImplicitBuilder {
-    f: Arc<ValueFn>,
-    grad: Option<Arc<GradientFn>>,
-    expr: Option<Arc<Expr>>,
+    func: Function,
     bs: BoundingSphere,
     dm_inf: Option<f64>,
     tolerance: Option<f64>,
@@ -177,7 +185,7 @@ pub struct ImplicitBuilder {
 impl ImplicitBuilder {
     /// An analytic gradient (else: central differences, or the exact one of an expression).
     pub fn gradient(mut self, g: impl Fn(DVec3) -> DVec3 + Send + Sync + 'static) -> Self {
-        self.grad = Some(Arc::new(g));
+        self.func.grad = Some(Arc::new(g));
         self
     }
     /// A known lower bound of d_M^inf (reach), returned by [`Surface::dm_inf_hint`].
@@ -243,7 +251,7 @@ impl ImplicitBuilder {
                 });
             }
         }
-        let f = &*self.f;
+        let f = &*self.func.f;
         // 1. f > 0 on the bounding sphere.
         let lattice = fibonacci_sphere(self.sphere_samples);
         let on_sphere: Vec<(DVec3, f64)> = lattice
@@ -287,9 +295,7 @@ impl ImplicitBuilder {
             });
         }
         Ok(ImplicitSurface {
-            f: self.f,
-            grad: self.grad,
-            expr: self.expr,
+            func: self.func,
             bs,
             dm_inf: self.dm_inf,
             tolerance: self.tolerance.unwrap_or(1e-7 * bs.radius),
@@ -310,9 +316,11 @@ impl ImplicitSurface {
         bs: BoundingSphere,
     ) -> ImplicitBuilder {
         ImplicitBuilder {
-            f: Arc::new(f),
-            grad: None,
-            expr: None,
+            func: Function {
+                f: Arc::new(f),
+                grad: None,
+                expr: None,
+            },
             bs,
             dm_inf: None,
             tolerance: None,
@@ -338,7 +346,7 @@ impl ImplicitSurface {
     pub fn builder_from_compiled(e: Arc<Expr>, bs: BoundingSphere) -> ImplicitBuilder {
         let (ev, eg) = (e.clone(), e.clone());
         let mut b = Self::builder(move |p| ev.eval(p), bs).gradient(move |p| eg.eval_grad(p).1);
-        b.expr = Some(e);
+        b.func.expr = Some(e);
         b
     }
 
@@ -357,7 +365,7 @@ impl ImplicitSurface {
 
     /// The compiled expression, if built from one.
     pub fn expr(&self) -> Option<&Expr> {
-        self.expr.as_deref()
+        self.func.expr.as_deref()
     }
 
     /// True if every value sampled at construction was -1, 0 or 1: crossings then use plain
@@ -372,7 +380,7 @@ impl ImplicitSurface {
     fn grid_crossings(&self) -> (Vec<DVec3>, Vec<usize>) {
         let g = &*self.grid;
         let cells = g.sign_change_cells();
-        let f = |p: DVec3| (self.f)(p);
+        let f = |p: DVec3| (self.func.f)(p);
         let tol = self.tolerance;
         let pts: Vec<Option<DVec3>> = cells
             .par_iter()
@@ -391,7 +399,7 @@ impl ImplicitSurface {
                         return None;
                     }
                 }
-                roots::try_find_root(f, a, fa, b, fb, tol).ok()
+                roots::try_find_root(f, roots::Ends::new(a, fa, b, fb), tol).ok()
             })
             .collect();
         let comp = g.clusters(&cells);
@@ -413,23 +421,19 @@ impl Surface for ImplicitSurface {
     }
     #[inline]
     fn value(&self, p: DVec3) -> f64 {
-        (self.f)(p)
+        (self.func.f)(p)
     }
     fn tolerance(&self) -> f64 {
         self.tolerance
     }
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
-        let f = |p: DVec3| (self.f)(p);
+        let f = |p: DVec3| (self.func.f)(p);
         let r = if self.sign_only {
-            roots::try_bisect(f, a, fa, b, fb, self.tolerance)
+            roots::try_bisect(f, roots::Ends::new(a, fa, b, fb), self.tolerance)
         } else {
-            roots::try_find_root(f, a, fa, b, fb, self.tolerance)
+            roots::try_find_root(f, roots::Ends::new(a, fa, b, fb), self.tolerance)
         };
         r.unwrap_or(DVec3::NAN)
-    }
-    fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
-        let f = |p: DVec3| (self.f)(p);
-        roots::all_crossings(f, a, b, self.crossing_step, self.tolerance, out)
     }
     fn crossing_step(&self) -> f64 {
         self.crossing_step
@@ -478,9 +482,9 @@ impl Surface for ImplicitSurface {
         out
     }
     fn gradient(&self, p: DVec3) -> DVec3 {
-        match &self.grad {
+        match &self.func.grad {
             Some(g) => g(p),
-            None => central_difference(&*self.f, p, 1e-6 * self.bs.radius),
+            None => central_difference(&*self.func.f, p, 1e-6 * self.bs.radius),
         }
     }
     fn dm_inf_hint(&self) -> Option<f64> {

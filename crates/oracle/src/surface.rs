@@ -5,6 +5,7 @@
 //! because the trait's defaults call them and they call the trait.)
 
 use crate::BoundingSphere;
+use crate::roots::Ends;
 use crate::roots::bisect::bisect;
 use crate::roots::rng::SplitMix64;
 use crate::roots::scan::all_crossings;
@@ -61,7 +62,7 @@ pub trait Surface: Send + Sync {
     /// of S on `[a, b]` within [`Surface::tolerance`]. Default: safeguarded bisection
     /// ([`roots::bisect`](crate::roots::bisect)).
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
-        bisect(|p| self.value(p), a, fa, b, fb, self.tolerance())
+        bisect(|p| self.value(p), Ends::new(a, fa, b, fb), self.tolerance())
     }
 
     /// Intersection oracle: push every point of `[a, b]` on S into `out` (sorted from `a`).
@@ -70,14 +71,7 @@ pub trait Surface: Send + Sync {
     /// closer than the step may be
     /// missed, as the paper's Θ(1/Δ) oracle.
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
-        all_crossings(
-            |p| self.value(p),
-            a,
-            b,
-            self.crossing_step(),
-            self.tolerance(),
-            out,
-        )
+        all_crossings(self, a, b, out)
     }
 
     /// Subdivision step of the default intersection oracle. Default: 1e-3 of the bounding radius.

@@ -97,7 +97,7 @@ fn crossing_matches_bisection_and_lands_on_surface() {
         let (fa, fb) = (s.value(a), s.value(b));
         assert!(fa < 0.0 && fb > 0.0);
         let p = s.crossing(a, fa, b, fb);
-        let q = oracle::roots::bisect(|x| s.value(x), a, fa, b, fb, tol);
+        let q = oracle::roots::bisect(|x| s.value(x), oracle::roots::Ends::new(a, fa, b, fb), tol);
         assert!((p - q).length() < 2.0 * tol, "{p} vs {q}");
         // Reverse orientation too.
         let p2 = s.crossing(b, fb, a, fa);
@@ -1063,7 +1063,11 @@ fn cpu_loop() {
                 let p = if what == "crossing" {
                     s.crossing(a, fa, b, fb)
                 } else {
-                    oracle::roots::bisect(|x| s.value(x), a, fa, b, fb, s.tolerance())
+                    oracle::roots::bisect(
+                        |x| s.value(x),
+                        oracle::roots::Ends::new(a, fa, b, fb),
+                        s.tolerance(),
+                    )
                 };
                 acc += p.x;
             }

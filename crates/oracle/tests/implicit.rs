@@ -356,9 +356,9 @@ proptest! {
         let b = rng.unit_vector() * 1.9;
         let tol = 1e-7 * 2.0;
         for p in [
-            roots::bisect(f, a, f(a), b, f(b), tol),
-            roots::try_find_root(f, a, f(a), b, f(b), tol).unwrap(),
-            roots::try_find_root(f, b, f(b), a, f(a), tol).unwrap(),
+            roots::bisect(f, roots::Ends::new(a, f(a), b, f(b)), tol),
+            roots::try_find_root(f, roots::Ends::new(a, f(a), b, f(b)), tol).unwrap(),
+            roots::try_find_root(f, roots::Ends::new(b, f(b), a, f(a)), tol).unwrap(),
         ] {
             prop_assert!((p.length() - 1.0).abs() <= tol, "{p} off by {}", p.length() - 1.0);
         }
@@ -399,9 +399,9 @@ fn root_with_zero_at_an_end() {
     let tol = 1e-9;
     // f(a) = 0 counts as outside (f >= 0); the crossing is at a.
     for p in [
-        roots::bisect(f, a, 0.0, b, -1.0, tol),
-        roots::try_find_root(f, a, 0.0, b, -1.0, tol).unwrap(),
-        roots::try_find_root(f, b, -1.0, a, 0.0, tol).unwrap(),
+        roots::bisect(f, roots::Ends::new(a, 0.0, b, -1.0), tol),
+        roots::try_find_root(f, roots::Ends::new(a, 0.0, b, -1.0), tol).unwrap(),
+        roots::try_find_root(f, roots::Ends::new(b, -1.0, a, 0.0), tol).unwrap(),
     ] {
         assert!(p.distance(a) <= tol, "{p}");
     }
@@ -418,8 +418,8 @@ fn root_with_zero_at_an_end() {
     };
     let (a, b) = (DVec3::new(1.0, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0));
     for p in [
-        roots::bisect(g, a, 1.0, b, -2.0, tol),
-        roots::try_find_root(g, a, 1.0, b, -2.0, tol).unwrap(),
+        roots::bisect(g, roots::Ends::new(a, 1.0, b, -2.0), tol),
+        roots::try_find_root(g, roots::Ends::new(a, 1.0, b, -2.0), tol).unwrap(),
     ] {
         assert!((p.x + 0.5).abs() <= tol, "{p}");
     }
@@ -436,16 +436,34 @@ fn nan_is_reported_with_its_point() {
     };
     let (a, b) = (DVec3::ZERO, DVec3::X);
     // Bisection probes 0.5 then 0.25: NaN.
-    let e = roots::try_bisect(f, a, f(a), b, f(b), 1e-9).unwrap_err();
+    let e = roots::try_bisect(f, roots::Ends::new(a, f(a), b, f(b)), 1e-9).unwrap_err();
     assert_eq!(e, OracleError::NaN(0.25, 0.0, 0.0));
-    assert!(roots::bisect(f, a, f(a), b, f(b), 1e-9).is_nan());
-    let e = roots::try_find_root(|_| f64::NAN, a, -1.0, b, 1.0, 1e-9).unwrap_err();
+    assert!(roots::bisect(f, roots::Ends::new(a, f(a), b, f(b)), 1e-9).is_nan());
+    let e =
+        roots::try_find_root(|_| f64::NAN, roots::Ends::new(a, -1.0, b, 1.0), 1e-9).unwrap_err();
     assert!(matches!(e, OracleError::NaN(..)));
-    assert!(roots::try_find_root(f, a, f64::NAN, b, 1.0, 1e-9).is_err());
+    assert!(roots::try_find_root(f, roots::Ends::new(a, f64::NAN, b, 1.0), 1e-9).is_err());
     let mut out = Vec::new();
     assert!(roots::try_all_crossings(f, a, b, 0.01, 1e-9, &mut out).is_err());
+    // The default intersection oracle (`roots::all_crossings`) ends with a NaN point.
+    struct NanBand;
+    impl Surface for NanBand {
+        fn bounding_sphere(&self) -> BoundingSphere {
+            ball(10.0)
+        }
+        fn value(&self, p: DVec3) -> f64 {
+            if p.x > 0.2 && p.x < 0.3 {
+                f64::NAN
+            } else {
+                p.x - 0.5
+            }
+        }
+    }
     out.clear();
-    roots::all_crossings(f, a, b, 0.01, 1e-9, &mut out);
+    NanBand.crossings(a, b, &mut out);
+    assert!(out.last().unwrap().is_nan());
+    out.clear();
+    roots::all_crossings(&NanBand, a, b, &mut out);
     assert!(out.last().unwrap().is_nan());
 }
 
@@ -467,10 +485,10 @@ fn safeguarded_method_is_faster_than_bisection_on_smooth_functions() {
             continue;
         }
         count.set(0);
-        let p = roots::try_find_root(f, a, fa, b, fb, 2e-7).unwrap();
+        let p = roots::try_find_root(f, roots::Ends::new(a, fa, b, fb), 2e-7).unwrap();
         n_illinois += count.get();
         count.set(0);
-        let q = roots::bisect(f, a, fa, b, fb, 2e-7);
+        let q = roots::bisect(f, roots::Ends::new(a, fa, b, fb), 2e-7);
         n_bisect += count.get();
         assert!(p.distance(q) <= 2e-7, "{p} vs {q}");
     }
@@ -491,7 +509,7 @@ fn sign_only_values_use_bisection() {
         if p.x < 0.3 { -1.0 } else { 1.0 }
     };
     let (a, b) = (DVec3::ZERO, DVec3::X);
-    let p = roots::try_find_root(f, a, -1.0, b, 1.0, 1e-6).unwrap();
+    let p = roots::try_find_root(f, roots::Ends::new(a, -1.0, b, 1.0), 1e-6).unwrap();
     assert!((p.x - 0.3).abs() <= 1e-6);
     assert!(count.get() <= 21, "{} evaluations", count.get());
     assert!(roots::is_sign_value(-1.0) && roots::is_sign_value(0.0) && !roots::is_sign_value(0.5));

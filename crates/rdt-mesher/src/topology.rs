@@ -206,6 +206,20 @@ pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -
     out
 }
 
+/// The triangles of an outward-oriented octahedron: vertices 0 to 3 around the equator, 4 and 5
+/// the poles (a test fixture).
+#[cfg(test)]
+pub(crate) const OCTAHEDRON: [[VertexId; 3]; 8] = [
+    [0, 2, 4],
+    [2, 1, 4],
+    [1, 3, 4],
+    [3, 0, 4],
+    [2, 0, 5],
+    [1, 2, 5],
+    [3, 1, 5],
+    [0, 3, 5],
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -222,17 +236,7 @@ mod tests {
 
     #[test]
     fn octahedron_is_manifold() {
-        let t = [
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        assert_eq!(nonmanifold_elements(&t), (vec![], vec![]));
+        assert_eq!(nonmanifold_elements(&OCTAHEDRON), (vec![], vec![]));
     }
 
     /// The definition, written plainly: sort all edges, and each vertex's link edges.

@@ -34,13 +34,7 @@ fn run(s: &ImageSurface, sigma: f64, resolution: Option<f64>, min: Option<f64>) 
 
 fn assert_closed_manifold(r: &MeshResult) {
     let rep = verify::check(&r.mesh, &verify::Options::default());
-    for name in [
-        "closed",
-        "edge-manifold",
-        "vertex-manifold",
-        "oriented",
-        "self-intersections",
-    ] {
+    for name in verify::CLOSED_MANIFOLD_CHECKS {
         assert_eq!(
             rep.status(name),
             Some(verify::Status::Pass),

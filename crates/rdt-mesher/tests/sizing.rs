@@ -189,11 +189,7 @@ fn certified_loose_epsilon(tp: &sizing::TwoPass, s: &dyn Surface, eps: f64) -> v
     let vo = verify::Options {
         self_intersections: false,
         samples_per_edge: 1,
-        surface_balls: Some(balls),
-        epsilon: Some(eps),
-        dm: verify::DmSource::Poles,
-        surface_samples: Some(tp.first.mesh.vertices.clone()),
-        ..Default::default()
+        ..verify::Options::two_pass(eps, balls, tp.first.mesh.vertices.clone())
     };
     let rep = verify::check_against(&tp.second.mesh, s, &vo);
     // The certificate holds; eps is above epsilon_1, so the check says "no guarantee" (INFO).

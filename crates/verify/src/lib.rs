@@ -152,6 +152,21 @@ impl Default for Options {
     }
 }
 
+impl Options {
+    /// The certificate of a two-pass run: `epsilon` checked against the second pass's surface
+    /// Delaunay `balls`, with the first pass's vertices `first_pass` as the S -> mesh samples
+    /// and d_M from their poles; every other option at its default.
+    pub fn two_pass(epsilon: f64, balls: Vec<SurfaceBall>, first_pass: Vec<DVec3>) -> Options {
+        Options {
+            surface_samples: Some(first_pass),
+            epsilon: Some(epsilon),
+            dm: DmSource::Poles,
+            surface_balls: Some(balls),
+            ..Default::default()
+        }
+    }
+}
+
 /// Outcome of one check.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq, Eq)]
 pub enum Status {
@@ -266,6 +281,21 @@ impl Report {
 
 fn pass_fail(ok: bool) -> Status {
     if ok { Status::Pass } else { Status::Fail }
+}
+
+/// A check whose detail counts the offending items (`total`) and lists the first few.
+fn push_listed<T: fmt::Debug>(
+    r: &mut Report,
+    name: &str,
+    ok: bool,
+    what: &str,
+    (items, total): (&[T], usize),
+) {
+    r.push(
+        name,
+        pass_fail(ok),
+        format!("{total} {what}{}", list(items, total)),
+    );
 }
 
 fn list<T: fmt::Debug>(v: &[T], total: usize) -> String {
@@ -408,36 +438,29 @@ fn input_checks(r: &mut Report, mesh: &TriMesh) -> bool {
     true
 }
 
+/// The names of the checks that together say a mesh is a closed, oriented 2-manifold without
+/// self-intersections (each must be [`Status::Pass`]).
+pub const CLOSED_MANIFOLD_CHECKS: [&str; 5] = [
+    "closed",
+    "edge-manifold",
+    "vertex-manifold",
+    "oriented",
+    "self-intersections",
+];
+
 /// Combinatorial checks (closed, manifold, oriented, components, degeneracies).
 fn topology_checks(r: &mut Report, mesh: &TriMesh, ml: usize) {
     let t = topology::analyze(mesh, ml);
-    r.push(
-        "closed",
-        pass_fail(t.is_closed()),
-        format!(
-            "{} boundary edges{}",
-            t.boundary_edges_total,
-            list(&t.boundary_edges, t.boundary_edges_total)
-        ),
-    );
-    r.push(
-        "edge-manifold",
-        pass_fail(t.is_edge_manifold()),
-        format!(
-            "{} edges with more than 2 facets{}",
-            t.non_manifold_edges_total,
-            list(&t.non_manifold_edges, t.non_manifold_edges_total)
-        ),
-    );
-    r.push(
-        "vertex-manifold",
-        pass_fail(t.is_vertex_manifold()),
-        format!(
-            "{} vertices with more than one umbrella{}",
-            t.non_manifold_vertices_total,
-            list(&t.non_manifold_vertices, t.non_manifold_vertices_total)
-        ),
-    );
+    let (closed, edge_ok, vertex_ok) =
+        (t.is_closed(), t.is_edge_manifold(), t.is_vertex_manifold());
+    let boundary = (&t.boundary_edges[..], t.boundary_edges_total);
+    push_listed(r, "closed", closed, "boundary edges", boundary);
+    let non_manifold = (&t.non_manifold_edges[..], t.non_manifold_edges_total);
+    let what = "edges with more than 2 facets";
+    push_listed(r, "edge-manifold", edge_ok, what, non_manifold);
+    let umbrellas = (&t.non_manifold_vertices[..], t.non_manifold_vertices_total);
+    let what = "vertices with more than one umbrella";
+    push_listed(r, "vertex-manifold", vertex_ok, what, umbrellas);
     let non_orientable = t.components.iter().filter(|c| !c.orientable).count();
     r.push(
         "oriented",
@@ -475,24 +498,13 @@ fn topology_checks(r: &mut Report, mesh: &TriMesh, ml: usize) {
             if genera.len() > 8 { "; ..." } else { "" }
         ),
     );
-    r.push(
-        "duplicate-vertices",
-        pass_fail(t.duplicate_vertices_total == 0),
-        format!(
-            "{} vertices equal to an earlier one{}",
-            t.duplicate_vertices_total,
-            list(&t.duplicate_vertices, t.duplicate_vertices_total)
-        ),
-    );
-    r.push(
-        "degenerate-triangles",
-        pass_fail(t.degenerate_triangles_total == 0),
-        format!(
-            "{} triangles with a repeated index or collinear corners (exact){}",
-            t.degenerate_triangles_total,
-            list(&t.degenerate_triangles, t.degenerate_triangles_total)
-        ),
-    );
+    let duplicates = (&t.duplicate_vertices[..], t.duplicate_vertices_total);
+    let (ok, what) = (duplicates.1 == 0, "vertices equal to an earlier one");
+    push_listed(r, "duplicate-vertices", ok, what, duplicates);
+    let degenerate = (&t.degenerate_triangles[..], t.degenerate_triangles_total);
+    let ok = degenerate.1 == 0;
+    let what = "triangles with a repeated index or collinear corners (exact)";
+    push_listed(r, "degenerate-triangles", ok, what, degenerate);
     r.push(
         "unreferenced-vertices",
         if t.unreferenced_vertices_total == 0 {

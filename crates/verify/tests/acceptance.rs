@@ -28,13 +28,7 @@ fn closed_cube_is_a_genus_0_manifold_of_volume_1() {
     assert_eq!(q.angle_histogram[4], 24); // 45 degrees
     assert_eq!(q.angle_histogram[9], 12); // 90 degrees
     assert_eq!(r.self_intersections.as_ref().unwrap().pairs_total, 0);
-    for name in [
-        "closed",
-        "edge-manifold",
-        "vertex-manifold",
-        "oriented",
-        "self-intersections",
-    ] {
+    for name in verify::CLOSED_MANIFOLD_CHECKS {
         assert_eq!(r.status(name), Some(Status::Pass), "{name}");
     }
     // The OBJ quad cube reads to the same verdict.

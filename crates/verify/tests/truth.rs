@@ -136,7 +136,7 @@ fn image_with_a_gap_hausdorff_matches_dense_sampling() {
     assert!(g.hausdorff <= 1.1 * m2s.max(s2m));
     // The false alarm of the issue: a good mesh of two blobs with a gap PASSes a limit of
     // half a voxel.
-    assert_eq!(r.status("hausdorff"), Some(Status::Pass), "{}", r.summary());
+    assert_status(&r, "hausdorff", Status::Pass);
 }
 
 #[test]
@@ -236,12 +236,7 @@ fn one_sphere_of_two_nested_fails_the_coverage_of_the_other() {
             ..quiet()
         },
     );
-    assert_eq!(
-        r.status("components-sampled"),
-        Some(Status::Pass),
-        "{}",
-        r.summary()
-    );
+    assert_status(&r, "components-sampled", Status::Pass);
 }
 
 #[test]
@@ -278,18 +273,8 @@ fn loose_epsilon_never_passes_above_its_range() {
     let fine = uv_sphere(DVec3::ZERO, 1.0, 48, 96);
     let r = check_against(&fine, &UnitSphere, &Options { ..quiet() });
     assert!(r.certificate.as_ref().unwrap().eps_achieved < verify::certificate::EPSILON_1);
-    assert_eq!(
-        r.status("loose-epsilon"),
-        Some(Status::Pass),
-        "{}",
-        r.summary()
-    );
-    assert_eq!(
-        r.status("theorem-4.7"),
-        Some(Status::Pass),
-        "{}",
-        r.summary()
-    );
+    assert_status(&r, "loose-epsilon", Status::Pass);
+    assert_status(&r, "theorem-4.7", Status::Pass);
 }
 
 #[test]

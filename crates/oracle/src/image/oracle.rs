@@ -168,7 +168,11 @@ impl Surface for ImageSurface {
         let d = b - a;
         let len = d.length();
         if !(len > tol && fa.is_finite() && fb.is_finite()) {
-            return crate::roots::bisect(|p| self.value(p), a, fa, b, fb, tol);
+            return crate::roots::bisect(
+                |p| self.value(p),
+                crate::roots::Ends::new(a, fa, b, fb),
+                tol,
+            );
         }
         let ttol = tol / len;
         let va = self.inv.transform_point3(a);

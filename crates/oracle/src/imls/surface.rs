@@ -4,7 +4,7 @@
 use super::PointSetSurface;
 use super::kernel::{MIN_WEIGHT, blend};
 use super::lfs::LfsSample;
-use crate::roots::SplitMix64;
+use crate::roots::{Ends, SplitMix64};
 use crate::{BoundingSphere, Surface};
 use glam::DVec3;
 
@@ -118,7 +118,8 @@ impl Surface for PointSetSurface {
     /// bracket, and bisection when the bracket shrinks slowly; stops when the bracket, |f|
     /// or the Newton step is below the tolerance.
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
-        crate::roots::newton_bracketed(|x| self.value_grad(x), a, fa, b, fb, self.tolerance())
+        let e = Ends::new(a, fa, b, fb);
+        crate::roots::newton_bracketed(|x| self.value_grad(x), e, self.tolerance())
     }
 
     /// Intersection oracle: sign changes of the value sampled at [`Surface::crossing_step`],

@@ -1,7 +1,7 @@
 //! The exact polyhedron oracle (section 6.6.4): a triangle mesh, possibly a soup with small
 //! holes; see [`super`] for the oracles and invariants.
 
-use crate::roots::{SplitMix64, bisect};
+use crate::roots::{Ends, SplitMix64, bisect};
 use crate::{BoundingSphere, Surface};
 use geom::bvh::TriangleBvh as Bvh;
 use geom::closest::closest_point_segment;
@@ -613,7 +613,7 @@ impl Surface for PolyhedronSurface {
                 }
             }
         }
-        bisect(|p| self.value(p), a, fa, b, fb, self.tolerance())
+        bisect(|p| self.value(p), Ends::new(a, fa, b, fb), self.tolerance())
     }
 
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {

@@ -18,7 +18,7 @@
 
 use super::exact::PolyhedronSurface;
 use crate::imls::{MIN_POINTS, PointSetError, PointSetParams, PointSetSurface};
-use crate::roots::SplitMix64;
+use crate::roots::{Ends, SplitMix64};
 use crate::{BoundingSphere, Surface};
 use glam::DVec3;
 
@@ -177,7 +177,7 @@ impl Surface for SmoothPolyhedron {
     }
     /// Illinois (safeguarded regula falsi) on [`SmoothPolyhedron`]'s value.
     fn crossing(&self, a: DVec3, fa: f64, b: DVec3, fb: f64) -> DVec3 {
-        crate::roots::illinois(|x| self.value(x), a, fa, b, fb, self.tolerance())
+        crate::roots::illinois(|x| self.value(x), Ends::new(a, fa, b, fb), self.tolerance())
     }
     /// Sign changes of the value sampled at [`Surface::crossing_step`], each refined by
     /// [`Surface::crossing`].

@@ -117,6 +117,77 @@ pub(crate) fn shrink_bracket(
     }
 }
 
+/// The state of the in-space finders (`illinois`, `newton_bracketed`): the bracket, the end
+/// that moved last (for the Illinois step), and the bracket's length at the last safeguard
+/// check (every third step).
+pub(crate) struct SpaceBracket {
+    pub e: Ends,
+    side: i8,
+    prev_len: f64,
+}
+
+impl SpaceBracket {
+    pub fn new(e: Ends) -> SpaceBracket {
+        SpaceBracket {
+            e,
+            side: 0,
+            prev_len: (e.b - e.a).length(),
+        }
+    }
+
+    /// The bracket's length.
+    pub fn len(&self) -> f64 {
+        (self.e.b - self.e.a).length()
+    }
+
+    /// The safeguard on step `it` with bracket length `len`: true when a bisection is due
+    /// (every third step, if the bracket did not halve since the last check).
+    pub fn bisect_due(&mut self, it: usize, len: f64) -> bool {
+        let due = it % 3 == 2 && len > 0.5 * self.prev_len;
+        if it % 3 == 2 {
+            self.prev_len = len;
+        }
+        due
+    }
+
+    /// The regula falsi probe (the bracket's middle if `bisect`, or if the estimate is not
+    /// finite), clamped to the bracket.
+    pub fn falsi_probe(&self, bisect: bool) -> DVec3 {
+        let Ends { a, fa, b, fb } = self.e;
+        let t = if bisect { 0.5 } else { fa / (fa - fb) };
+        a.lerp(
+            b,
+            if t.is_finite() {
+                t.clamp(0.0, 1.0)
+            } else {
+                0.5
+            },
+        )
+    }
+
+    /// The probe `m` with value `fm`: true if it is accepted as the answer (`|fm| < tol`, or
+    /// NaN), else the Illinois step ([`shrink_bracket`]) and false.
+    pub fn accept_or_shrink(&mut self, m: DVec3, fm: f64, tol: f64) -> bool {
+        if fm.is_nan() || fm.abs() < tol {
+            return true;
+        }
+        let e = &mut self.e;
+        shrink_bracket(
+            m,
+            fm,
+            (&mut e.a, &mut e.fa),
+            (&mut e.b, &mut e.fb),
+            &mut self.side,
+        );
+        false
+    }
+
+    /// The bracket's middle.
+    pub fn mid(&self) -> DVec3 {
+        self.e.a.lerp(self.e.b, 0.5)
+    }
+}
+
 /// True if `v` is -1, 0 or 1: a value of a sign-only function, on which interpolation
 /// (secant, regula falsi, Newton) is meaningless and bisection must be used.
 #[inline]
@@ -130,18 +201,37 @@ pub(crate) fn nan_at(p: DVec3) -> OracleError {
 }
 
 /// `Err` naming the first end whose value is NaN.
-/// The end with the smaller |value| when both ends are on the same side (a violated bracket
-/// precondition, which the root finders answer with that end), else `None`.
-pub(crate) fn same_side_end(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Option<DVec3> {
-    ((fa < 0.0) == (fb < 0.0)).then_some(if fa.abs() <= fb.abs() { a } else { b })
+/// A sign-change bracket in space: ends `a`, `b` with their values `fa`, `fb`, the input of
+/// every finder here (the vocabulary of [`super`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ends {
+    /// The first end.
+    pub a: DVec3,
+    /// The value at `a`.
+    pub fa: f64,
+    /// The second end.
+    pub b: DVec3,
+    /// The value at `b`.
+    pub fb: f64,
 }
 
-pub(crate) fn check_ends(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Result<(), OracleError> {
-    if fa.is_nan() {
-        return Err(nan_at(a));
+impl Ends {
+    /// The bracket `[a, b]` with values `fa` at `a` and `fb` at `b`.
+    pub fn new(a: DVec3, fa: f64, b: DVec3, fb: f64) -> Ends {
+        Ends { a, fa, b, fb }
     }
-    if fb.is_nan() {
-        return Err(nan_at(b));
+
+    /// The checks of the checked finders: `Err` naming the first end whose value is NaN, else
+    /// the end with the smaller |value| when both ends are on the same side (a violated
+    /// precondition, which the finders answer with that end), else `None`.
+    pub(crate) fn precheck(&self) -> Result<Option<DVec3>, OracleError> {
+        let Ends { a, fa, b, fb } = *self;
+        if fa.is_nan() {
+            return Err(nan_at(a));
+        }
+        if fb.is_nan() {
+            return Err(nan_at(b));
+        }
+        Ok(((fa < 0.0) == (fb < 0.0)).then_some(if fa.abs() <= fb.abs() { a } else { b }))
     }
-    Ok(())
 }

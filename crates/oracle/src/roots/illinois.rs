@@ -1,13 +1,11 @@
 //! Illinois (modified regula falsi) root finders (ours), in the vocabulary of [`super`].
 
 use super::bisect::try_bisect;
-use super::bracket::{
-    ParamBracket, check_ends, is_sign_value, nan_at, same_side_end, shrink_bracket,
-};
+use super::bracket::{Ends, ParamBracket, SpaceBracket, is_sign_value, nan_at};
 use crate::OracleError;
 use glam::DVec3;
 
-/// Safeguarded root finding on `[a, b]` (same contract as [`try_bisect`]: the result is within
+/// Safeguarded root finding on `[a, b]` (the [`Ends`] `e`; same contract as [`try_bisect`]: the result is within
 /// `tol / 2` of a sign change of `f`, with `f < 0` inside and `f >= 0` outside).
 ///
 /// Uses the Illinois variant of regula falsi, which converges superlinearly on smooth functions,
@@ -15,18 +13,11 @@ use glam::DVec3;
 /// exactly 0; a bisection step whenever the bracket has not halved within three steps (so the
 /// cost is at most about four times that of bisection); and interpolated probes kept about
 /// `tol` inside the bracket, so the bracket closes on the root from both sides.
-pub fn try_find_root(
-    f: impl Fn(DVec3) -> f64,
-    a: DVec3,
-    fa: f64,
-    b: DVec3,
-    fb: f64,
-    tol: f64,
-) -> Result<DVec3, OracleError> {
-    check_ends(a, fa, b, fb)?;
-    if let Some(end) = same_side_end(a, fa, b, fb) {
+pub fn try_find_root(f: impl Fn(DVec3) -> f64, e: Ends, tol: f64) -> Result<DVec3, OracleError> {
+    if let Some(end) = e.precheck()? {
         return Ok(end);
     }
+    let Ends { a, fa, b, fb } = e;
     let neg0 = fa < 0.0;
     let d = b - a;
     let len = d.length();
@@ -34,7 +25,7 @@ pub fn try_find_root(
         return Ok(0.5 * (a + b));
     }
     if is_sign_value(fa) && is_sign_value(fb) {
-        return try_bisect(f, a, fa, b, fb, tol);
+        return try_bisect(f, e, tol);
     }
     let tt = tol / len; // tolerance in parameter units
     let mut br = ParamBracket::new(fa, fb);
@@ -86,65 +77,19 @@ pub fn try_find_root(
 /// every third step if the bracket did not halve. Returns a point within `tol` of a sign
 /// change: a probe where `|f| < tol` (for functions close to a distance) or the midpoint of a
 /// bracket shorter than `tol`.
-pub(crate) fn illinois(
-    f: impl Fn(DVec3) -> f64,
-    a: DVec3,
-    fa: f64,
-    b: DVec3,
-    fb: f64,
-    tol: f64,
-) -> DVec3 {
-    let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
-    let mut side = 0i8;
-    let mut prev_len = (b - a).length();
+pub(crate) fn illinois(f: impl Fn(DVec3) -> f64, e: Ends, tol: f64) -> DVec3 {
+    let mut br = SpaceBracket::new(e);
     for it in 0..200 {
-        let len = (b - a).length();
+        let len = br.len();
         if len <= tol {
             break;
         }
-        // Every third step, bisect if the last steps did not halve the bracket.
-        let t = if it % 3 == 2 && len > 0.5 * prev_len {
-            0.5
-        } else {
-            let t = fa / (fa - fb);
-            if t.is_finite() {
-                t.clamp(0.0, 1.0)
-            } else {
-                0.5
-            }
-        };
-        if it % 3 == 2 {
-            prev_len = len;
-        }
-        let m = a.lerp(b, t);
+        let bisect = br.bisect_due(it, len);
+        let m = br.falsi_probe(bisect);
         let fm = f(m);
-        if fm.is_nan() || fm.abs() < tol {
+        if br.accept_or_shrink(m, fm, tol) {
             return m;
         }
-        shrink_bracket(m, fm, (&mut a, &mut fa), (&mut b, &mut fb), &mut side);
     }
-    a.lerp(b, 0.5)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use std::cell::Cell;
-
-    #[test]
-    fn illinois_converges_on_smooth_and_sign_only_functions() {
-        let (a, b) = (DVec3::new(-1.0, 0.2, 0.0), DVec3::new(2.0, 0.2, 0.0));
-        let calls = Cell::new(0);
-        let smooth = |x: DVec3| {
-            calls.set(calls.get() + 1);
-            x.length() - 1.0
-        };
-        let x = illinois(smooth, a, smooth(a), b, smooth(b), 1e-12);
-        assert!((x.length() - 1.0).abs() < 1e-12);
-        assert!(calls.get() < 20, "{} evaluations", calls.get());
-        // A sign-only function: the bisection safeguard still closes the bracket.
-        let step = |x: DVec3| if x.x < 0.3 { -1.0 } else { 1.0 };
-        let x = illinois(step, a, -1.0, b, 1.0, 1e-9);
-        assert!((x.x - 0.3).abs() < 1e-8, "{x}");
-    }
+    br.mid()
 }

@@ -6,7 +6,7 @@
 //! - **Side**: a value `f` is *inside* when `f < 0` and *outside* when `f >= 0` (zero
 //!   included), the bipolar convention of [`crate::Surface::crossing`].
 //! - **Bracket**: two ends `a`, `b` (or two parameters `t0 < t1` along a segment) whose values
-//!   are on opposite sides. Every step keeps this invariant: a probe replaces the end on its
+//!   are on opposite sides; every finder takes it as [`Ends`] (ends and their values). Every step keeps this invariant: a probe replaces the end on its
 //!   side, so a sign change stays between the ends.
 //! - **Tolerance** `tol`: an absolute length in space; `ttol = tol / |b − a|` is the same in
 //!   parameter units.
@@ -39,13 +39,15 @@ mod illinois;
 mod newton;
 pub(crate) mod rng;
 pub(crate) mod scan;
+#[cfg(test)]
+mod tests;
 
 pub use crate::surface::{
     nearest_crossing_on_rays, project_newton, project_robust, random_line_seeds,
 };
 pub use bisect::{bisect, try_bisect};
 pub(crate) use bracket::ParamBracket;
-pub use bracket::is_sign_value;
+pub use bracket::{Ends, is_sign_value};
 pub(crate) use illinois::illinois;
 pub use illinois::try_find_root;
 pub(crate) use newton::newton_bracketed;

@@ -1,30 +1,26 @@
 //! The intersection oracle by sampling (section 6.4.2's Θ(1/Δ) oracle): sample a segment,
 //! refine every sign change with a root finder.
 
-use super::bracket::nan_at;
+use super::bracket::{Ends, nan_at};
 use super::illinois::try_find_root;
 use crate::OracleError;
 use crate::Surface;
 use glam::DVec3;
 
-/// All sign changes of `f` on `[a, b]` sampled at steps of at most `step`, each refined by
-/// bisection, pushed in order from `a`. If `f` returns NaN, pushes one point with NaN
-/// coordinates and stops (see [`try_all_crossings`]).
-pub fn all_crossings(
-    f: impl Fn(DVec3) -> f64,
-    a: DVec3,
-    b: DVec3,
-    step: f64,
-    tol: f64,
-    out: &mut Vec<DVec3>,
-) {
-    if try_all_crossings(f, a, b, step, tol, out).is_err() {
+/// The default intersection oracle of a surface ([`Surface::crossings`]): every sign change
+/// of its value on `[a, b]`, sampled at steps of at most [`Surface::crossing_step`] and refined
+/// to [`Surface::tolerance`] by [`try_all_crossings`], pushed in order from `a`. If the value
+/// is NaN, pushes one point with NaN coordinates and stops.
+pub fn all_crossings<S: Surface + ?Sized>(s: &S, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+    let f = |p| s.value(p);
+    if try_all_crossings(f, a, b, s.crossing_step(), s.tolerance(), out).is_err() {
         out.push(DVec3::NAN);
     }
 }
 
-/// [`all_crossings`] reporting NaN as an error (crossings found before it stay in `out`). Each
-/// sign change is refined by [`try_find_root`] (bisection for sign-only values).
+/// All sign changes of `f` on `[a, b]` sampled at steps of at most `step`, pushed in order
+/// from `a`, NaN reported as an error (crossings found before it stay in `out`). Each sign
+/// change is refined to `tol` by [`try_find_root`] (bisection for sign-only values).
 pub fn try_all_crossings(
     f: impl Fn(DVec3) -> f64,
     a: DVec3,
@@ -55,7 +51,7 @@ pub fn try_all_crossings(
             return Err(nan_at(p1));
         }
         if (f0 < 0.0) != (f1 < 0.0) {
-            out.push(try_find_root(&f, p0, f0, p1, f1, tol)?);
+            out.push(try_find_root(&f, Ends::new(p0, f0, p1, f1), tol)?);
         }
         p0 = p1;
         f0 = f1;

@@ -292,19 +292,8 @@ impl Plan<'_, '_> {
         }
         if self.request.verify {
             progress(Event::Verifying);
-            let angle = self.request.min_angle_deg;
-            let vopts = verify::Options {
-                samples_per_edge: 2,
-                surface_balls: Some(super::verify_balls(&out.balls)),
-                epsilon: self
-                    .request
-                    .certify_epsilon
-                    .or(self.input.dm_inf().map(|d| sigma / d)),
-                min_angle_deg: (angle > 0.0).then_some(angle - 1e-9),
-                component_seeds: self.input.control_points.clone(),
-                seed: self.request.seed,
-                ..Default::default()
-            };
+            let epsilon = (self.request.certify_epsilon).or(self.input.dm_inf().map(|d| sigma / d));
+            let vopts = verify_options(self.input, self.request, &out, epsilon);
             out.report = Some(verify::check_against(&out.mesh, surface, &vopts));
         }
         Ok(out)
@@ -329,17 +318,11 @@ impl Plan<'_, '_> {
         out.notes = self.notes;
         if self.request.verify {
             progress(Event::Verifying);
-            let angle = self.request.min_angle_deg;
+            let eps = Some(self.request.certify_epsilon.unwrap_or(epsilon));
             let vopts = verify::Options {
-                samples_per_edge: 2,
-                surface_balls: Some(super::verify_balls(&out.balls)),
-                epsilon: Some(self.request.certify_epsilon.unwrap_or(epsilon)),
                 dm: verify::DmSource::Poles,
                 surface_samples: Some(tp.first.mesh.vertices.clone()),
-                min_angle_deg: (angle > 0.0).then_some(angle - 1e-9),
-                component_seeds: self.input.control_points.clone(),
-                seed: self.request.seed,
-                ..Default::default()
+                ..verify_options(self.input, self.request, &out, eps)
             };
             out.report = Some(verify::check_against(&out.mesh, surface, &vopts));
         }
@@ -354,5 +337,26 @@ impl Plan<'_, '_> {
             first: tp.first,
         });
         Ok(out)
+    }
+}
+
+/// The verifier's options common to both modes: the mesh's surface balls, the certified
+/// `epsilon`, the requested angle bound (less 1e-9 for rounding), the control points as
+/// component seeds, and the request's seed.
+fn verify_options(
+    input: &Input,
+    request: &Request,
+    out: &Outcome,
+    epsilon: Option<f64>,
+) -> verify::Options {
+    let angle = request.min_angle_deg;
+    verify::Options {
+        samples_per_edge: 2,
+        surface_balls: Some(super::verify_balls(&out.balls)),
+        epsilon,
+        min_angle_deg: (angle > 0.0).then_some(angle - 1e-9),
+        component_seeds: input.control_points.clone(),
+        seed: request.seed,
+        ..Default::default()
     }
 }

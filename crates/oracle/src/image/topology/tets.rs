@@ -22,7 +22,8 @@ pub(super) fn first_crossing(
         let b = aff.transform_point3(m + u * (len * i as f64 / steps as f64));
         let fb = s.value(b);
         if (fa < 0.0) != (fb < 0.0) {
-            let c = crate::roots::bisect(|p| s.value(p), a, fa, b, fb, 0.0);
+            let c =
+                crate::roots::bisect(|p| s.value(p), crate::roots::Ends::new(a, fa, b, fb), 0.0);
             return c.is_finite().then_some(c);
         }
         (a, fa) = (b, fb);

@@ -28,6 +28,20 @@ fn run(mut m: TriMesh, min_volume: Option<f64>) -> (TriMesh, Vec<TopologyDecisio
     (m, d)
 }
 
+/// [`run`] without a volume threshold on `vertices`, `triangles`, checking that the output is
+/// closed and oriented.
+fn run_closed(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> (TriMesh, Vec<TopologyDecision>) {
+    let (out, d) = run(
+        TriMesh {
+            vertices,
+            triangles,
+        },
+        None,
+    );
+    assert!(closed_oriented(&out), "{d:?}");
+    (out, d)
+}
+
 #[test]
 fn a_closed_manifold_is_left_alone() {
     let (vertices, triangles) = tet(DVec3::ZERO, 0);
@@ -44,14 +58,7 @@ fn a_closed_manifold_is_left_alone() {
 fn a_hole_is_closed() {
     let (vertices, mut triangles) = tet(DVec3::ZERO, 0);
     triangles.remove(3);
-    let (out, d) = run(
-        TriMesh {
-            vertices,
-            triangles,
-        },
-        None,
-    );
-    assert!(closed_oriented(&out));
+    let (out, d) = run_closed(vertices, triangles);
     assert_eq!(out.triangles.len(), 4);
     assert_eq!(d.len(), 1);
     assert_eq!(
@@ -79,16 +86,7 @@ fn a_pinch_is_cut_into_two_closed_pieces() {
         }
         v
     };
-    let faces = [
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
+    let faces = crate::topology::OCTAHEDRON;
     let mut vertices = oct(DVec3::Z, true); // its -Z vertex (5) at the origin
     let mut lower = oct(-DVec3::Z, false);
     lower[4] = DVec3::ZERO; // its +Z vertex at the origin: shared with vertex 5
@@ -99,14 +97,7 @@ fn a_pinch_is_cut_into_two_closed_pieces() {
             .iter()
             .map(|f| f.map(|v| if v == 4 { 5 } else { v + 6 })),
     );
-    let (out, d) = run(
-        TriMesh {
-            vertices,
-            triangles,
-        },
-        None,
-    );
-    assert!(closed_oriented(&out));
+    let (out, d) = run_closed(vertices, triangles);
     assert_eq!(d.len(), 1, "{d:?}");
     assert_eq!(d[0].kind, DecisionKind::Cut { loops: 2 });
     assert_eq!(d[0].facets_removed, 8);
@@ -128,14 +119,7 @@ fn two_tetrahedra_on_an_edge_and_a_lone_triangle() {
         DVec3::new(5.0, 6.0, 5.0),
     ]);
     triangles.push([6, 7, 8]);
-    let (out, d) = run(
-        TriMesh {
-            vertices,
-            triangles,
-        },
-        None,
-    );
-    assert!(closed_oriented(&out), "{d:?}");
+    let (out, d) = run_closed(vertices, triangles);
     assert!(d.iter().any(|x| x.kind == DecisionKind::DropSliver));
     assert!(!out.vertices.contains(&DVec3::splat(5.0)));
 }
