@@ -10,11 +10,17 @@ fn scratch(test: &str) -> PathBuf {
     common::scratch_dir("xtask-cli-certificate", test)
 }
 
+/// A fresh scratch directory for `test` and the run of `line` in it.
+fn run_in(test: &str, line: &str) -> (PathBuf, std::process::Output) {
+    let d = scratch(test);
+    let o = xtask_line(&d, line);
+    (d, o)
+}
+
 #[test]
 fn budget_stop_is_never_a_bare_pass() {
-    let d = scratch("budget");
-    let o = xtask_line(
-        &d,
+    let (d, o) = run_in(
+        "budget",
         "mesh implicit:sphere --size 0.02 --max-vertices 3000 -o s.ply --report r.json",
     );
     let s = stdout(&o);
@@ -29,9 +35,8 @@ fn budget_stop_is_never_a_bare_pass() {
 
 #[test]
 fn skip_hint_names_the_flags_of_each_command() {
-    let d = scratch("hint");
-    let o = xtask_line(
-        &d,
+    let (d, o) = run_in(
+        "hint",
         "mesh implicit:x^2+y^2+z^2-1 --bounding-sphere 0,0,0,2 --size 0.3 -o s.ply",
     );
     assert!(o.status.success());

@@ -7,7 +7,7 @@ use geom::closest::closest_point_triangle;
 use glam::{DAffine3, DVec3};
 use meshio::TriMesh;
 use oracle::Surface;
-use oracle::image::{ImageOptions, ImageSurface, Volume, Voxels};
+use oracle::image::{ImageSurface, Volume, Voxels};
 use verify::{DmSource, Options, Status, check_against};
 
 /// Options without the (slow, irrelevant here) self-intersection test.
@@ -32,6 +32,14 @@ fn mesh_distance(m: &TriMesh, p: DVec3) -> f64 {
 /// Two balls of radius 5 voxels centred 14 voxels apart on a 32 x 20 x 20 grid (a gap of 4
 /// voxels between them, like two hemispheres): f32 voxels = 5 - distance to the nearer
 /// centre, iso 0 (bright inside).
+/// The distance from `p` to the nearest of `points` (brute force: the independent reference).
+fn nearest_of(points: &[DVec3], p: DVec3) -> f64 {
+    points
+        .iter()
+        .map(|q| q.distance(p))
+        .fold(f64::INFINITY, f64::min)
+}
+
 fn two_blobs() -> (ImageSurface, [DVec3; 2]) {
     let (nx, ny, nz) = (32usize, 20usize, 20usize);
     let c = [DVec3::new(9.0, 9.5, 9.5), DVec3::new(23.0, 9.5, 9.5)];
@@ -46,14 +54,7 @@ fn two_blobs() -> (ImageSurface, [DVec3; 2]) {
         }
     }
     let vol = Volume::new([nx, ny, nz], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
-    let s = ImageSurface::new(
-        vol,
-        &ImageOptions {
-            iso: Some(0.0),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = ImageSurface::at_iso(vol, 0.0).unwrap();
     (s, c)
 }
 
@@ -113,12 +114,7 @@ fn image_with_a_gap_hausdorff_matches_dense_sampling() {
     }
     let m2s = samples
         .iter()
-        .map(|p| {
-            dense
-                .iter()
-                .map(|q| (*q - *p).length())
-                .fold(f64::INFINITY, f64::min)
-        })
+        .map(|p| nearest_of(&dense, *p))
         .fold(0.0, f64::max);
     let s2m = dense
         .iter()

@@ -185,7 +185,7 @@ impl Blocks {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::image::{ImageOptions, ImageSurface, Volume, Voxels};
+    use crate::image::{ImageSurface, Volume, Voxels};
     use crate::roots::SplitMix64;
     use glam::DAffine3;
 
@@ -208,14 +208,7 @@ mod tests {
             })
             .collect();
         let vol = Volume::new(n, Voxels::F32(data), DAffine3::IDENTITY).unwrap();
-        let s = ImageSurface::new(
-            vol,
-            &ImageOptions {
-                iso: Some(1.5),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let s = ImageSurface::at_iso(vol, 1.5).unwrap();
         let blocks = Blocks::from_bits(s.dims_isize(), &s.inside_bits_rows());
         assert!(blocks.flags.contains(&IN) && blocks.flags.contains(&OUT));
         assert!(blocks.flags.contains(&MIXED));

@@ -80,6 +80,23 @@ impl ImageSurface {
         ImageSurface::new_shared(std::sync::Arc::new(vol), opts)
     }
 
+    /// [`ImageSurface::new`] with the default options and the level set at `iso`.
+    ///
+    /// ```
+    /// use oracle::image::{ImageSurface, Volume, Voxels};
+    /// use glam::DAffine3;
+    /// let v: Vec<f32> = (0..64).map(|i| (i % 4) as f32).collect();
+    /// let vol = Volume::new([4, 4, 4], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+    /// assert_eq!(ImageSurface::at_iso(vol, 1.5).unwrap().iso(), 1.5);
+    /// ```
+    pub fn at_iso(vol: Volume, iso: f64) -> Result<ImageSurface, ImageError> {
+        let opts = ImageOptions {
+            iso: Some(iso),
+            ..Default::default()
+        };
+        ImageSurface::new(vol, &opts)
+    }
+
     /// Same as [`ImageSurface::new`] on a shared volume: mesh several labels or iso values of
     /// one image without copying the voxels.
     ///
