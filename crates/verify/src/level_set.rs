@@ -19,7 +19,7 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use glam::{DAffine3, DVec3};
-use oracle::image::ImageSurface;
+use oracle::image::{ImageSurface, trilinear};
 use rayon::prelude::*;
 
 /// Pyramid levels from this one up store the node signs of their blocks (2^level cells a side).
@@ -482,15 +482,4 @@ impl SubBox {
             }
         })
     }
-}
-
-/// Trilinear interpolation of corner values `c` (x fastest) at `f` in `[0, 1]^3`.
-fn trilinear(c: &[f64; 8], f: DVec3) -> f64 {
-    let x0 = c[0] + (c[1] - c[0]) * f.x;
-    let x1 = c[2] + (c[3] - c[2]) * f.x;
-    let x2 = c[4] + (c[5] - c[4]) * f.x;
-    let x3 = c[6] + (c[7] - c[6]) * f.x;
-    let y0 = x0 + (x1 - x0) * f.y;
-    let y1 = x2 + (x3 - x2) * f.y;
-    y0 + (y1 - y0) * f.z
 }

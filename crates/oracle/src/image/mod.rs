@@ -71,7 +71,7 @@ pub use nifti_io::{NiftiWriteOptions, Qform, nifti_affine, read_nifti, write_nif
 pub use stack::{
     LoadOptions, RawOptions, load_volume, read_raw, read_slice_folder, read_tiff_stack,
 };
-pub use surface::{ImageOptions, ImageSurface};
+pub use surface::{ImageOptions, ImageSurface, trilinear};
 pub use topology::Topology;
 pub(crate) use volume::with_voxels;
 pub use volume::{Dtype, Stats, Volume, Voxel, Voxels};

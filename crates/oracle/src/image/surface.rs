@@ -550,9 +550,16 @@ pub(super) fn floor3(v: DVec3) -> DVec3 {
     DVec3::new(f(v.x), f(v.y), f(v.z))
 }
 
-/// Trilinear interpolation of the 8 corner values `c` (x fastest) at local coordinates `t`.
+/// Trilinear interpolation of the 8 corner values `c` (x fastest) at local coordinates `t`
+/// (the interpolant whose level set [`ImageSurface`] is).
+///
+/// ```
+/// use glam::DVec3;
+/// let c = [0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0]; // the value is x
+/// assert_eq!(oracle::image::trilinear(&c, DVec3::new(0.25, 0.5, 0.75)), 0.25);
+/// ```
 #[inline(always)]
-pub(super) fn trilinear(c: &[f64; 8], t: DVec3) -> f64 {
+pub fn trilinear(c: &[f64; 8], t: DVec3) -> f64 {
     let x00 = c[0] + t.x * (c[1] - c[0]);
     let x10 = c[2] + t.x * (c[3] - c[2]);
     let x01 = c[4] + t.x * (c[5] - c[4]);
