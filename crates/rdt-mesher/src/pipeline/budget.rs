@@ -184,7 +184,7 @@ pub(crate) fn auto_size(
     area: Option<AreaEstimate>,
     budgets: &Budgets,
 ) -> (f64, Option<Forecast>, Vec<String>) {
-    let (sigma, rule, kept) = theorem_default(input);
+    let (sigma, rule, kept, theorem) = theorem_default(input);
     let Some(area) = area else {
         return (sigma, None, vec![kept, no_forecast()]);
     };
@@ -216,7 +216,7 @@ pub(crate) fn auto_size(
         sig(chosen),
         count(cf.vertices)
     );
-    if rule.contains("d_M^inf") {
+    if theorem {
         note.push_str(
             "; the theorems' sampling condition (sigma <= 0.09 d_M^inf) is not claimed at this \
              size: request the size to get it",
@@ -225,19 +225,21 @@ pub(crate) fn auto_size(
     (chosen, Some(cf), vec![note])
 }
 
-/// The size the paper's rules give without a request, the rule's name and the note saying
-/// it was used.
-fn theorem_default(input: &Input<'_>) -> (f64, &'static str, String) {
+/// The size the paper's rules give without a request, the rule's name, the note saying it
+/// was used, and whether it is the theorems' sigma = 0.09 d_M^inf.
+fn theorem_default(input: &Input<'_>) -> (f64, &'static str, String, bool) {
     match (input.default_size, input.dm_inf()) {
         (Some(d), _) => (
             d,
             "the input's suggested size",
             format!("no --size: using the input's suggested size {d:.5}"),
+            false,
         ),
         (None, Some(dm)) => (
             0.09 * dm,
             "sigma = 0.09 * d_M^inf",
             format!("no --size: using sigma = 0.09 * d_M^inf = {:.5}", 0.09 * dm),
+            true,
         ),
         (None, None) => {
             let r = input.surface().bounding_sphere().radius / 20.0;
@@ -245,6 +247,7 @@ fn theorem_default(input: &Input<'_>) -> (f64, &'static str, String) {
                 r,
                 "sigma = bounding radius / 20",
                 format!("no --size: using sigma = bounding radius / 20 = {r:.5}"),
+                false,
             )
         }
     }
