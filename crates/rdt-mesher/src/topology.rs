@@ -163,25 +163,44 @@ fn link_of(link: &[[VertexId; 2]], ends: &mut Vec<(VertexId, u32)>) -> (bool, bo
     (len == n, true)
 }
 
-/// Up to `per_component` well-spread vertices (farthest-point order) of every connected
-/// component of a triangle mesh, in a deterministic order.
-pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -> Vec<glam::DVec3> {
-    let n = mesh.vertices.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
+/// Union-find over vertex ids, joined by triangles. Invariant: a set's root is its smallest
+/// vertex (a union keeps the smaller root), so roots do not depend on the order of the joins.
+pub(crate) struct VertexUnion(Vec<u32>);
+
+impl VertexUnion {
+    /// `n` singleton sets.
+    pub(crate) fn new(n: usize) -> VertexUnion {
+        VertexUnion((0..n as u32).collect())
+    }
+
+    /// The root of `x`'s set (with path halving).
+    pub(crate) fn find(&mut self, mut x: u32) -> u32 {
+        let p = &mut self.0;
         while p[x as usize] != x {
             p[x as usize] = p[p[x as usize] as usize];
             x = p[x as usize];
         }
         x
     }
-    for t in &mesh.triangles {
-        for i in 0..3 {
-            let (a, b) = (find(&mut parent, t[i]), find(&mut parent, t[(i + 1) % 3]));
+
+    /// Join the three corners of `t`.
+    pub(crate) fn join_triangle(&mut self, t: [u32; 3]) {
+        for k in 1..3 {
+            let (a, b) = (self.find(t[0]), self.find(t[k]));
             if a != b {
-                parent[a.max(b) as usize] = a.min(b);
+                self.0[a.max(b) as usize] = a.min(b);
             }
         }
+    }
+}
+
+/// Up to `per_component` well-spread vertices (farthest-point order) of every connected
+/// component of a triangle mesh, in a deterministic order.
+pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -> Vec<glam::DVec3> {
+    let n = mesh.vertices.len();
+    let mut parent = VertexUnion::new(n);
+    for &t in &mesh.triangles {
+        parent.join_triangle(t);
     }
     let mut used = vec![false; n];
     for t in &mesh.triangles {
@@ -192,7 +211,7 @@ pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -
     let mut comps: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
     for v in 0..n as u32 {
         if used[v as usize] {
-            let r = find(&mut parent, v);
+            let r = parent.find(v);
             comps.entry(r).or_default().push(v);
         }
     }

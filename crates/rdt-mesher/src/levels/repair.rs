@@ -225,27 +225,14 @@ fn live_tris(tris: &[[u32; 3]], live: &[bool]) -> Vec<[u32; 3]> {
 /// Components (by shared vertices) of the triangles `which` of `tris`, as lists of triangle
 /// indices, in order of their first triangle.
 fn components(tris: &[[u32; 3]], which: &[usize], n: usize) -> Vec<Vec<usize>> {
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
-    }
+    let mut parent = crate::topology::VertexUnion::new(n);
     for &i in which {
-        let t = tris[i];
-        for k in 1..3 {
-            let (a, b) = (find(&mut parent, t[0]), find(&mut parent, t[k]));
-            if a != b {
-                parent[a.max(b) as usize] = a.min(b);
-            }
-        }
+        parent.join_triangle(tris[i]);
     }
     let mut index: std::collections::BTreeMap<u32, usize> = Default::default();
     let mut out: Vec<Vec<usize>> = Vec::new();
     for &i in which {
-        let r = find(&mut parent, tris[i][0]);
+        let r = parent.find(tris[i][0]);
         let k = *index.entry(r).or_insert_with(|| {
             out.push(Vec::new());
             out.len() - 1
@@ -464,19 +451,14 @@ pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
     st.topology_decisions = decisions;
 }
 
-/// The ball circumscribing the triangle `p` (its circumcircle's center and radius).
+/// The ball circumscribing the triangle `p`: its circumcircle's center (the centroid if
+/// degenerate) and the largest distance from there to a corner.
 fn circumball(p: [DVec3; 3]) -> SurfaceBall {
-    let (a, b) = (p[1] - p[0], p[2] - p[0]);
-    let n = a.cross(b);
-    let d = 2.0 * n.length_squared();
-    let c = if d > 0.0 {
-        p[0] + (n.cross(a) * b.length_squared() + b.cross(n) * a.length_squared()) / d
-    } else {
-        (p[0] + p[1] + p[2]) / 3.0
-    };
+    let center = verify::certificate::circumcircle(p[0], p[1], p[2])
+        .map_or((p[0] + p[1] + p[2]) / 3.0, |(c, _)| c);
     SurfaceBall {
-        center: c,
-        radius: p.iter().map(|q| q.distance(c)).fold(0.0, f64::max),
+        center,
+        radius: p.iter().map(|q| q.distance(center)).fold(0.0, f64::max),
     }
 }
 
