@@ -86,7 +86,7 @@ fn min_component_drops_specks_and_reports_them() {
         .topology_decisions
         .iter()
         .filter_map(|d| match d.kind {
-            DecisionKind::DropSmallComponent { volume } => Some(volume),
+            DecisionKind::DropSmallComponent { volume, .. } => Some(volume),
             _ => None,
         })
         .collect();

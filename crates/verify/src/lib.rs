@@ -47,6 +47,7 @@ pub mod intersect;
 pub mod level_set;
 pub mod medial;
 pub mod quality;
+pub mod scan_components;
 mod surface_checks;
 pub mod topology;
 
@@ -129,6 +130,9 @@ pub struct Options {
     /// Delaunay ball radius of the facet nearest to the seed (the mesh's own scale there; see
     /// the `components-sampled` check).
     pub seed_tolerance: Option<f64>,
+    /// Images: a vertex of each mesh piece removed on request (`--min-component`); their
+    /// voxel-scan components count as dropped, not missed ([`scan_components::account`]).
+    pub dropped_points: Vec<DVec3>,
 }
 
 impl Default for Options {
@@ -148,6 +152,7 @@ impl Default for Options {
             component_seeds: None,
             seed: 0,
             seed_tolerance: None,
+            dropped_points: Vec::new(),
         }
     }
 }
@@ -218,6 +223,8 @@ pub struct Report {
     pub geometry: Option<Geometry>,
     pub certificate: Option<EpsilonCertificate>,
     pub components_sampled: Option<ComponentCoverage>,
+    /// Images: the mesh's pieces against the voxel scan's components.
+    pub scan_components: Option<scan_components::ScanComponents>,
     pub hausdorff_bound: Option<HausdorffBound>,
     pub checks: Vec<Check>,
 }
@@ -378,6 +385,7 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
         geometry: None,
         certificate: None,
         components_sampled: None,
+        scan_components: None,
         hausdorff_bound: None,
         checks: Vec::new(),
     };

@@ -3,6 +3,7 @@
 
 use std::sync::Arc;
 
+use glam::DVec3;
 use meshio::TriMesh;
 use oracle::Surface;
 
@@ -330,27 +331,54 @@ fn components_sampled_check(
         None => 2.0 * radius.get(facet).copied().unwrap_or(0.0) + slack,
     };
     let dist = MeshDistance::new(mesh, bvh);
-    let cov = certificate::component_coverage(&dist, &seeds, &tol);
-    r.push(
-        "components-sampled",
-        pass_fail(cov.uncovered == 0 && !seeds.is_empty()),
-        if seeds.is_empty() {
-            "no seed points on S to check against".into()
-        } else {
-            format!(
-                "{} of {} seed points of S farther from the mesh than {} (largest threshold \
-                 {:.3e}, farthest seed {:.3e})",
-                cov.uncovered,
-                seeds.len(),
-                match opts.seed_tolerance {
-                    Some(t) => format!("{t:.3e} (given)"),
-                    None => "twice the surface Delaunay ball radius of their nearest facet".into(),
-                },
-                cov.tolerance,
-                cov.seeds.iter().map(|s| s.distance).fold(0.0, f64::max),
-            )
-        },
+    let mut cov = certificate::component_coverage(&dist, &seeds, &tol);
+    let threshold = match opts.seed_tolerance {
+        Some(t) => format!("{t:.3e} (given)"),
+        None => "twice the surface Delaunay ball radius of their nearest facet".into(),
+    };
+    let far = format!(
+        "{} of {} seed points of S farther from the mesh than {threshold} (largest threshold \
+         {:.3e}, farthest seed {:.3e})",
+        cov.uncovered,
+        seeds.len(),
+        cov.tolerance,
+        cov.seeds.iter().map(|s| s.distance).fold(0.0, f64::max),
     );
+    let (status, detail) = if let Some(img) = surface.as_image() {
+        // Images: the voxel scan names each seed's component, so a far seed is a missed
+        // component only when no mesh vertex lies on its component.
+        let acc = crate::scan_components::account(mesh, img, &opts.dropped_points);
+        let far_seeds = cov.uncovered;
+        for s in cov.seeds.iter_mut().filter(|s| !s.covered) {
+            let c = img.component_of(DVec3::from_array(s.seed));
+            s.covered = c.is_some_and(|c| acc.has_piece(c) || acc.dropped(c));
+        }
+        cov.uncovered = cov.seeds.iter().filter(|s| !s.covered).count();
+        let worst = acc
+            .components
+            .iter()
+            .find(|c| c.fate == crate::scan_components::Fate::Missed)
+            .map(|c| {
+                format!(
+                    "; largest missed: {} voxel edges crossed, at ({:.4}, {:.4}, {:.4})",
+                    c.crossing_edges, c.seed[0], c.seed[1], c.seed[2]
+                )
+            })
+            .unwrap_or_default();
+        let detail = format!(
+            "components: {}{worst}; {far}, {} of them on meshed components",
+            acc.summary(),
+            far_seeds - cov.uncovered
+        );
+        let status = pass_fail(acc.missed == 0 && cov.uncovered == 0);
+        r.scan_components = Some(acc);
+        (status, detail)
+    } else if seeds.is_empty() {
+        (Status::Fail, "no seed points on S to check against".into())
+    } else {
+        (pass_fail(cov.uncovered == 0), far)
+    };
+    r.push("components-sampled", status, detail);
     r.components_sampled = Some(cov);
 }
 

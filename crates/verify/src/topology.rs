@@ -109,6 +109,35 @@ impl Dsu {
     }
 }
 
+/// The vertices of each connected piece of `mesh` (vertices joined by its triangles), in
+/// increasing order of their lowest vertex; vertices of no triangle are left out.
+pub(crate) fn vertex_components(mesh: &TriMesh) -> Vec<Vec<usize>> {
+    let n = mesh.vertices.len();
+    let mut dsu = Dsu::new(n);
+    let mut used = vec![false; n];
+    for t in &mesh.triangles {
+        if t.iter().any(|&v| v as usize >= n) {
+            continue;
+        }
+        dsu.union(t[0], t[1]);
+        dsu.union(t[0], t[2]);
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    let mut index = vec![usize::MAX; n];
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for v in (0..n).filter(|&v| used[v]) {
+        let r = dsu.find(v as u32) as usize;
+        if index[r] == usize::MAX {
+            index[r] = out.len();
+            out.push(Vec::new());
+        }
+        out[index[r]].push(v);
+    }
+    out
+}
+
 /// Half-edge record: undirected key, triangle, direction.
 #[derive(Clone, Copy)]
 struct HalfEdge {

@@ -7,7 +7,7 @@ use crate::cli::mesh_report;
 use anyhow::{Context, Result, bail};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use indicatif::{ProgressBar, ProgressStyle};
-use rdt_mesher::pipeline::{self, Event, Failure, Input, Outcome, Request, SizeRequest, Verdict};
+use rdt_mesher::pipeline::{self, Event, Failure, Outcome, Request, SizeRequest, Verdict};
 use rdt_mesher::{Initialization, OracleKind};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -280,7 +280,7 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         print_two_pass_verdict(&out, &out_path);
         write_two_pass_report(a, base(), &out)?;
     } else {
-        print_single(&spec, &opened, &out, &out_path);
+        print_single(&spec, &out, &out_path);
         write_report(a, base(), &out)?;
     }
     Ok(out.verdict)
@@ -301,7 +301,7 @@ pub(super) fn write_json(r: &Path, report: &serde_json::Value) -> Result<()> {
 }
 
 /// The lines of a constant-size run.
-fn print_single(spec: &str, opened: &Input<'_>, out: &Outcome, out_path: &Path) {
+fn print_single(spec: &str, out: &Outcome, out_path: &Path) {
     if let Some(s) = &out.sharp_edges {
         outln!("{s}");
     }
@@ -336,12 +336,17 @@ fn print_single(spec: &str, opened: &Input<'_>, out: &Outcome, out_path: &Path) 
         },
         out_path.display()
     );
-    if let (Some(scan), Some(t)) = (opened.components, topo)
-        && t.components.len() < scan as usize
+    if let Some(acc) = out.report.as_ref().and_then(|r| r.scan_components.as_ref())
+        && (acc.split + acc.missed + acc.dropped + acc.unassigned_pieces > 0)
     {
         outln!(
-            "warning: the mesh has {} of the {scan} surface components found by the voxel scan; components smaller than the size bound may be missed (try a smaller --size)",
-            t.components.len()
+            "components: {}{} (each listed with a point on it in the report's verify.scan_components)",
+            acc.summary(),
+            if acc.missed + acc.split > 0 {
+                "; parts thinner than the size bound are split or missed: try a smaller --size"
+            } else {
+                ""
+            }
         );
     }
     if let Some(line) = out.verify_line() {

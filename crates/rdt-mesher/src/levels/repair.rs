@@ -46,6 +46,8 @@ pub enum DecisionKind {
     DropSmallComponent {
         /// The volume it enclosed, in the surface's units cubed.
         volume: f64,
+        /// One of its vertices (a point of S: names the component it stood for).
+        vertex: DVec3,
     },
 }
 
@@ -347,7 +349,8 @@ fn drop_small(
             for &i in &comp {
                 live[i] = false;
             }
-            let kind = DecisionKind::DropSmallComponent { volume };
+            let vertex = mesh.vertices[mesh.triangles[comp[0]][0] as usize];
+            let kind = DecisionKind::DropSmallComponent { volume, vertex };
             out.push(decision(mesh, &mesh.triangles, &comp, kind, comp.len()));
         }
     }

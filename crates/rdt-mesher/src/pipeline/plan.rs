@@ -342,7 +342,7 @@ impl Plan<'_, '_> {
 
 /// The verifier's options common to both modes: the mesh's surface balls, the certified
 /// `epsilon`, the requested angle bound (less 1e-9 for rounding), the control points as
-/// component seeds, and the request's seed.
+/// component seeds, the request's seed, and a vertex of each component dropped on request.
 fn verify_options(
     input: &Input,
     request: &Request,
@@ -357,6 +357,15 @@ fn verify_options(
         min_angle_deg: (angle > 0.0).then_some(angle - 1e-9),
         component_seeds: input.control_points.clone(),
         seed: request.seed,
+        dropped_points: out
+            .stats
+            .topology_decisions
+            .iter()
+            .filter_map(|d| match d.kind {
+                crate::DecisionKind::DropSmallComponent { vertex, .. } => Some(vertex),
+                _ => None,
+            })
+            .collect(),
         ..Default::default()
     }
 }

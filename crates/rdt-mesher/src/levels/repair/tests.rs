@@ -141,7 +141,7 @@ fn small_components_are_dropped_on_request() {
     assert_eq!(out.triangles.len(), 4);
     assert!(matches!(
         d[0].kind,
-        DecisionKind::DropSmallComponent { volume } if (volume - 1e-3 / 6.0).abs() < 1e-12
+        DecisionKind::DropSmallComponent { volume, .. } if (volume - 1e-3 / 6.0).abs() < 1e-12
     ));
     let (out, d) = run(m, Some(1e-6));
     assert!(d.is_empty() && out.triangles.len() == 8);

@@ -1,0 +1,189 @@
+//! Component accounting against the voxel scan (ours; P1 for images, section 6.6.2): which
+//! surface components of an image's level set the mesh has, which it split, which it lacks.
+//!
+//! The voxel scan ([`oracle::image::Topology`]) finds the components of the trilinear level
+//! set exactly (union-find on the grid's sign runs). Each connected piece of the mesh is
+//! assigned the scan component that most of its vertices lie on
+//! ([`ImageSurface::component_of`]; ties to the lowest index), so:
+//! - a component with one piece, or with mesh vertices on it but no piece of its own (a piece
+//!   assigned to a neighbour it nearly touches), is *meshed*; with two or more pieces, *split*
+//!   (a neck cut by the topological repair, or a neck thinner than the size bound);
+//! - a component with no vertex on it is *dropped* when it was removed on request (`--min-component`:
+//!   a vertex of each removed piece is passed in [`account`]'s `dropped`) and *missed*
+//!   otherwise; every missed component is listed with a point on it and its size;
+//! - a piece whose vertices lie on no component (none of its cells' corners straddle the
+//!   iso level) is *unassigned*.
+//!
+//! The assignment is exact where a vertex's cell has one inside and one outside region (the
+//! scan's regions), and takes the nearest such pair of corners otherwise.
+
+use meshio::TriMesh;
+use oracle::image::ImageSurface;
+use serde::Serialize;
+
+/// What happened to one scan component.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Fate {
+    /// One mesh piece.
+    Meshed,
+    /// Two or more mesh pieces.
+    Split,
+    /// Removed on request (`--min-component`).
+    Dropped,
+    /// No mesh piece and not removed on request.
+    Missed,
+}
+
+/// One scan component and its mesh pieces.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ScanComponent {
+    /// Index into the scan's components ([`oracle::image::Topology::component_seeds`]).
+    pub index: usize,
+    /// A point of S on it (world space).
+    pub seed: [f64; 3],
+    /// Voxel edges crossed by it (about its area in voxel faces).
+    pub crossing_edges: usize,
+    /// Mesh pieces assigned to it.
+    pub pieces: usize,
+    /// What happened to it.
+    pub fate: Fate,
+}
+
+/// The accounting: counts, and the components that are not meshed as one piece.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ScanComponents {
+    /// Components found by the voxel scan.
+    pub scan: usize,
+    /// Connected pieces of the mesh.
+    pub mesh_pieces: usize,
+    /// Scan components with exactly one piece.
+    pub meshed: usize,
+    /// Scan components with two or more pieces.
+    pub split: usize,
+    /// Scan components removed on request.
+    pub dropped: usize,
+    /// Scan components with no piece, not removed on request.
+    pub missed: usize,
+    /// Mesh pieces on no scan component.
+    pub unassigned_pieces: usize,
+    /// Every missed, dropped and split component (missed first, then dropped, then split;
+    /// the largest first within each).
+    pub components: Vec<ScanComponent>,
+}
+
+impl ScanComponents {
+    /// Whether scan component `i` has a mesh piece.
+    pub fn has_piece(&self, i: usize) -> bool {
+        !self
+            .components
+            .iter()
+            .any(|c| c.index == i && matches!(c.fate, Fate::Missed | Fate::Dropped))
+    }
+
+    /// Whether scan component `i` was removed on request.
+    pub fn dropped(&self, i: usize) -> bool {
+        self.components
+            .iter()
+            .any(|c| c.index == i && c.fate == Fate::Dropped)
+    }
+
+    /// One line: `450 found by the voxel scan: 440 meshed, 3 split, 2 dropped, 5 missed`.
+    pub fn summary(&self) -> String {
+        let mut s = format!(
+            "{} found by the voxel scan: {} meshed",
+            self.scan, self.meshed
+        );
+        for (n, what) in [
+            (self.split, "split into pieces"),
+            (self.dropped, "dropped (--min-component)"),
+            (self.missed, "missed"),
+            (self.unassigned_pieces, "mesh pieces on no component"),
+        ] {
+            if n > 0 {
+                s += &format!(", {n} {what}");
+            }
+        }
+        s
+    }
+}
+
+/// The accounting of `mesh` against `image`'s voxel scan; `dropped`: a vertex of each mesh
+/// piece removed on request (their components count as dropped, not missed).
+pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) -> ScanComponents {
+    let topo = image.topology();
+    let n = topo.component_seeds.len();
+    let pieces = crate::topology::vertex_components(mesh);
+    let mut per = vec![0usize; n];
+    let mut touched = vec![false; n];
+    let mut unassigned = 0;
+    for piece in &pieces {
+        let mut votes: Vec<(usize, usize)> = Vec::new();
+        for &v in piece {
+            if let Some(c) = image.component_of(mesh.vertices[v]).filter(|&c| c < n) {
+                touched[c] = true;
+                match votes.iter_mut().find(|x| x.0 == c) {
+                    Some(x) => x.1 += 1,
+                    None => votes.push((c, 1)),
+                }
+            }
+        }
+        // Most votes, lowest index on ties.
+        match votes
+            .iter()
+            .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
+        {
+            Some(&(c, _)) => per[c] += 1,
+            _ => unassigned += 1,
+        }
+    }
+    let mut was_dropped = vec![false; n];
+    for &p in dropped {
+        if let Some(c) = image.component_of(p).filter(|&c| c < n) {
+            was_dropped[c] = true;
+        }
+    }
+    let mut components: Vec<ScanComponent> = (0..n)
+        .filter_map(|i| {
+            let fate = match per[i] {
+                _ if per[i] == 0 && touched[i] => return None,
+                0 if was_dropped[i] => Fate::Dropped,
+                0 => Fate::Missed,
+                1 => return None,
+                _ => Fate::Split,
+            };
+            Some(ScanComponent {
+                index: i,
+                seed: topo.component_seeds[i].to_array(),
+                crossing_edges: topo.component_edges.get(i).copied().unwrap_or(0),
+                pieces: per[i],
+                fate,
+            })
+        })
+        .collect();
+    let rank = |f: Fate| match f {
+        Fate::Missed => 0,
+        Fate::Dropped => 1,
+        _ => 2,
+    };
+    components.sort_by(|a, b| {
+        (rank(a.fate), std::cmp::Reverse(a.crossing_edges), a.index).cmp(&(
+            rank(b.fate),
+            std::cmp::Reverse(b.crossing_edges),
+            b.index,
+        ))
+    });
+    let count = |f: Fate| components.iter().filter(|c| c.fate == f).count();
+    ScanComponents {
+        scan: n,
+        mesh_pieces: pieces.len(),
+        meshed: (0..n)
+            .filter(|&i| per[i] == 1 || (per[i] == 0 && touched[i]))
+            .count(),
+        split: count(Fate::Split),
+        dropped: count(Fate::Dropped),
+        missed: count(Fate::Missed),
+        unassigned_pieces: unassigned,
+        components,
+    }
+}
