@@ -77,33 +77,9 @@ fn every_scan_component_is_accounted_for_and_a_removed_piece_is_missed() {
     );
 }
 
-/// The vertices of the mesh piece with the fewest vertices.
+/// The vertices of the mesh piece with the fewest vertices (the lowest-numbered on ties).
 fn smallest_piece(mesh: &meshio::TriMesh) -> Vec<u32> {
-    let n = mesh.vertices.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            x = p[x as usize];
-        }
-        x
-    }
-    for t in &mesh.triangles {
-        for k in 1..3 {
-            let (a, b) = (find(&mut parent, t[0]), find(&mut parent, t[k]));
-            parent[a.max(b) as usize] = a.min(b);
-        }
-    }
-    let mut groups: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
-    for t in &mesh.triangles {
-        for &v in t {
-            groups.entry(find(&mut parent, v)).or_default().push(v);
-        }
-    }
-    let mut g: Vec<Vec<u32>> = groups.into_values().collect();
-    g.iter_mut().for_each(|v| {
-        v.sort();
-        v.dedup()
-    });
-    g.sort_by_key(|v| (v.len(), v[0]));
-    g.swap_remove(0)
+    let mut pieces = verify::topology::vertex_components(mesh);
+    pieces.sort_by_key(|v| (v.len(), v[0]));
+    pieces[0].iter().map(|&v| v as u32).collect()
 }

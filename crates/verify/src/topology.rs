@@ -111,7 +111,7 @@ impl Dsu {
 
 /// The vertices of each connected piece of `mesh` (vertices joined by its triangles), in
 /// increasing order of their lowest vertex; vertices of no triangle are left out.
-pub(crate) fn vertex_components(mesh: &TriMesh) -> Vec<Vec<usize>> {
+pub fn vertex_components(mesh: &TriMesh) -> Vec<Vec<usize>> {
     let n = mesh.vertices.len();
     let mut dsu = Dsu::new(n);
     let mut used = vec![false; n];
