@@ -1,4 +1,5 @@
-//! `cargo xtask`: the project's runner (mesh, verify, delaunay, regress, bench, paper-table).
+//! `cargo xtask`: the project's runner (mesh, verify, delaunay, regress, bench, paper-table,
+//! test).
 
 use clap::{Parser, Subcommand};
 
@@ -26,7 +27,7 @@ mod cli;
 mod suites;
 
 use cli::{delaunay, mesh, verify};
-use suites::{bench, paper_table, regress};
+use suites::{bench, paper_table, regress, test_all};
 
 #[derive(Parser)]
 #[command(
@@ -57,6 +58,9 @@ enum Cmd {
     Regress(regress::RegressArgs),
     /// The paper's Table 1 on this machine (writes docs/paper-table.{json,md}).
     PaperTable(paper_table::PaperTableArgs),
+    /// The whole test suite, what CI runs: Rust tests, quick regression, the Python package's
+    /// tests, the readers' mutation smoke pass.
+    Test(test_all::TestArgs),
 }
 
 /// The flags, or exit: a bad value of a numeric flag is one `error:` line (the parser's
@@ -108,6 +112,7 @@ fn main() {
         Cmd::Bench(a) => bench::run(a).map(|()| false),
         Cmd::Regress(a) => regress::run(a).map(|()| false),
         Cmd::PaperTable(a) => paper_table::run(a).map(|()| false),
+        Cmd::Test(a) => test_all::run(a).map(|()| false),
     };
     let verdict_failed = match r {
         Ok(failed) => failed,
