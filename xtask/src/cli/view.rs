@@ -297,7 +297,8 @@ pub fn check_extension(flag: &str, p: &Path, ext: &str) -> Result<()> {
 /// `cargo xtask view`.
 pub fn run(a: &ViewArgs) -> Result<()> {
     check_extension("-o", &a.output, "html")?;
-    let mut outs = vec![("-o", a.output.as_path())];
+    // Named `--output` here: check_outputs takes `-o` for a mesh path.
+    let mut outs = vec![("--output", a.output.as_path())];
     if let Some(p) = &a.picture {
         check_extension("--picture", p, "png")?;
         outs.push(("--picture", p.as_path()));
