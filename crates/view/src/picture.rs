@@ -15,7 +15,7 @@ pub struct PictureOptions {
     pub measure: Option<String>,
     /// Side of each view's square tile, in pixels (at least 64).
     pub tile: u32,
-    /// Draw facet edges: `None` draws them when facets are at least 6 pixels across.
+    /// Draw facet edges: `None` draws them when facets are at least 10 pixels across.
     pub edges: Option<bool>,
 }
 
@@ -154,7 +154,7 @@ fn draw_view(
             })
             .sum::<f64>()
             / n;
-        mean * f.scale >= 6.0
+        mean * f.scale >= 10.0
     });
     for (i, t) in scene.triangles.iter().enumerate() {
         let p = corners(t);

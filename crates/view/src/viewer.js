@@ -300,7 +300,7 @@
     ["eps_achieved", "requested_eps", "exceeding_total", "worst_facet", "balls", "facets_without_ball", "dm_source"].forEach(function (k) {
       if (cert[k] !== undefined && cert[k] !== null) cd.appendChild(el("div", {}, k + ": " + cert[k]));
     });
-  } else cd.textContent = "no certificate in the report (verify against a surface to get one)";
+  } else cd.textContent = "no certificate in the report (the loose-epsilon check below says why)";
   apply();
   // What the page fetched besides itself (the tests read it; it stays empty: no network).
   var fetched = (window.performance && performance.getEntriesByType) ? performance.getEntriesByType("resource") : [];
