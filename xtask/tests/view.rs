@@ -283,3 +283,38 @@ fn html_viewer_draws_in_chromium_and_the_colour_mode_changes_it() {
         ],
     );
 }
+
+#[test]
+fn bad_view_flags_and_files_give_one_error_line() {
+    let d = scratch_dir("view", "errors");
+    let s = sphere(&d);
+    let s = s.to_str().unwrap();
+    let o = xtask_line(&d, "mesh implicit:sphere --size 0.3 -q --picture p.jpg");
+    let e = one_error_line(&o, &["note:", "forecast:"]);
+    has(&e, &["--picture p.jpg", ".png"]);
+    assert!(!d.join("out").exists(), "refused before meshing");
+    let e = one_error_line(&xtask(&d, &["verify", s, "--up", "w"]), &[]);
+    has(&e, &["--up w", "x, y or z"]);
+    let e = one_error_line(&xtask(&d, &["view", s, "-o", "v.png"]), &[]);
+    has(&e, &["v.png", ".html"]);
+    let e = one_error_line(&xtask(&d, &["view", "missing.ply", "-o", "v.html"]), &[]);
+    has(&e, &["missing.ply"]);
+    std::fs::write(d.join("bad.json"), "{ not json").unwrap();
+    let e = one_error_line(
+        &xtask(&d, &["view", s, "--report", "bad.json", "-o", "v.html"]),
+        &[],
+    );
+    has(&e, &["--report bad.json", "not JSON"]);
+    // The report of another mesh is refused.
+    let o = xtask_line(
+        &d,
+        "mesh implicit:torus --size 0.3 -q -o t.ply --report t.json",
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = one_error_line(
+        &xtask(&d, &["view", s, "--report", "t.json", "-o", "v.html"]),
+        &[],
+    );
+    has(&e, &["t.json", "triangles", "give the report of this mesh"]);
+    assert!(!d.join("v.html").exists());
+}

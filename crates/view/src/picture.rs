@@ -290,6 +290,55 @@ fn wrap(s: &str, w: usize) -> Vec<String> {
 mod tests {
     use super::*;
 
+    /// A grid of `n x n` squares in the plane z = 0, two triangles each.
+    fn grid(n: u32) -> meshio::TriMesh {
+        let mut m = meshio::TriMesh {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for j in 0..=n {
+            for i in 0..=n {
+                m.vertices.push(DVec3::new(i as f64, j as f64, 0.0));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let v = j * (n + 1) + i;
+                m.triangles.push([v, v + 1, v + n + 2]);
+                m.triangles.push([v, v + n + 2, v + n + 1]);
+            }
+        }
+        m
+    }
+
+    fn highlight_pixels(img: &image::RgbImage) -> usize {
+        img.pixels().filter(|p| palette::is_highlight(p.0)).count()
+    }
+
+    #[test]
+    fn one_tiny_highlighted_facet_is_ringed_and_pictures_are_deterministic() {
+        let mut s = Scene::new(&grid(200), "grid").unwrap();
+        // An open grid: its border facets are highlighted (closed: boundary edge); keep only
+        // one interior facet instead.
+        s.highlights.clear();
+        let img = picture(&s, &PictureOptions::default()).unwrap();
+        assert_eq!(highlight_pixels(&img), 0);
+        s.add_highlight("test: one facet", [40_401]);
+        let img = picture(&s, &PictureOptions::default()).unwrap();
+        // The facet is under a pixel across in the top view; its ring is not.
+        assert!(highlight_pixels(&img) >= 30, "{}", highlight_pixels(&img));
+        let again = picture(&s, &PictureOptions::default()).unwrap();
+        assert_eq!(encode_png(&img).unwrap(), encode_png(&again).unwrap());
+        let e = picture(
+            &s,
+            &PictureOptions {
+                measure: Some("nope".into()),
+                ..Default::default()
+            },
+        );
+        assert!(e.unwrap_err().0.contains("min_angle, component"));
+    }
+
     #[test]
     fn values_and_wrapping() {
         assert_eq!(fmt_value(30.0), "30");

@@ -180,6 +180,18 @@ fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
             .report
             .as_ref()
             .map(|r| r.with_extension(format!("label{l}.json")));
+        b.pictures.picture = a
+            .pictures
+            .picture
+            .as_ref()
+            .map(|r| r.with_extension(format!("label{l}.png")));
+        b.html = a.html.as_ref().map(|h| match h.as_str() {
+            "" => String::new(),
+            h => Path::new(h)
+                .with_extension(format!("label{l}.html"))
+                .display()
+                .to_string(),
+        });
         if let Verdict::Fail(f) = run(&b).with_context(|| format!("label {l}"))? {
             failures.extend(f);
         }

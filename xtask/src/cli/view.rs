@@ -26,7 +26,7 @@ pub struct PictureArgs {
     pub picture: Option<PathBuf>,
     /// Colour of the picture: min_angle, r_sigma, distance or component (default: r_sigma
     /// when known, else min_angle).
-    #[arg(long, value_name = "MEASURE")]
+    #[arg(long, value_name = "MEASURE", value_parser = ["min_angle", "r_sigma", "distance", "component"])]
     pub picture_color: Option<String>,
     /// The surface's up axis in pictures and the viewer (default: y for mesh and point-set
     /// inputs, as scanned models are stored; z otherwise, as images and the catalog).
