@@ -1,6 +1,6 @@
 //! Seeing the mesh: `--picture` PNGs (the mesh in frame in each view, the highlight on a
 //! mesh with a planted defect and not on a clean one) and the HTML viewer in headless
-//! chromium (drawn, the colour mode changes it, no network).
+//! chromium (drawn, the colour mode changes it, no network request in chromium's net log).
 
 mod common;
 use common::*;
@@ -182,6 +182,28 @@ fn browse(dir: &Path, name: &str, url: &str, extra: &[String]) -> std::process::
     o
 }
 
+/// The network requests a page started, from chromium's net log: the URL_REQUEST_START_JOB
+/// events whose initiator is an origin (the page's, `null` for a file) and not the browser's
+/// own background requests (initiator `not an origin`).
+fn page_requests(netlog: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(netlog).unwrap();
+    let log: serde_json::Value = serde_json::from_str(&text)
+        .unwrap_or_else(|e| panic!("{}: not a complete net log: {e}", netlog.display()));
+    let start = &log["constants"]["logEventTypes"]["URL_REQUEST_START_JOB"];
+    assert!(
+        start.is_u64(),
+        "the net log names no URL_REQUEST_START_JOB event type"
+    );
+    let events = log["events"].as_array().expect("net log events");
+    events
+        .iter()
+        .filter(|e| &e["type"] == start && e["params"]["initiator"] != "not an origin")
+        .filter_map(|e| e["params"]["url"].as_str())
+        .filter(|u| !u.starts_with("file:") && !u.starts_with("data:"))
+        .map(str::to_string)
+        .collect()
+}
+
 /// Pixels of the view (left of the 360-pixel panel): (drawn, blue-dominant).
 fn drawn(img: &image::RgbImage) -> (u32, u32, Vec<[u8; 3]>) {
     let (mut n, mut blue, mut px) = (0, 0, Vec::new());
@@ -216,6 +238,8 @@ fn html_viewer_draws_in_chromium_and_the_colour_mode_changes_it() {
     has(&page, &["Content-Security-Policy", "default-src 'none'"]);
     let url = |hash: &str| format!("file://{}#{hash}", d.join("v.html").display());
 
+    // The net log of the first screenshot: no request started by the page.
+    let netlog = d.join("net.json");
     let mut shots = Vec::new();
     for (name, hash) in [
         ("component", "color=component&edges=0"),
@@ -223,12 +247,11 @@ fn html_viewer_draws_in_chromium_and_the_colour_mode_changes_it() {
         ("canvas2d", "color=component&edges=0&renderer=2d"),
     ] {
         let shot = d.join(format!("{name}.png"));
-        browse(
-            &d,
-            name,
-            &url(hash),
-            &[format!("--screenshot={}", shot.display())],
-        );
+        let mut flags = vec![format!("--screenshot={}", shot.display())];
+        if name == "component" {
+            flags.push(format!("--log-net-log={}", netlog.display()));
+        }
+        browse(&d, name, &url(hash), &flags);
         shots.push(drawn(&png(&shot)));
     }
     let area = 600 * 700;
@@ -270,6 +293,30 @@ fn html_viewer_draws_in_chromium_and_the_colour_mode_changes_it() {
         "{} vs {}",
         flat.0,
         comp.0
+    );
+
+    let asked = page_requests(&netlog);
+    assert!(
+        asked.is_empty(),
+        "the viewer asked the network for {asked:?}"
+    );
+    // Control: the same check sees a page that asks (a local port that refuses).
+    let leak = d.join("leak.html");
+    std::fs::write(&leak, "<img src=\"http://127.0.0.1:9/x.png\">").unwrap();
+    let leak_log = d.join("leak.json");
+    browse(
+        &d,
+        "leak",
+        &format!("file://{}", leak.display()),
+        &[
+            format!("--log-net-log={}", leak_log.display()),
+            "--dump-dom".into(),
+        ],
+    );
+    let leaked = page_requests(&leak_log);
+    assert!(
+        leaked.iter().any(|u| u == "http://127.0.0.1:9/x.png"),
+        "{leaked:?}"
     );
 
     // The page chose WebGL and fetched nothing (its resource timing list is empty).
