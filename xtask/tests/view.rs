@@ -234,6 +234,18 @@ fn html_viewer_draws_in_chromium_and_the_colour_mode_changes_it() {
     let o = xtask_line(&d, "view t.ply --report t.json -o v.html");
     assert!(o.status.success(), "{}", stderr(&o));
     let page = std::fs::read_to_string(d.join("v.html")).unwrap();
+    // Without the surface the page has no per-facet ball measures; with it, r/sigma (the
+    // report's sigma) and the distance, as `mesh --html` has.
+    lacks(&page, &["\"key\":\"r_sigma\"", "\"key\":\"distance\""]);
+    let o = xtask_line(
+        &d,
+        "view t.ply --report t.json --against implicit:torus -o w.html",
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let with = std::fs::read_to_string(d.join("w.html")).unwrap();
+    has(&with, &["\"key\":\"r_sigma\"", "\"key\":\"distance\""]);
+    let from_mesh = std::fs::read_to_string(d.join("t.html")).unwrap();
+    has(&from_mesh, &["\"key\":\"r_sigma\"", "\"key\":\"distance\""]);
     lacks(&page, &["http://", "https://", " src=", " href="]);
     has(&page, &["Content-Security-Policy", "default-src 'none'"]);
     let url = |hash: &str| format!("file://{}#{hash}", d.join("v.html").display());

@@ -34,7 +34,7 @@ pub struct PictureArgs {
     pub up: Option<Axis>,
 }
 
-/// `cargo xtask view MESH [--report R.json] -o FILE.html`.
+/// `cargo xtask view MESH [--report R.json] [--against SURFACE] -o FILE.html`.
 #[derive(clap::Args, Debug)]
 pub struct ViewArgs {
     /// The mesh (.ply, .off, .obj, .stl).
@@ -49,9 +49,18 @@ pub struct ViewArgs {
     /// Also write a PNG picture.
     #[arg(long, value_name = "FILE.png")]
     pub picture: Option<PathBuf>,
-    /// The surface's up axis (default z).
+    /// The surface's up axis (default: y against a mesh or point set, z otherwise).
     #[arg(long, value_parser = parse_up)]
     pub up: Option<Axis>,
+    /// The surface the mesh approximates (same specs as `mesh`): its surface Delaunay balls
+    /// give the distance to the surface, and with the report's sigma r/sigma.
+    #[arg(long)]
+    pub against: Option<String>,
+    /// Bounding sphere `cx,cy,cz,r` for an expression given to --against.
+    #[arg(long, allow_hyphen_values = true)]
+    pub bounding_sphere: Option<String>,
+    #[command(flatten)]
+    pub surface: super::input::SurfaceOptions,
 }
 
 /// The default up axis for an input kind.
@@ -344,14 +353,27 @@ pub fn run(a: &ViewArgs) -> Result<()> {
         }
     }
     let angle_bound = report.as_ref().and_then(|r| r["angle"].as_f64());
+    let (mut kind, mut balls) = (None, None);
+    if let Some(spec) = &a.against {
+        let opened = super::input::open(spec, a.bounding_sphere.as_deref(), &a.surface)?;
+        kind = Some(opened.kind);
+        balls = Some(verify::certificate::surface_delaunay_balls(
+            &mesh,
+            opened.surface(),
+        ));
+    }
+    let sigma = report
+        .as_ref()
+        .and_then(|r| r["sigma"].as_f64())
+        .filter(|s| *s > 0.0 && s.is_finite());
     let s = scene(Known {
         title: a.mesh.display().to_string(),
         mesh: &mesh,
-        balls: None,
-        sigma: None,
+        balls: balls.as_deref(),
+        sigma,
         angle_bound,
         report,
-        up: a.up.unwrap_or(Axis::Z),
+        up: a.up.unwrap_or(default_up(kind)),
     })?;
     write_html(&a.output, &s)?;
     if let Some(p) = &a.picture {
