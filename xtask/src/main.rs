@@ -1,5 +1,5 @@
-//! `cargo xtask`: the project's runner (mesh, verify, delaunay, regress, bench, paper-table,
-//! test).
+//! `cargo xtask`: the project's runner (mesh, verify, view, delaunay, regress, bench,
+//! paper-table, test).
 
 use clap::{Parser, Subcommand};
 
@@ -26,7 +26,7 @@ macro_rules! out {
 mod cli;
 mod suites;
 
-use cli::{delaunay, mesh, verify};
+use cli::{delaunay, mesh, verify, view};
 use suites::{bench, paper_table, regress, test_all};
 
 #[derive(Parser)]
@@ -50,6 +50,9 @@ enum Cmd {
     /// Verify a triangle mesh (topology, self-intersections, quality; against a surface:
     /// Hausdorff, normals, loose-epsilon certificate).
     Verify(verify::VerifyArgs),
+    /// Write one self-contained HTML viewer of a mesh (rotate, zoom, colour by quality,
+    /// the report's failing facets highlighted); opens offline in any browser.
+    View(view::ViewArgs),
     /// 3D Delaunay triangulation of a point file or of random points.
     Delaunay(delaunay::DelaunayArgs),
     /// Timing tables (medians, ratios against baselines measured in the same run).
@@ -109,6 +112,7 @@ fn main() {
         Cmd::Mesh(a) => mesh::run(a).map(|v| !v.passed()),
         Cmd::Delaunay(a) => delaunay::run(a).map(|()| false),
         Cmd::Verify(a) => verify::run(a).map(|()| false),
+        Cmd::View(a) => view::run(a).map(|()| false),
         Cmd::Bench(a) => bench::run(a).map(|()| false),
         Cmd::Regress(a) => regress::run(a).map(|()| false),
         Cmd::PaperTable(a) => paper_table::run(a).map(|()| false),

@@ -123,6 +123,12 @@ pub struct MeshArgs {
     pub quiet: bool,
     #[command(flatten)]
     pub surface: SurfaceOptions,
+    #[command(flatten)]
+    pub pictures: super::view::PictureArgs,
+    /// Write the HTML viewer of the mesh (one self-contained page; default name: the mesh's
+    /// with .html).
+    #[arg(long, value_name = "FILE.html", num_args = 0..=1, default_missing_value = "")]
+    pub html: Option<String>,
     /// Image: `all` meshes every label present except 0, one file per label
     /// (`NAME_label<L>.ply`, or -o's stem with `_label<L>`).
     #[arg(long, conflicts_with = "label")]
@@ -174,6 +180,18 @@ fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
             .report
             .as_ref()
             .map(|r| r.with_extension(format!("label{l}.json")));
+        b.pictures.picture = a
+            .pictures
+            .picture
+            .as_ref()
+            .map(|r| r.with_extension(format!("label{l}.png")));
+        b.html = a.html.as_ref().map(|h| match h.as_str() {
+            "" => String::new(),
+            h => Path::new(h)
+                .with_extension(format!("label{l}.html"))
+                .display()
+                .to_string(),
+        });
         if let Verdict::Fail(f) = run(&b).with_context(|| format!("label {l}"))? {
             failures.extend(f);
         }
@@ -230,9 +248,24 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/{}.ply", opened.name)));
+    let html_path = a.html.as_ref().map(|h| {
+        if h.is_empty() {
+            out_path.with_extension("html")
+        } else {
+            PathBuf::from(h)
+        }
+    });
     let mut outputs = vec![("-o", out_path.as_path())];
     if let Some(r) = &a.report {
         outputs.push(("--report", r.as_path()));
+    }
+    if let Some(p) = &a.pictures.picture {
+        super::view::check_extension("--picture", p, "png")?;
+        outputs.push(("--picture", p.as_path()));
+    }
+    if let Some(h) = &html_path {
+        super::view::check_extension("--html", h, "html")?;
+        outputs.push(("--html", h.as_path()));
     }
     super::output::check_outputs(Some(Path::new(&spec)), &outputs)?;
     let req = request(a)?;
@@ -286,7 +319,53 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         }
         write_report(a, base(), &out)?;
     }
+    write_views(a, &spec, opened.kind, &out, html_path.as_deref())?;
     Ok(out.verdict)
+}
+
+/// `--picture` and `--html`: the mesh with the mesher's balls (r/sigma, distance), its
+/// verification and unmet criteria.
+fn write_views(
+    a: &MeshArgs,
+    spec: &str,
+    kind: pipeline::InputKind,
+    out: &Outcome,
+    html: Option<&Path>,
+) -> Result<()> {
+    if a.pictures.picture.is_none() && html.is_none() {
+        return Ok(());
+    }
+    let report = if out.two_pass.is_some() {
+        json!({"second": out.stats, "verify": out.report, "angle": a.angle})
+    } else {
+        json!({"sigma": out.sigma, "stats": out.stats, "verify": out.report, "angle": a.angle})
+    };
+    // The mesher's balls are in facet order.
+    let balls: Vec<geom::SurfaceBall> = (out.balls.iter().enumerate())
+        .map(|(facet, b)| geom::SurfaceBall {
+            facet,
+            center: b.center,
+            radius: b.radius,
+        })
+        .collect();
+    let scene = super::view::scene(super::view::Known {
+        title: spec.to_string(),
+        mesh: &out.mesh,
+        balls: Some(&balls),
+        sigma: out.sigma,
+        angle_bound: Some(a.angle),
+        report: Some(report),
+        up: a.pictures.up.unwrap_or(super::view::default_up(Some(kind))),
+    })?;
+    if let Some(p) = &a.pictures.picture {
+        super::view::write_picture(p, &scene, a.pictures.picture_color.as_deref())?;
+        outln!("wrote {}", p.display());
+    }
+    if let Some(h) = html {
+        super::view::write_html(h, &scene)?;
+        outln!("wrote {}", h.display());
+    }
+    Ok(())
 }
 
 fn write_mesh(out_path: &Path, out: &Outcome) -> Result<()> {

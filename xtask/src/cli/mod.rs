@@ -1,5 +1,6 @@
 //! The commands that drive one library call each (ours): parse the flags, call the library,
-//! print. `input` and `points` read what the flags name.
+//! print. `input` and `points` read what the flags name; `view` turns a run into pictures
+//! and the HTML viewer.
 
 pub mod delaunay;
 pub mod input;
@@ -8,3 +9,4 @@ pub mod mesh_report;
 pub mod output;
 pub mod points;
 pub mod verify;
+pub mod view;

@@ -36,6 +36,8 @@ pub struct VerifyArgs {
     pub report: Option<PathBuf>,
     #[command(flatten)]
     pub surface: SurfaceOptions,
+    #[command(flatten)]
+    pub pictures: super::view::PictureArgs,
 }
 
 /// `--dm`: `auto`, `poles` or a positive finite number.
@@ -81,6 +83,14 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
             a.dm
         );
     }
+    if let Some(p) = &a.pictures.picture {
+        super::view::check_extension("--picture", p, "png")?;
+        let mut outs = vec![("--picture", p.as_path())];
+        if let Some(r) = &a.report {
+            outs.push(("--report", r.as_path()));
+        }
+        super::output::check_outputs(Some(&a.mesh), &outs)?;
+    }
     let mesh = meshio::read(&a.mesh)?;
     let opts = verify::Options {
         epsilon: a.epsilon,
@@ -90,9 +100,18 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
         dm,
         ..Default::default()
     };
+    let mut kind = None;
+    let mut balls = None;
     let report = match &a.against {
         Some(spec) => {
             let opened = input::open(spec, a.bounding_sphere.as_deref(), &a.surface)?;
+            kind = Some(opened.kind);
+            if a.pictures.picture.is_some() {
+                balls = Some(verify::certificate::surface_delaunay_balls(
+                    &mesh,
+                    opened.surface(),
+                ));
+            }
             let (samples, source) = reference_samples(spec, &opened, &a.surface).unzip();
             let opts = verify::Options {
                 surface_samples: samples,
@@ -109,6 +128,19 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
         let mut v: serde_json::Value = serde_json::from_str(&report.to_json())?;
         super::mesh_report::bound_lists(&mut v, super::mesh_report::LIST_LIMIT);
         super::mesh::write_json(p, &v).with_context(|| format!("writing {}", p.display()))?;
+    }
+    if let Some(p) = &a.pictures.picture {
+        let scene = super::view::scene(super::view::Known {
+            title: a.mesh.display().to_string(),
+            mesh: &mesh,
+            balls: balls.as_deref(),
+            sigma: None,
+            angle_bound: a.min_angle,
+            report: Some(serde_json::from_str(&report.to_json())?),
+            up: a.pictures.up.unwrap_or(super::view::default_up(kind)),
+        })?;
+        super::view::write_picture(p, &scene, a.pictures.picture_color.as_deref())?;
+        outln!("wrote {}", p.display());
     }
     if !report.passed() {
         anyhow::bail!(
