@@ -213,6 +213,7 @@ fn request(a: &MeshArgs) -> Result<Request> {
         verify: !a.no_verify,
         certify_epsilon: a.certify_epsilon,
         min_component: a.min_component,
+        cancel: None,
     })
 }
 
@@ -275,13 +276,22 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         print_two_pass(&spec, &out);
     }
     write_mesh(&out_path, &out)?;
-    let base = || mesh_report::common(&spec, &out_path, &opened, forecast.as_ref(), &budgets, &out);
     if out.two_pass.is_some() {
         print_two_pass_verdict(&out, &out_path);
-        write_two_pass_report(a, base(), &out)?;
     } else {
         print_single(&spec, &out, &out_path);
-        write_report(a, base(), &out)?;
+    }
+    if let Some(r) = &a.report {
+        let report = mesh_report::mesh_report(
+            &spec,
+            &out_path,
+            &opened,
+            forecast.as_ref(),
+            &budgets,
+            &req,
+            &out,
+        );
+        write_json(r, &report)?;
     }
     Ok(out.verdict)
 }
@@ -368,27 +378,6 @@ fn unmet(st: &rdt_mesher::Stats) -> String {
         .join("; ")
 }
 
-fn write_report(a: &MeshArgs, base: serde_json::Map<String, Value>, out: &Outcome) -> Result<()> {
-    let Some(r) = &a.report else { return Ok(()) };
-    let report = mesh_report::finish(
-        base,
-        json!({
-            "sigma": out.sigma,
-            "angle": a.angle,
-            "distance": a.distance,
-            "oracle": a.oracle.name(),
-            "manifold": !a.no_manifold,
-            "scaffold": !a.no_scaffold,
-            "initialization": a.initialization.name(),
-            "seed": a.seed,
-            "notes": out.notes,
-            "stats": out.stats,
-            "verify": out.report,
-        }),
-    );
-    write_json(r, &report)
-}
-
 /// The summary of a two-pass run (`--epsilon`), before the mesh is written.
 fn print_two_pass(spec: &str, out: &Outcome) {
     let tp = out.two_pass.as_ref().expect("a two-pass outcome");
@@ -453,23 +442,4 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
             }
         }
     }
-}
-
-fn write_two_pass_report(
-    a: &MeshArgs,
-    base: serde_json::Map<String, Value>,
-    out: &Outcome,
-) -> Result<()> {
-    let Some(r) = &a.report else { return Ok(()) };
-    let tp = out.two_pass.as_ref().expect("a two-pass outcome");
-    let report = mesh_report::finish(
-        base,
-        json!({
-            "epsilon": tp.epsilon, "dm_inf": tp.dm_inf,
-            "initialization": a.initialization.name(),
-            "sigma0": tp.sigma0, "eps_prime": tp.eps_prime, "notes": out.notes,
-            "first": tp.first.stats, "second": out.stats, "verify": out.report,
-        }),
-    );
-    write_json(r, &report)
 }
