@@ -72,7 +72,7 @@ class Mesh:
         v = self.report.get("verify")
         if not v:
             return None
-        return all(c.get("status") != "fail" for c in v.get("checks", []))
+        return all(c.get("status") != "FAIL" for c in v.get("checks", []))
 
     def __repr__(self) -> str:
         return f"Mesh({len(self.vertices)} vertices, {len(self.faces)} faces, sigma={self.sigma})"
