@@ -86,8 +86,7 @@ def test_ctrl_c_raises_keyboard_interrupt():
                 fired.append(time.perf_counter())
                 os.kill(os.getpid(), signal.SIGINT)
         try:
-            rdt_mesher.mesh_image(vol, iso=0.0, dark_foreground=True, size=0.02, progress=progress,
-                                  max_vertices=5_000_000, max_memory=8 << 30)
+            rdt_mesher.mesh_image(vol, iso=0.0, dark_foreground=True, size=0.3, progress=progress)
         except KeyboardInterrupt:
             print("interrupted after %.2f s" % (time.perf_counter() - fired[0]))
             sys.exit(0)

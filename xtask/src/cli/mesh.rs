@@ -9,7 +9,6 @@ use clap::builder::{PossibleValuesParser, TypedValueParser};
 use indicatif::{ProgressBar, ProgressStyle};
 use rdt_mesher::pipeline::{self, Event, Failure, Outcome, Request, SizeRequest, Verdict};
 use rdt_mesher::{Initialization, OracleKind};
-use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
