@@ -107,7 +107,7 @@ fn volume_from_array(a: &Bound<'_, PyUntypedArray>, affine: DAffine3) -> PyResul
             "volume: the array must be C- or Fortran-contiguous (numpy.asfortranarray(volume))",
         ));
     }
-    if ptr % dtype.size() != 0 {
+    if !ptr.is_multiple_of(dtype.size()) {
         return Err(PyValueError::new_err(
             "volume: the array's data is not aligned (numpy.require(volume, requirements='A'))",
         ));
