@@ -69,5 +69,5 @@ pub use criteria::{Criteria, Sizing};
 pub use error::MeshError;
 pub use levels::repair::{DecisionKind, TopologyDecision};
 pub use mesher::{mesh, mesh_with_progress};
-pub use options::{Initialization, MeshOptions, OracleKind};
+pub use options::{Cancel, Initialization, MeshOptions, OracleKind};
 pub use stats::{MeshResult, Progress, Stats, StopReason, SurfaceBall, Unmet, UnmetFacet};

@@ -63,6 +63,32 @@ pub struct MeshOptions {
     /// Drop closed components of the output enclosing less than this volume (the surface's
     /// units cubed), each reported.
     pub min_component: Option<f64>,
+    /// Stop (like a budget, `StopReason::Cancelled`) once this is cancelled: a front end's
+    /// interrupt (Ctrl-C in Python). Unused, it changes nothing.
+    pub cancel: Option<Cancel>,
+}
+
+/// A cancellation flag shared between a run and its caller (cloning shares it).
+///
+/// ```
+/// let c = rdt_mesher::Cancel::default();
+/// let seen = c.clone();
+/// assert!(!seen.is_cancelled());
+/// c.cancel();
+/// assert!(seen.is_cancelled());
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct Cancel(std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+impl Cancel {
+    /// Ask the run to stop at its next budget check.
+    pub fn cancel(&self) {
+        self.0.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+    /// Whether [`Cancel::cancel`] was called.
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
 }
 
 impl Default for MeshOptions {
@@ -81,6 +107,7 @@ impl Default for MeshOptions {
             scaffold: true,
             resolution: None,
             min_component: None,
+            cancel: None,
         }
     }
 }

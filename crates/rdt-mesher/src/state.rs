@@ -166,6 +166,12 @@ impl<'a> Mesher<'a> {
             });
             return true;
         }
+        if let Some(c) = &self.opts.cancel
+            && c.is_cancelled()
+        {
+            self.stats.stopped_by = Some(StopReason::Cancelled);
+            return true;
+        }
         false
     }
 

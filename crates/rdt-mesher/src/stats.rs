@@ -35,6 +35,8 @@ pub enum StopReason {
         /// The budget, in seconds.
         seconds: f64,
     },
+    /// [`crate::MeshOptions::cancel`] was cancelled (an interrupt).
+    Cancelled,
     /// The manifold patch (section 6.6.1) made no progress for `passes` passes.
     ManifoldStalled {
         /// Passes without a decrease of the count of non-manifold elements.
@@ -49,6 +51,7 @@ impl fmt::Display for StopReason {
         match self {
             StopReason::MaxVertices { limit } => write!(f, "max_vertices ({limit})"),
             StopReason::TimeLimit { seconds } => write!(f, "time_limit ({seconds:.3} s)"),
+            StopReason::Cancelled => write!(f, "cancelled"),
             StopReason::ManifoldStalled { passes, left } => write!(
                 f,
                 "manifold patch: no progress in {passes} passes ({left} non-manifold elements left)"

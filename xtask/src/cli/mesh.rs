@@ -9,7 +9,6 @@ use clap::builder::{PossibleValuesParser, TypedValueParser};
 use indicatif::{ProgressBar, ProgressStyle};
 use rdt_mesher::pipeline::{self, Event, Failure, Outcome, Request, SizeRequest, Verdict};
 use rdt_mesher::{Initialization, OracleKind};
-use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -231,6 +230,7 @@ fn request(a: &MeshArgs) -> Result<Request> {
         verify: !a.no_verify,
         certify_epsilon: a.certify_epsilon,
         min_component: a.min_component,
+        cancel: None,
     })
 }
 
@@ -308,16 +308,25 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         print_two_pass(&spec, &out);
     }
     write_mesh(&out_path, &out)?;
-    let base = || mesh_report::common(&spec, &out_path, &opened, forecast.as_ref(), &budgets, &out);
     if out.two_pass.is_some() {
         print_two_pass_verdict(&out, &out_path);
-        write_two_pass_report(a, base(), &out)?;
     } else {
         print_single(&spec, &out, &out_path);
         if let Some(n) = forecast.and_then(|f| f.overshoot(out.mesh.vertices.len())) {
             eprintln!("note: {n}");
         }
-        write_report(a, base(), &out)?;
+    }
+    if let Some(r) = &a.report {
+        let report = mesh_report::mesh_report(
+            &spec,
+            &out_path,
+            &opened,
+            forecast.as_ref(),
+            &budgets,
+            &req,
+            &out,
+        );
+        write_json(r, &report)?;
     }
     write_views(a, &spec, opened.kind, &out, html_path.as_deref())?;
     Ok(out.verdict)
@@ -450,27 +459,6 @@ fn unmet(st: &rdt_mesher::Stats) -> String {
         .join("; ")
 }
 
-fn write_report(a: &MeshArgs, base: serde_json::Map<String, Value>, out: &Outcome) -> Result<()> {
-    let Some(r) = &a.report else { return Ok(()) };
-    let report = mesh_report::finish(
-        base,
-        json!({
-            "sigma": out.sigma,
-            "angle": a.angle,
-            "distance": a.distance,
-            "oracle": a.oracle.name(),
-            "manifold": !a.no_manifold,
-            "scaffold": !a.no_scaffold,
-            "initialization": a.initialization.name(),
-            "seed": a.seed,
-            "notes": out.notes,
-            "stats": out.stats,
-            "verify": out.report,
-        }),
-    );
-    write_json(r, &report)
-}
-
 /// The summary of a two-pass run (`--epsilon`), before the mesh is written.
 fn print_two_pass(spec: &str, out: &Outcome) {
     let tp = out.two_pass.as_ref().expect("a two-pass outcome");
@@ -535,23 +523,4 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
             }
         }
     }
-}
-
-fn write_two_pass_report(
-    a: &MeshArgs,
-    base: serde_json::Map<String, Value>,
-    out: &Outcome,
-) -> Result<()> {
-    let Some(r) = &a.report else { return Ok(()) };
-    let tp = out.two_pass.as_ref().expect("a two-pass outcome");
-    let report = mesh_report::finish(
-        base,
-        json!({
-            "epsilon": tp.epsilon, "dm_inf": tp.dm_inf,
-            "initialization": a.initialization.name(),
-            "sigma0": tp.sigma0, "eps_prime": tp.eps_prime, "notes": out.notes,
-            "first": tp.first.stats, "second": out.stats, "verify": out.report,
-        }),
-    );
-    write_json(r, &report)
 }

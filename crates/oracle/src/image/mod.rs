@@ -59,6 +59,7 @@ mod error;
 #[allow(missing_docs)]
 mod nifti_io;
 mod oracle;
+mod shared;
 mod stack;
 mod surface;
 pub mod synthetic;
@@ -68,6 +69,8 @@ mod volume;
 
 pub use error::ImageError;
 pub use nifti_io::{NiftiWriteOptions, Qform, nifti_affine, read_nifti, write_nifti};
+pub(crate) use shared::with_view;
+pub use shared::{SharedVoxels, VoxelSource, VoxelView};
 pub use stack::{
     LoadOptions, RawOptions, load_volume, read_raw, read_slice_folder, read_tiff_stack,
 };

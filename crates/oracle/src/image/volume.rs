@@ -1,7 +1,7 @@
 //! Voxel storage in the native type, with a voxel-to-world affine (ours: the image backend's
 //! data; section 6.6.2 meshes its level sets).
 
-use super::ImageError;
+use super::{ImageError, SharedVoxels};
 use glam::{DAffine3, DMat3, DVec3};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -126,9 +126,12 @@ pub enum Voxels {
     I32(Vec<i32>),
     F32(Vec<f32>),
     F64(Vec<f64>),
+    /// Voxels borrowed from their owner (see [`SharedVoxels`]), x fastest as well.
+    Shared(SharedVoxels),
 }
 
-/// `with_voxels!(voxels, d => expr)` evaluates `expr` with `d: &Vec<T>` for the native `T`.
+/// `with_voxels!(voxels, d => expr)` evaluates `expr` with `d: &Vec<T>` (or `&[T]` for shared
+/// voxels) for the native `T`.
 macro_rules! with_voxels {
     ($v:expr, $d:ident => $body:expr) => {
         match $v {
@@ -140,6 +143,7 @@ macro_rules! with_voxels {
             $crate::image::Voxels::I32($d) => $body,
             $crate::image::Voxels::F32($d) => $body,
             $crate::image::Voxels::F64($d) => $body,
+            $crate::image::Voxels::Shared(s) => $crate::image::with_view!(s.view(), $d => $body),
         }
     };
 }
@@ -156,6 +160,7 @@ impl Voxels {
             Voxels::I32(_) => Dtype::I32,
             Voxels::F32(_) => Dtype::F32,
             Voxels::F64(_) => Dtype::F64,
+            Voxels::Shared(s) => s.view().dtype(),
         }
     }
     pub fn len(&self) -> usize {

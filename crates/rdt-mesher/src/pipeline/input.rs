@@ -396,41 +396,61 @@ fn open_image(spec: &str, opts: &InputOptions) -> Result<Input<'static>, Pipelin
     let path = Path::new(spec);
     let img = ImageSurface::open(path, &opts.load, &opts.image)
         .map_err(|e| PipelineError::backend(format!("opening image {spec}"), e))?;
-    let comps = img.component_count();
-    let img_notes = img.volume().notes().to_vec();
-    // Room among the control points for a seed tetrahedron on every small component.
-    let img = img.with_seed_budget(None);
-    let budget = img.seed_budget();
-    let note = format!(
-        "image: {} surface component(s) found by the voxel scan (iso {}); {budget} seed points",
-        comps,
-        img.iso()
-    );
-    let area = super::forecast::voxel_crossing_area(&img);
-    let h = img.volume().spacing();
-    let st = img.stats();
-    let image_stats = ImageStats {
-        dims: img.volume().dims(),
-        spacing: h.to_array(),
-        iso: img.iso(),
-        range: [st.min, st.max],
-        components: comps,
-        seed_points: budget,
-    };
-    let mut input = Input::with(
-        Held::Owned(Box::new(img)),
-        stem(path),
-        InputKind::Image,
-        DmInf::FromSurface,
-    );
-    input.components = Some(comps as u32);
-    input.max_control_points = budget;
-    input.notes.extend(img_notes);
-    input.notes.push(note);
-    input.stats.image = Some(image_stats);
-    input.area = Some(area);
-    input.voxel_spacing = Some((h.x * h.y * h.z).cbrt());
-    Ok(input)
+    Ok(Input::image(img, stem(path)))
+}
+
+impl Input<'static> {
+    /// An image surface of the caller's (a volume built in memory, e.g. from a numpy array),
+    /// opened exactly as [`Input::open`] opens an image file: the same seeds, statistics,
+    /// area estimate and notes, so the same volume meshes to the same mesh either way.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{Input, InputKind};
+    /// use oracle::image::{synthetic, ImageOptions, ImageSurface};
+    /// use glam::{DAffine3, DVec3};
+    /// let vol = synthetic::sample_implicit(|p| p.length() - 5.0, [16, 16, 16],
+    ///     DAffine3::from_translation(DVec3::splat(-7.5)));
+    /// let opts = ImageOptions { iso: Some(0.0), dark_foreground: true, ..Default::default() };
+    /// let input = Input::image(ImageSurface::new(vol, &opts).unwrap(), "ball");
+    /// assert_eq!((input.kind, input.components), (InputKind::Image, Some(1)));
+    /// ```
+    pub fn image(img: ImageSurface, name: impl Into<String>) -> Input<'static> {
+        let comps = img.component_count();
+        let img_notes = img.volume().notes().to_vec();
+        // Room among the control points for a seed tetrahedron on every small component.
+        let img = img.with_seed_budget(None);
+        let budget = img.seed_budget();
+        let note = format!(
+            "image: {} surface component(s) found by the voxel scan (iso {}); {budget} seed points",
+            comps,
+            img.iso()
+        );
+        let area = super::forecast::voxel_crossing_area(&img);
+        let h = img.volume().spacing();
+        let st = img.stats();
+        let image_stats = ImageStats {
+            dims: img.volume().dims(),
+            spacing: h.to_array(),
+            iso: img.iso(),
+            range: [st.min, st.max],
+            components: comps,
+            seed_points: budget,
+        };
+        let mut input = Input::with(
+            Held::Owned(Box::new(img)),
+            name.into(),
+            InputKind::Image,
+            DmInf::FromSurface,
+        );
+        input.components = Some(comps as u32);
+        input.max_control_points = budget;
+        input.notes.extend(img_notes);
+        input.notes.push(note);
+        input.stats.image = Some(image_stats);
+        input.area = Some(area);
+        input.voxel_spacing = Some((h.x * h.y * h.z).cbrt());
+        input
+    }
 }
 
 fn open_point_set(spec: &str, xyz: bool) -> Result<Input<'static>, PipelineError> {
@@ -444,80 +464,126 @@ fn open_point_set(spec: &str, xyz: bool) -> Result<Input<'static>, PipelineError
             normals: c.normals,
         }
     };
-    let had_normals = cloud.normals.is_some();
-    let ps = oracle::pointset::PointSetSurface::from_cloud(&cloud, &Default::default())
-        .map_err(|e| PipelineError::backend(format!("point set {spec}"), e))?;
-    let size = ps.suggested_size();
-    let dm = ps.dm_inf_hint();
-    let mut input = Input::with(
-        Held::Owned(Box::new(ps)),
-        stem(path),
-        InputKind::PointSet,
-        DmInf::Known(dm),
-    );
-    input.default_size = Some(size);
-    input.stats.points = Some(PointStats {
-        points: cloud.points.len(),
-        normals_given: had_normals,
-    });
-    input.notes.push(format!(
-        "point set: {} points, normals {}; suggested size {size:.5}",
-        cloud.points.len(),
-        if had_normals {
-            "given"
-        } else {
-            "estimated (PCA + propagation)"
-        }
-    ));
-    Ok(input)
+    Input::point_cloud(cloud, spec, stem(path))
+}
+
+impl Input<'static> {
+    /// A point set of the caller's, opened as [`Input::open`] opens a point-set file (`spec`
+    /// names it in messages, `name` is the output's default name).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{Input, InputKind};
+    /// let pts = (0..400).map(|i| {
+    ///     let (t, z) = (i as f64 * 2.4, 1.0 - (2 * i + 1) as f64 / 400.0);
+    ///     let r = (1.0 - z * z).sqrt();
+    ///     glam::DVec3::new(r * t.cos(), r * t.sin(), z)
+    /// }).collect();
+    /// let cloud = meshio::PointCloud { points: pts, normals: None };
+    /// let input = Input::point_cloud(cloud, "points", "points".into()).unwrap();
+    /// assert_eq!(input.kind, InputKind::PointSet);
+    /// ```
+    pub fn point_cloud(
+        cloud: oracle::pointset::PointCloud,
+        spec: &str,
+        name: String,
+    ) -> Result<Input<'static>, PipelineError> {
+        let had_normals = cloud.normals.is_some();
+        let ps = oracle::pointset::PointSetSurface::from_cloud(&cloud, &Default::default())
+            .map_err(|e| PipelineError::backend(format!("point set {spec}"), e))?;
+        let size = ps.suggested_size();
+        let dm = ps.dm_inf_hint();
+        let mut input = Input::with(
+            Held::Owned(Box::new(ps)),
+            name,
+            InputKind::PointSet,
+            DmInf::Known(dm),
+        );
+        input.default_size = Some(size);
+        input.stats.points = Some(PointStats {
+            points: cloud.points.len(),
+            normals_given: had_normals,
+        });
+        input.notes.push(format!(
+            "point set: {} points, normals {}; suggested size {size:.5}",
+            cloud.points.len(),
+            if had_normals {
+                "given"
+            } else {
+                "estimated (PCA + propagation)"
+            }
+        ));
+        Ok(input)
+    }
 }
 
 fn open_mesh(spec: &str, smooth: bool) -> Result<Input<'static>, PipelineError> {
     let path = Path::new(spec);
     let mesh = meshio::read(path).map_err(PipelineError::read)?;
-    let poly = oracle::polyhedron::PolyhedronSurface::new(&mesh)
-        .map_err(|e| PipelineError::backend(format!("mesh {spec}"), e))?;
-    let size = poly.suggested_size();
-    let sharp_edges = poly.sharp_edges(SHARP_DEG);
-    let pstats = poly.stats().clone();
-    let mut notes = vec![format!(
-        "polyhedron: {} vertices, {} triangles, {}; {} sharp edges (normals > {SHARP_DEG} deg apart); suggested size {size:.5} (bbox diagonal / 50)",
-        mesh.vertices.len(),
-        mesh.triangles.len(),
-        polyhedron_summary(&pstats),
-        sharp_edges.len(),
-    )];
-    let area = AreaEstimate {
-        area: super::forecast::triangle_area(&mesh),
-        source: AreaSource::InputTriangles,
-    };
-    let surface: Box<dyn Surface> = if !smooth {
-        notes.push("polyhedron: meshing the exact triangles (--smooth-polyhedron meshes a smooth approximation)".into());
-        Box::new(poly)
-    } else {
-        let n = oracle::polyhedron::DEFAULT_SAMPLES;
-        let s = oracle::polyhedron::SmoothPolyhedron::new(poly, n)
-            .map_err(|e| PipelineError::backend(format!("mesh {spec}: smoothing"), e))?;
-        notes.push(format!(
+    Input::mesh(&mesh, spec, stem(path), smooth)
+}
+
+impl Input<'static> {
+    /// A triangle mesh of the caller's, opened as [`Input::open`] opens a mesh file (`spec`
+    /// names it in messages, `name` is the output's default name; `smooth`: mesh its IMLS
+    /// approximation).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{Input, InputKind};
+    /// let dir = env!("CARGO_MANIFEST_DIR");
+    /// let cube = meshio::read(format!("{dir}/../../fixtures/meshes/cube.off")).unwrap();
+    /// let input = Input::mesh(&cube, "cube", "cube".into(), false).unwrap();
+    /// assert_eq!((input.kind, input.stats.sharp_edges), (InputKind::Polyhedron, Some(12)));
+    /// ```
+    pub fn mesh(
+        mesh: &meshio::TriMesh,
+        spec: &str,
+        name: String,
+        smooth: bool,
+    ) -> Result<Input<'static>, PipelineError> {
+        let poly = oracle::polyhedron::PolyhedronSurface::new(&mesh)
+            .map_err(|e| PipelineError::backend(format!("mesh {spec}"), e))?;
+        let size = poly.suggested_size();
+        let sharp_edges = poly.sharp_edges(SHARP_DEG);
+        let pstats = poly.stats().clone();
+        let mut notes = vec![format!(
+            "polyhedron: {} vertices, {} triangles, {}; {} sharp edges (normals > {SHARP_DEG} deg apart); suggested size {size:.5} (bbox diagonal / 50)",
+            mesh.vertices.len(),
+            mesh.triangles.len(),
+            polyhedron_summary(&pstats),
+            sharp_edges.len(),
+        )];
+        let area = AreaEstimate {
+            area: super::forecast::triangle_area(&mesh),
+            source: AreaSource::InputTriangles,
+        };
+        let surface: Box<dyn Surface> = if !smooth {
+            notes.push("polyhedron: meshing the exact triangles (--smooth-polyhedron meshes a smooth approximation)".into());
+            Box::new(poly)
+        } else {
+            let n = oracle::polyhedron::DEFAULT_SAMPLES;
+            let s = oracle::polyhedron::SmoothPolyhedron::new(poly, n)
+                .map_err(|e| PipelineError::backend(format!("mesh {spec}: smoothing"), e))?;
+            notes.push(format!(
             "polyhedron: meshing its IMLS approximation from {n} area-uniform samples (kernel radius {:.2e}); verification measures the distance to the input triangles",
             s.imls().stats().median_radius
         ));
-        Box::new(s)
-    };
-    // A mesh's d_M^inf is not used (0 at its sharp edges): sizes come from its bbox.
-    let mut input = Input::with(
-        Held::Owned(surface),
-        stem(path),
-        InputKind::Polyhedron,
-        DmInf::Known(None),
-    );
-    input.default_size = Some(size);
-    input.notes = notes;
-    input.stats.sharp_edges = Some(sharp_edges.len());
-    input.stats.polyhedron = Some(pstats);
-    input.sharp_edges = sharp_edges;
-    input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);
-    Ok(input)
+            Box::new(s)
+        };
+        // A mesh's d_M^inf is not used (0 at its sharp edges): sizes come from its bbox.
+        let mut input = Input::with(
+            Held::Owned(surface),
+            name,
+            InputKind::Polyhedron,
+            DmInf::Known(None),
+        );
+        input.default_size = Some(size);
+        input.notes = notes;
+        input.stats.sharp_edges = Some(sharp_edges.len());
+        input.stats.polyhedron = Some(pstats);
+        input.sharp_edges = sharp_edges;
+        input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);
+        Ok(input)
+    }
 }
 
 /// `1 component, closed, consistently oriented`, or the defects found, in words.

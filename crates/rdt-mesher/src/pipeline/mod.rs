@@ -32,6 +32,7 @@ mod forecast;
 mod input;
 mod outcome;
 mod plan;
+pub mod report;
 mod request;
 
 pub use budget::{

@@ -100,6 +100,7 @@ pub fn plan<'p, 's>(
         resolution: (input.kind == super::InputKind::Image)
             .then(|| 4.0 * input.surface().crossing_step()),
         min_component: request.min_component,
+        cancel: request.cancel.clone(),
     };
     Ok(Plan {
         input,

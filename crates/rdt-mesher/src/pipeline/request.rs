@@ -82,6 +82,8 @@ pub struct Request {
     pub certify_epsilon: Option<f64>,
     /// Drop closed components enclosing less than this volume (units cubed), each reported.
     pub min_component: Option<f64>,
+    /// Stop meshing (like a budget) once cancelled; unused, it changes nothing.
+    pub cancel: Option<crate::Cancel>,
 }
 
 impl Default for Request {
@@ -102,6 +104,7 @@ impl Default for Request {
             verify: true,
             certify_epsilon: None,
             min_component: None,
+            cancel: None,
         }
     }
 }

@@ -1,8 +1,9 @@
 //! What `cargo xtask mesh` writes in its JSON report and how it summarizes the genus of many
-//! components on one line (ours). Lists of objects longer than [`LIST_LIMIT`] are cut to
-//! their first entries, with the count beside them (`NAME_total`).
+//! components on one line (ours; shared by the CLI and the Python bindings, so both write the
+//! same report). Lists of objects longer than [`LIST_LIMIT`] are cut to their first entries,
+//! with the count beside them (`NAME_total`).
 
-use rdt_mesher::pipeline::{Budgets, Forecast, Input, Outcome};
+use super::{Budgets, Forecast, Input, Outcome, Request};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -104,6 +105,60 @@ pub fn common(
     );
     m.insert("genus".into(), json!(genera));
     m
+}
+
+/// The whole report of one run of `request` on `input` (spec `spec`) whose mesh is written to
+/// `out_path`: what `cargo xtask mesh --report` writes, for a constant-size or a two-pass run.
+///
+/// ```
+/// use rdt_mesher::pipeline::{plan, report, Input, Request, SizeRequest};
+/// let input = Input::open("implicit:sphere", &Default::default()).unwrap();
+/// let req = Request { size: SizeRequest::Size(0.3), ..Default::default() };
+/// let p = plan(&input, &req).unwrap();
+/// let (forecast, budgets) = (p.forecast().copied(), *p.budgets());
+/// let out = p.execute(&mut |_| {}).unwrap();
+/// let path = std::path::Path::new("sphere.ply");
+/// let r = report::mesh_report("implicit:sphere", path, &input, forecast.as_ref(), &budgets,
+///                             &req, &out);
+/// assert_eq!((r["sigma"].as_f64(), r["oracle"].as_str()), (Some(0.3), Some("bipolar")));
+/// ```
+pub fn mesh_report(
+    spec: &str,
+    out_path: &Path,
+    input: &Input<'_>,
+    forecast: Option<&Forecast>,
+    budgets: &Budgets,
+    request: &Request,
+    out: &Outcome,
+) -> Value {
+    let base = common(spec, out_path, input, forecast, budgets, out);
+    match &out.two_pass {
+        None => finish(
+            base,
+            json!({
+                "sigma": out.sigma,
+                "angle": request.min_angle_deg,
+                "distance": request.max_distance,
+                "oracle": request.oracle.name(),
+                "manifold": request.manifold,
+                "scaffold": request.scaffold,
+                "initialization": request.initialization.name(),
+                "seed": request.seed,
+                "notes": out.notes,
+                "stats": out.stats,
+                "verify": out.report,
+            }),
+        ),
+        Some(tp) => finish(
+            base,
+            json!({
+                "epsilon": tp.epsilon, "dm_inf": tp.dm_inf,
+                "initialization": request.initialization.name(),
+                "sigma0": tp.sigma0, "eps_prime": tp.eps_prime, "notes": out.notes,
+                "first": tp.first.stats, "second": out.stats, "verify": out.report,
+            }),
+        ),
+    }
 }
 
 /// Add `fields` to `base`, bound its lists, and return the report.

@@ -1,0 +1,67 @@
+"""The other inputs: expressions and callables, meshes, point sets, verify; aliases; labels."""
+
+import numpy as np
+import pytest
+
+import rdt_mesher
+from conftest import FIXTURES, ball_volume
+
+
+def test_expression_and_callable():
+    e = rdt_mesher.mesh_implicit("x^2 + y^2 + z^2 - 1", bounding_sphere=((0, 0, 0), 2.0), size=0.2)
+    assert np.allclose(np.linalg.norm(e.vertices, axis=1), 1.0, atol=1e-6)
+    calls = []
+
+    def f(p):
+        calls.append(len(p))
+        return (p * p).sum(axis=1) - 1.0
+
+    c = rdt_mesher.mesh_implicit(f, bounding_sphere=((0, 0, 0), 2.0), grid=64, batch=50_000, size=0.2)
+    assert max(calls) == 50_000 and sum(calls) == 64**3  # batches, not points
+    assert np.abs(np.linalg.norm(c.vertices, axis=1) - 1.0).max() < 0.02
+    assert c.to_trimesh().is_watertight
+
+
+def test_cgal_aliases_are_the_same_criteria():
+    vol = ball_volume(32, 11.0)
+    a = rdt_mesher.mesh_image(vol, iso=0.0, size=1.5, min_angle=30, max_distance=1.0)
+    b = rdt_mesher.mesh_image(vol, iso=0.0, max_radius_surface_delaunay_ball=1.5,
+                              min_facet_angle=30, max_facet_distance=1.0)
+    assert np.array_equal(a.vertices, b.vertices)
+    assert a.report["distance"] == 1.0
+
+
+def test_remesh_points_and_verify():
+    s = rdt_mesher.mesh_implicit("sphere", bounding_sphere=((0, 0, 0), 2.0), size=0.15)
+    r = rdt_mesher.remesh(s.vertices, s.faces, size=0.3)
+    assert r.to_trimesh().is_watertight and len(r.vertices) < len(s.vertices)
+    p = rdt_mesher.mesh_points(s.vertices, s.vertices.copy(), size=0.3)
+    assert np.abs(np.linalg.norm(p.vertices, axis=1) - 1).max() < 0.05
+    ok = rdt_mesher.verify(s.vertices, s.faces, against="implicit:sphere", epsilon=0.2)
+    assert all(c["status"] != "FAIL" for c in ok["checks"]), ok["checks"]
+    broken = rdt_mesher.verify(s.vertices, s.faces[1:])
+    assert any(c["status"] == "FAIL" for c in broken["checks"])
+
+
+def test_mesh_file_reads_a_mesh_file():
+    m = rdt_mesher.mesh_file(f"{FIXTURES}/meshes/cube.off", size=0.2)
+    assert m.report["input_kind"] == "polyhedron"
+    assert m.to_trimesh().is_watertight
+
+
+def test_labels_all_one_mesh_per_label():
+    vol = np.zeros((30, 30, 30), dtype=np.int16)
+    vol[3:12, 3:12, 3:12] = 2
+    vol[15:27, 15:27, 15:27] = 5
+    out = rdt_mesher.mesh_image(vol, labels="all", size=1.0)
+    assert sorted(out) == [2, 5]
+    assert all(m.to_trimesh().is_watertight for m in out.values())
+    one = rdt_mesher.mesh_image(vol, label=5, size=1.0)
+    assert np.array_equal(one.vertices, out[5].vertices)
+
+
+@pytest.mark.parametrize("dtype", [np.bool_, np.uint8, np.int16, np.uint16, np.int32, np.float32, np.float64])
+def test_every_dtype(dtype):
+    vol = ball_volume(24, 8.0) > 0
+    m = rdt_mesher.mesh_image(vol.astype(dtype), iso=0.5, size=1.0)
+    assert m.to_trimesh().is_watertight
