@@ -2,7 +2,9 @@
 //!
 //! - [`Volume`]: voxels in their native type ([`Voxels`]), dims, a voxel-to-world affine
 //!   (`glam::DAffine3`, voxel centres at integer coordinates) and the intensity scaling.
-//! - Loaders: [`read_nifti`] (NIfTI-1 `.nii`, `.nii.gz`, `.hdr`/`.img`), [`read_slice_folder`]
+//! - Loaders: [`read_nifti`] (NIfTI-1 `.nii`, `.nii.gz`, `.hdr`/`.img`), [`read_nrrd`]
+//!   (`.nrrd`, `.nhdr`), [`read_metaimage`] (`.mha`, `.mhd`), [`read_ome_zarr`] (OME-Zarr
+//!   multiscale level 0, Zarr v2 or v3), [`read_slice_folder`]
 //!   (PNG/TIFF slices, 8/16 bit, natural name order), [`read_tiff_stack`] (multi-page TIFF),
 //!   [`read_raw`] (headerless volume) and [`load_volume`] which picks one from the path.
 //! - [`ImageSurface`]: the [`Surface`](crate::Surface) of the trilinear interpolant at an iso
@@ -58,15 +60,22 @@ mod distance;
 mod error;
 #[allow(missing_docs)]
 mod nifti_io;
+mod metaimage;
+mod nrrd;
 mod oracle;
+mod orient;
 mod stack;
 mod surface;
 pub mod synthetic;
 mod topology;
 #[allow(missing_docs)]
 mod volume;
+mod zarr;
 
 pub use error::ImageError;
+pub use metaimage::read_metaimage;
+pub use nrrd::read_nrrd;
+pub use zarr::read_ome_zarr;
 pub use nifti_io::{NiftiWriteOptions, Qform, nifti_affine, read_nifti, write_nifti};
 pub use stack::{
     LoadOptions, RawOptions, load_volume, read_raw, read_slice_folder, read_tiff_stack,
