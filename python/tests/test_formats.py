@@ -28,7 +28,7 @@ def run_mesh(tmp, image, out):
     if not os.path.exists(XTASK):
         pytest.skip("target/release/xtask is not built")
     report = os.path.join(tmp, out + ".json")
-    cmd = [XTASK, "mesh", "-q", image, "--iso", "500", "--size", "1.5", "--no-verify",
+    cmd = [XTASK, "mesh", "-q", image, "--iso", "500", "--size", "1", "--no-verify",
            "-o", os.path.join(tmp, out), "--report", report]
     r = subprocess.run(cmd, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr

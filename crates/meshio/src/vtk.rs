@@ -84,8 +84,8 @@ fn bad(path: &Path, reason: impl Into<String>) -> MeshIoError {
     MeshIoError::not_a_mesh(path, Format::Vtk, reason)
 }
 
-/// Read ASCII legacy VTK (see the module documentation).
-pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
+/// The text after the three header lines (version, title, ASCII), checked.
+fn body<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a str, MeshIoError> {
     let mut lines = bytes.split(|&b| b == b'\n');
     let first = lines.next().unwrap_or_default();
     if !first.starts_with(b"# vtk DataFile Version") {
@@ -127,8 +127,13 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
         .take(3)
         .map(<[u8]>::len)
         .sum();
-    let text = std::str::from_utf8(&bytes[header_len..])
-        .map_err(|_| bad(path, "the ASCII body is not UTF-8 text"))?;
+    std::str::from_utf8(&bytes[header_len..])
+        .map_err(|_| bad(path, "the ASCII body is not UTF-8 text"))
+}
+
+/// Read ASCII legacy VTK (see the module documentation).
+pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
+    let text = body(bytes, path)?;
     let toks = text
         .lines()
         .enumerate()
@@ -165,7 +170,10 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
                         .collect::<Result<_, _>>()?,
                 );
             }
-            "CELL_DATA" | "POINT_DATA" | "FIELD" | "METADATA" => break,
+            "CELL_DATA" | "POINT_DATA" => {
+                t.at -= 1;
+                attributes(&mut t)?;
+            }
             "VERTICES" | "LINES" | "TRIANGLE_STRIPS" => {
                 return Err(bad(
                     path,
@@ -206,6 +214,65 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
         vertices,
         triangles: faces.triangles,
     })
+}
+
+/// Skip the `CELL_DATA n` / `POINT_DATA n` sections, checking that each array holds all its
+/// values (so a cut file is an error, not a mesh without its data).
+fn attributes(t: &mut Tokens) -> Result<(), MeshIoError> {
+    let mut n = 0usize;
+    while let Some(kw) = t.peek() {
+        let (line, _) = t.next("an attribute")?;
+        let count = match kw.to_ascii_uppercase().as_str() {
+            "CELL_DATA" | "POINT_DATA" => {
+                n = t.num("the attribute count")?;
+                continue;
+            }
+            "SCALARS" => {
+                let _name = t.next("the array name")?;
+                let _ty = t.next("the array type")?;
+                let comps = match t.peek() {
+                    Some(c) if c.parse::<usize>().is_ok() => t.num("the component count")?,
+                    _ => 1usize,
+                };
+                if t.peek()
+                    .is_some_and(|k| k.eq_ignore_ascii_case("LOOKUP_TABLE"))
+                {
+                    let _ = t.next("LOOKUP_TABLE")?;
+                    let _ = t.next("the table name")?;
+                }
+                n * comps
+            }
+            "VECTORS" | "NORMALS" => {
+                let _ = t.next("the array name")?;
+                let _ = t.next("the array type")?;
+                3 * n
+            }
+            "FIELD" => {
+                let _ = t.next("the field name")?;
+                let arrays: usize = t.num("the field's array count")?;
+                for _ in 0..arrays {
+                    let _ = t.next("the array name")?;
+                    let comps: usize = t.num("the component count")?;
+                    let tuples: usize = t.num("the tuple count")?;
+                    let _ = t.next("the array type")?;
+                    for _ in 0..comps.saturating_mul(tuples) {
+                        let _: f64 = t.num("an array value")?;
+                    }
+                }
+                0
+            }
+            _ => {
+                return Err(bad(
+                    t.path,
+                    format!("line {line}: unexpected keyword {kw:?} in the data attributes"),
+                ));
+            }
+        };
+        for _ in 0..count {
+            let _: f64 = t.num("an attribute value")?;
+        }
+    }
+    Ok(())
 }
 
 fn points(t: &mut Tokens) -> Result<Vec<DVec3>, MeshIoError> {

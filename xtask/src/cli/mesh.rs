@@ -306,8 +306,11 @@ fn facet_quality(out: &Outcome) -> Vec<meshio::CellData> {
         .iter()
         .map(|t| {
             let [a, b, c] = t.map(|i| m.vertices[i as usize]);
-            verify::quality::triangle_shape(a, b, c)
-                .map_or(0.0, |(ang, _, _)| ang.iter().fold(f64::INFINITY, |x, &y| x.min(y)).to_degrees())
+            verify::quality::triangle_shape(a, b, c).map_or(0.0, |(ang, _, _)| {
+                ang.iter()
+                    .fold(f64::INFINITY, |x, &y| x.min(y))
+                    .to_degrees()
+            })
         })
         .collect();
     let mut cells = vec![meshio::CellData {

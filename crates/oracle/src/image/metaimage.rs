@@ -31,7 +31,11 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<(HashMap<String, String>, u
         let end = bytes[at..].iter().position(|&b| b == b'\n');
         let line_end = end.map_or(bytes.len(), |e| at + e);
         let line = std::str::from_utf8(&bytes[at..line_end]).map_err(|_| {
-            err(path, "header", "is not text before ElementDataFile: not a MetaImage header")
+            err(
+                path,
+                "header",
+                "is not text before ElementDataFile: not a MetaImage header",
+            )
         })?;
         let line = line.trim_end_matches('\r');
         at = end.map_or(bytes.len(), |_| line_end + 1);
@@ -111,56 +115,18 @@ fn vector(
     }
 }
 
-/// Read a MetaImage volume (`.mha` or `.mhd`); see the module documentation.
-pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
-    let path = path.as_ref();
-    let bytes = orient::read(path)?;
-    let (f, data_start) = parse_header(path, &bytes)?;
-    if let Some(t) = f.get("ObjectType").filter(|t| *t != "Image") {
-        return Err(err(path, "ObjectType", format!("= {t}: only Image is read")));
-    }
-    let nd = f.get("NDims").map(String::as_str);
-    if nd != Some("3") {
-        return Err(err(
-            path,
-            "NDims",
-            format!(
-                "= {}: only 3D volumes are read (extract one 3D volume, e.g. with SimpleITK)",
-                nd.unwrap_or("(missing)")
-            ),
-        ));
-    }
-    let ds = f
-        .get("DimSize")
-        .ok_or_else(|| err(path, "DimSize", "is missing; give the three sizes"))?;
-    let dims: Vec<usize> = ds
-        .split_whitespace()
-        .map(|t| t.parse::<usize>().ok().filter(|&v| v > 0))
-        .collect::<Option<_>>()
-        .filter(|v: &Vec<usize>| v.len() == 3)
-        .ok_or_else(|| err(path, "DimSize", format!("= {ds:?}: expected three positive whole numbers")))?;
-    let dims = [dims[0], dims[1], dims[2]];
-    let channels = f.get("ElementNumberOfChannels").map_or("1", String::as_str);
-    if channels != "1" {
-        return Err(err(
-            path,
-            "ElementNumberOfChannels",
-            format!("= {channels}: only scalar images (1 channel) are read"),
-        ));
-    }
-    let ty = f
-        .get("ElementType")
-        .ok_or_else(|| err(path, "ElementType", "is missing; give the voxel type (e.g. MET_SHORT)"))?;
-    let dtype = dtype(path, ty)?;
-    let big = flag(path, &f, &["BinaryDataByteOrderMSB", "ElementByteOrderMSB"])?;
-    let compressed = flag(path, &f, &["CompressedData"])?;
-    let spacing = vector(path, &f, &["ElementSpacing", "ElementSize"], 3, vec![1.0; 3])?;
-    let offset = vector(path, &f, &["Offset", "Origin", "Position"], 3, vec![0.0; 3])?;
-    let eye = vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-    let tm = vector(path, &f, &["TransformMatrix", "Rotation", "Orientation"], 9, eye)?;
-    let need = orient::byte_count(path, FMT, "DimSize", dims, dtype.size())?;
+/// The voxel bytes as stored: after the header (`LOCAL`) or in the named data file (after
+/// `HeaderSize` bytes; -1: the last bytes), with the file they come from.
+fn load_data(
+    path: &Path,
+    f: &HashMap<String, String>,
+    bytes: Vec<u8>,
+    data_start: usize,
+    need: usize,
+    compressed: bool,
+) -> Result<(std::path::PathBuf, Vec<u8>), ImageError> {
     let file = &f["ElementDataFile"];
-    let (src, raw) = if file == "LOCAL" {
+    Ok(if file == "LOCAL" {
         let mut b = bytes;
         b.drain(..data_start);
         (path.to_path_buf(), b)
@@ -196,7 +162,84 @@ pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             d.drain(..(hs as usize).min(d.len()));
         }
         (p, d)
-    };
+    })
+}
+
+/// Read a MetaImage volume (`.mha` or `.mhd`); see the module documentation.
+pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
+    let path = path.as_ref();
+    let bytes = orient::read(path)?;
+    let (f, data_start) = parse_header(path, &bytes)?;
+    if let Some(t) = f.get("ObjectType").filter(|t| *t != "Image") {
+        return Err(err(
+            path,
+            "ObjectType",
+            format!("= {t}: only Image is read"),
+        ));
+    }
+    let nd = f.get("NDims").map(String::as_str);
+    if nd != Some("3") {
+        return Err(err(
+            path,
+            "NDims",
+            format!(
+                "= {}: only 3D volumes are read (extract one 3D volume, e.g. with SimpleITK)",
+                nd.unwrap_or("(missing)")
+            ),
+        ));
+    }
+    let ds = f
+        .get("DimSize")
+        .ok_or_else(|| err(path, "DimSize", "is missing; give the three sizes"))?;
+    let dims: Vec<usize> = ds
+        .split_whitespace()
+        .map(|t| t.parse::<usize>().ok().filter(|&v| v > 0))
+        .collect::<Option<_>>()
+        .filter(|v: &Vec<usize>| v.len() == 3)
+        .ok_or_else(|| {
+            err(
+                path,
+                "DimSize",
+                format!("= {ds:?}: expected three positive whole numbers"),
+            )
+        })?;
+    let dims = [dims[0], dims[1], dims[2]];
+    let channels = f.get("ElementNumberOfChannels").map_or("1", String::as_str);
+    if channels != "1" {
+        return Err(err(
+            path,
+            "ElementNumberOfChannels",
+            format!("= {channels}: only scalar images (1 channel) are read"),
+        ));
+    }
+    let ty = f.get("ElementType").ok_or_else(|| {
+        err(
+            path,
+            "ElementType",
+            "is missing; give the voxel type (e.g. MET_SHORT)",
+        )
+    })?;
+    let dtype = dtype(path, ty)?;
+    let big = flag(path, &f, &["BinaryDataByteOrderMSB", "ElementByteOrderMSB"])?;
+    let compressed = flag(path, &f, &["CompressedData"])?;
+    let spacing = vector(
+        path,
+        &f,
+        &["ElementSpacing", "ElementSize"],
+        3,
+        vec![1.0; 3],
+    )?;
+    let offset = vector(path, &f, &["Offset", "Origin", "Position"], 3, vec![0.0; 3])?;
+    let eye = vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let tm = vector(
+        path,
+        &f,
+        &["TransformMatrix", "Rotation", "Orientation"],
+        9,
+        eye,
+    )?;
+    let need = orient::byte_count(path, FMT, "DimSize", dims, dtype.size())?;
+    let (src, raw) = load_data(path, &f, bytes, data_start, need, compressed)?;
     let data = if compressed {
         orient::inflate_zlib(&src, &raw, need)?
     } else {
@@ -206,7 +249,10 @@ pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
         if data.len() < need {
             return Err(ImageError::Truncated {
                 path: src,
-                detail: format!("the voxel data has {} bytes, DimSize and ElementType need {need}", data.len()),
+                detail: format!(
+                    "the voxel data has {} bytes, DimSize and ElementType need {need}",
+                    data.len()
+                ),
             });
         }
         return Err(err(
@@ -221,7 +267,11 @@ pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
     }
     let axes = [0, 1, 2].map(|i| DVec3::new(tm[3 * i], tm[3 * i + 1], tm[3 * i + 2]) * spacing[i]);
     let affine = orient::affine(axes, DVec3::from_slice(&offset), Frame::Lps);
-    super::volume::check_affine(&affine, Some(path), "TransformMatrix / ElementSpacing / Offset")?;
+    super::volume::check_affine(
+        &affine,
+        Some(path),
+        "TransformMatrix / ElementSpacing / Offset",
+    )?;
     let voxels = Voxels::from_bytes(dtype, &data, big);
     Ok(Volume::new(dims, voxels, affine)?.with_source(path))
 }

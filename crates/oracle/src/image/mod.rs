@@ -58,9 +58,9 @@ mod distance;
 // Documented on helper M's branch (NIfTI reader hardening); allowed until it merges.
 #[allow(missing_docs)]
 mod error;
+mod metaimage;
 #[allow(missing_docs)]
 mod nifti_io;
-mod metaimage;
 mod nrrd;
 mod oracle;
 mod orient;
@@ -74,9 +74,8 @@ mod zarr;
 
 pub use error::ImageError;
 pub use metaimage::read_metaimage;
-pub use nrrd::read_nrrd;
-pub use zarr::read_ome_zarr;
 pub use nifti_io::{NiftiWriteOptions, Qform, nifti_affine, read_nifti, write_nifti};
+pub use nrrd::read_nrrd;
 pub use stack::{
     LoadOptions, RawOptions, load_volume, read_raw, read_slice_folder, read_tiff_stack,
 };
@@ -84,3 +83,4 @@ pub use surface::{ImageOptions, ImageSurface, trilinear};
 pub use topology::Topology;
 pub(crate) use volume::with_voxels;
 pub use volume::{Dtype, Stats, Volume, Voxel, Voxels};
+pub use zarr::read_ome_zarr;

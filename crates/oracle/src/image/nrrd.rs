@@ -50,9 +50,9 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ImageError> {
         } else if line.is_empty() {
             break;
         } else if !line.starts_with('#') && !line.contains(":=") {
-            let (k, v) = line.split_once(": ").ok_or_else(|| {
-                err(path, line, "is not a `field: value` line; fix the header")
-            })?;
+            let (k, v) = line
+                .split_once(": ")
+                .ok_or_else(|| err(path, line, "is not a `field: value` line; fix the header"))?;
             fields.insert(k.trim().to_ascii_lowercase(), v.trim().to_string());
         }
         if end.is_none() {
@@ -134,7 +134,11 @@ fn geometry(path: &Path, h: &Header) -> Result<([DVec3; 3], DVec3, Frame), Image
         })?,
         (None, Some(d)) if d.trim() == "3" => Frame::Plain,
         (None, Some(d)) => {
-            return Err(err(path, "space dimension", format!("= {d}: only 3 is supported")));
+            return Err(err(
+                path,
+                "space dimension",
+                format!("= {d}: only 3 is supported"),
+            ));
         }
         (None, None) => Frame::Plain,
     };
@@ -154,11 +158,19 @@ fn geometry(path: &Path, h: &Header) -> Result<([DVec3; 3], DVec3, Frame), Image
     }
     let s = match f.get("spacings") {
         Some(s) => orient::numbers(s, 3).ok_or_else(|| {
-            err(path, "spacings", format!("= {s:?}: expected three finite numbers"))
+            err(
+                path,
+                "spacings",
+                format!("= {s:?}: expected three finite numbers"),
+            )
         })?,
         None => vec![1.0; 3],
     };
-    Ok(([DVec3::X * s[0], DVec3::Y * s[1], DVec3::Z * s[2]], DVec3::ZERO, frame))
+    Ok((
+        [DVec3::X * s[0], DVec3::Y * s[1], DVec3::Z * s[2]],
+        DVec3::ZERO,
+        frame,
+    ))
 }
 
 fn dims(path: &Path, h: &Header) -> Result<[usize; 3], ImageError> {
@@ -184,13 +196,22 @@ fn dims(path: &Path, h: &Header) -> Result<[usize; 3], ImageError> {
         .collect::<Option<_>>()
         .filter(|v: &Vec<usize>| v.len() == 3)
         .ok_or_else(|| {
-            err(path, "sizes", format!("= {s:?}: expected three positive whole numbers"))
+            err(
+                path,
+                "sizes",
+                format!("= {s:?}: expected three positive whole numbers"),
+            )
         })?;
     Ok([n[0], n[1], n[2]])
 }
 
 /// The voxel bytes: from the attached data or the `data file`, skipped and decoded.
-fn data(path: &Path, h: &Header, bytes: Vec<u8>, need: usize) -> Result<(Vec<u8>, PathBuf), ImageError> {
+fn data(
+    path: &Path,
+    h: &Header,
+    bytes: Vec<u8>,
+    need: usize,
+) -> Result<(Vec<u8>, PathBuf), ImageError> {
     let f = &h.fields;
     let (src, mut raw) = match f.get("data file").or_else(|| f.get("datafile")) {
         Some(name) => {
@@ -232,10 +253,17 @@ fn data(path: &Path, h: &Header, bytes: Vec<u8>, need: usize) -> Result<(Vec<u8>
     let line_skip = num("line skip")?;
     let byte_skip = num("byte skip")?;
     if line_skip < 0 || byte_skip < -1 {
-        return Err(err(path, "byte skip", "must be 0 or more (or -1 for raw data)"));
+        return Err(err(
+            path,
+            "byte skip",
+            "must be 0 or more (or -1 for raw data)",
+        ));
     }
     for _ in 0..line_skip {
-        let e = raw.iter().position(|&b| b == b'\n').map_or(raw.len(), |e| e + 1);
+        let e = raw
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(raw.len(), |e| e + 1);
         raw.drain(..e);
     }
     let enc = f.get("encoding").map(|s| s.to_ascii_lowercase());
@@ -253,9 +281,7 @@ fn data(path: &Path, h: &Header, bytes: Vec<u8>, need: usize) -> Result<(Vec<u8>
             return Err(err(
                 path,
                 "encoding",
-                format!(
-                    "= {enc:?} is not supported; save the volume with encoding raw or gzip"
-                ),
+                format!("= {enc:?} is not supported; save the volume with encoding raw or gzip"),
             ));
         }
     };
@@ -292,10 +318,13 @@ pub fn read_nrrd(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
     let bytes = orient::read(path)?;
     let h = parse_header(path, &bytes)?;
     let dims = dims(path, &h)?;
-    let ty = h
-        .fields
-        .get("type")
-        .ok_or_else(|| err(path, "type", "is missing; give the voxel type (e.g. type: short)"))?;
+    let ty = h.fields.get("type").ok_or_else(|| {
+        err(
+            path,
+            "type",
+            "is missing; give the voxel type (e.g. type: short)",
+        )
+    })?;
     let dtype = dtype(path, ty)?;
     let big = match h.fields.get("endian").map(|s| s.to_ascii_lowercase()) {
         Some(e) if e == "big" => true,

@@ -145,7 +145,11 @@ mod tests {
 
     #[test]
     fn lps_and_ras_describe_the_same_point() {
-        let axes = [DVec3::new(0.5, 0.25, 0.0), DVec3::new(0.0, 1.0, 0.0), DVec3::Z * 2.0];
+        let axes = [
+            DVec3::new(0.5, 0.25, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::Z * 2.0,
+        ];
         let o = DVec3::new(10.0, -20.0, 5.0);
         let a = affine(axes, o, Frame::Lps);
         // Voxel (1, 2, 3) in LPS is sum + origin; RAS negates x and y.

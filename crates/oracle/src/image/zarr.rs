@@ -41,7 +41,10 @@ fn json(path: &Path, file: &Path) -> Result<Value, ImageError> {
     serde_json::from_slice(&b).map_err(|e| {
         err(
             path,
-            &file.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+            &file
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default(),
             format!("is not valid JSON ({e}); the store is damaged"),
         )
     })
@@ -80,7 +83,12 @@ fn multiscales(path: &Path) -> Result<(Value, u8), ImageError> {
 }
 
 /// Per-axis `x -> a x + b` from a list of coordinate transformations.
-fn transforms(path: &Path, list: Option<&Value>, n: usize, field: &str) -> Result<Vec<(f64, f64)>, ImageError> {
+fn transforms(
+    path: &Path,
+    list: Option<&Value>,
+    n: usize,
+    field: &str,
+) -> Result<Vec<(f64, f64)>, ImageError> {
     let mut ab = vec![(1.0, 0.0); n];
     for t in list.and_then(Value::as_array).into_iter().flatten() {
         let kind = t.get("type").and_then(Value::as_str).unwrap_or("");
@@ -88,7 +96,11 @@ fn transforms(path: &Path, list: Option<&Value>, n: usize, field: &str) -> Resul
             let v: Option<Vec<f64>> = t
                 .get(key)
                 .and_then(Value::as_array)
-                .map(|a| a.iter().map(|x| x.as_f64().filter(|f| f.is_finite())).collect())
+                .map(|a| {
+                    a.iter()
+                        .map(|x| x.as_f64().filter(|f| f.is_finite()))
+                        .collect()
+                })
                 .unwrap_or(None);
             v.filter(|v| v.len() == n).ok_or_else(|| {
                 err(
@@ -114,7 +126,9 @@ fn transforms(path: &Path, list: Option<&Value>, n: usize, field: &str) -> Resul
                 return Err(err(
                     path,
                     field,
-                    format!("has a transformation of type {other:?}; only scale and translation are read"),
+                    format!(
+                        "has a transformation of type {other:?}; only scale and translation are read"
+                    ),
                 ));
             }
         }
@@ -129,9 +143,15 @@ fn axis_roles(path: &Path, ms: &Value, n: usize) -> Result<Vec<Option<usize>>, I
         Some(a) => a
             .iter()
             .map(|x| match x {
-                Value::String(s) => (s.to_ascii_lowercase(), ["x", "y", "z"].contains(&s.as_str())),
+                Value::String(s) => (
+                    s.to_ascii_lowercase(),
+                    ["x", "y", "z"].contains(&s.as_str()),
+                ),
                 _ => (
-                    x.get("name").and_then(Value::as_str).unwrap_or("").to_ascii_lowercase(),
+                    x.get("name")
+                        .and_then(Value::as_str)
+                        .unwrap_or("")
+                        .to_ascii_lowercase(),
                     x.get("type").and_then(Value::as_str) == Some("space"),
                 ),
             })
@@ -142,7 +162,10 @@ fn axis_roles(path: &Path, ms: &Value, n: usize) -> Result<Vec<Option<usize>>, I
         return Err(err(
             path,
             "multiscales[0].axes",
-            format!("lists {} axes but the level-0 array has {n} dimensions", names.len()),
+            format!(
+                "lists {} axes but the level-0 array has {n} dimensions",
+                names.len()
+            ),
         ));
     }
     let space: Vec<usize> = (0..n).filter(|&i| names[i].1).collect();
@@ -258,8 +281,13 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
     let store = FilesystemStore::new(path)
         .map_err(|e| err(path, "store", format!("cannot be opened ({e})")))?;
     let store = Arc::new(store);
-    let array = Array::open(store.clone(), &format!("/{sub}"))
-        .map_err(|e| err(path, &format!("{sub}/{meta}"), format!("is not a readable Zarr array ({e})")))?;
+    let array = Array::open(store.clone(), &format!("/{sub}")).map_err(|e| {
+        err(
+            path,
+            &format!("{sub}/{meta}"),
+            format!("is not a readable Zarr array ({e})"),
+        )
+    })?;
     let shape = array.shape().to_vec();
     let n = shape.len();
     let roles = axis_roles(path, &ms, n)?;
@@ -274,10 +302,18 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             ),
         ));
     }
-    let own = transforms(path, ds.and_then(|d| d.get("coordinateTransformations")), n,
-        "multiscales[0].datasets[0].coordinateTransformations")?;
-    let outer = transforms(path, ms.get("coordinateTransformations"), n,
-        "multiscales[0].coordinateTransformations")?;
+    let own = transforms(
+        path,
+        ds.and_then(|d| d.get("coordinateTransformations")),
+        n,
+        "multiscales[0].datasets[0].coordinateTransformations",
+    )?;
+    let outer = transforms(
+        path,
+        ms.get("coordinateTransformations"),
+        n,
+        "multiscales[0].coordinateTransformations",
+    )?;
     let dtype = dtype(path, array.data_type())?;
     let mut dims = [1usize; 3];
     let mut strides = [0usize; 3];
@@ -298,10 +334,22 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
     let bytes = array
         .retrieve_array_subset(&array.subset_all())
         .and_then(|b| Ok(b.into_fixed()?.into_owned()))
-        .map_err(|e| err(path, sub, format!("cannot be decoded ({e}); the chunks are damaged or use an unsupported codec")))?;
+        .map_err(|e| {
+            err(
+                path,
+                sub,
+                format!(
+                    "cannot be decoded ({e}); the chunks are damaged or use an unsupported codec"
+                ),
+            )
+        })?;
     let size = dtype.size();
     if bytes.len() != need {
-        return Err(err(path, sub, format!("decoded to {} bytes, the shape needs {need}", bytes.len())));
+        return Err(err(
+            path,
+            sub,
+            format!("decoded to {} bytes, the shape needs {need}", bytes.len()),
+        ));
     }
     let mut out = Vec::with_capacity(need);
     for k in 0..dims[2] {
@@ -314,7 +362,11 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
     }
     let voxels = Voxels::from_bytes(dtype, &out, cfg!(target_endian = "big"));
     let affine = DAffine3::from_mat3_translation(DMat3::from_diagonal(scale), origin);
-    super::volume::check_affine(&affine, Some(path), "coordinateTransformations (scale, translation)")?;
+    super::volume::check_affine(
+        &affine,
+        Some(path),
+        "coordinateTransformations (scale, translation)",
+    )?;
     let mut vol = Volume::new(dims, voxels, affine)?.with_source(path);
     if missing > 0 {
         vol = vol.with_note(format!(

@@ -366,9 +366,11 @@ impl Input<'static> {
 pub fn is_image_spec(spec: &str, raw: bool) -> bool {
     let lower = spec.to_lowercase();
     Path::new(spec).is_dir()
-        || [".nii", ".nii.gz", ".nrrd", ".nhdr", ".mha", ".mhd", ".tif", ".tiff", ".raw"]
-            .iter()
-            .any(|e| lower.ends_with(e))
+        || [
+            ".nii", ".nii.gz", ".nrrd", ".nhdr", ".mha", ".mhd", ".tif", ".tiff", ".raw",
+        ]
+        .iter()
+        .any(|e| lower.ends_with(e))
         || raw
 }
 
