@@ -110,7 +110,7 @@ def test_gii_with_nibabel(meshes):
     assert np.array_equal(coords, v.astype(np.float32))  # world millimetres, as stored
     cs = g.darrays[0].coordsys
     assert cs.dataspace == cs.xformspace == nib.nifti1.xform_codes["scanner"]
-    assert np.array_equal(cs.xform, np.eye(4))
+    assert np.array_equal(np.asarray(cs.xform), np.eye(4))
 
 
 def cli_affine(tmp, image):

@@ -52,7 +52,7 @@ pub(crate) fn write<W: Write>(w: &mut W, mesh: &TriMesh) -> std::io::Result<()> 
             )?;
             writeln!(
                 w,
-                "<MatrixData>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</MatrixData>"
+                "<MatrixData>\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n</MatrixData>"
             )?;
             writeln!(w, "</CoordinateSystemTransformMatrix>")?;
         }

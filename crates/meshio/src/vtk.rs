@@ -1,6 +1,7 @@
-//! VTK legacy `.vtk` (ours: file format support): ASCII `POLYDATA`, double coordinates
-//! (the shortest exact decimal, so a round trip is exact), `POLYGONS`, and each
-//! [`CellData`] as a `SCALARS NAME double 1` array of `CELL_DATA`.
+//! VTK legacy `.vtk` (ours: file format support): ASCII `UNSTRUCTURED_GRID` of triangles
+//! (`CELLS` and `CELL_TYPES` 5; what meshio reads, ParaView and VTK too), double coordinates
+//! (the shortest exact decimal, so a round trip is exact), and each [`CellData`] as a
+//! `SCALARS NAME double 1` array of `CELL_DATA`.
 //!
 //! The reader takes ASCII `POLYDATA` (`POLYGONS`, fan-triangulated) and `UNSTRUCTURED_GRID`
 //! (`CELLS` with `CELL_TYPES`, triangles only: what meshio writes), in the classic layout
@@ -14,7 +15,7 @@ use glam::DVec3;
 
 use crate::{CellData, FaceBuilder, Format, MeshIoError, TriMesh, fmt_coord};
 
-/// Write ASCII legacy VTK polydata with cell data.
+/// Write an ASCII legacy VTK unstructured grid of triangles with cell data.
 pub(crate) fn write<W: Write>(
     w: &mut W,
     mesh: &TriMesh,
@@ -23,15 +24,19 @@ pub(crate) fn write<W: Write>(
     writeln!(w, "# vtk DataFile Version 4.2")?;
     writeln!(w, "rdt-mesher surface mesh")?;
     writeln!(w, "ASCII")?;
-    writeln!(w, "DATASET POLYDATA")?;
+    writeln!(w, "DATASET UNSTRUCTURED_GRID")?;
     writeln!(w, "POINTS {} double", mesh.vertices.len())?;
     for &v in &mesh.vertices {
         crate::write_point_line(w, "", v, true)?;
     }
     let m = mesh.triangles.len();
-    writeln!(w, "POLYGONS {m} {}", 4 * m)?;
+    writeln!(w, "CELLS {m} {}", 4 * m)?;
     for t in &mesh.triangles {
         writeln!(w, "3 {} {} {}", t[0], t[1], t[2])?;
+    }
+    writeln!(w, "CELL_TYPES {m}")?;
+    for _ in 0..m {
+        writeln!(w, "5")?;
     }
     if !cells.is_empty() {
         writeln!(w, "CELL_DATA {m}")?;
