@@ -67,7 +67,7 @@ def test_vtk_with_meshio(meshes):
     m = meshio.read(os.path.join(tmp, "m.vtk"))
     assert np.array_equal(m.points, v)  # double precision, exact
     assert np.array_equal(m.cells_dict["triangle"], f)
-    angle = m.cell_data["min_angle_deg"][0]
+    angle = np.ravel(m.cell_data["min_angle_deg"][0])
     a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
 
     def ang(p, q, r):
@@ -77,7 +77,7 @@ def test_vtk_with_meshio(meshes):
     expect = np.minimum(np.minimum(ang(a, b, c), ang(b, c, a)), ang(c, a, b))
     assert np.allclose(angle, expect, atol=1e-9)
     assert angle.min() > 20.0
-    rs = m.cell_data["r_over_sigma"][0]
+    rs = np.ravel(m.cell_data["r_over_sigma"][0])
     assert rs.max() <= 1.0 + 1e-12 and rs.min() > 0.0
 
 
