@@ -1,8 +1,11 @@
-//! Triangle meshes and their file formats (PLY ASCII/binary, OFF, OBJ, STL ASCII/binary).
+//! Triangle meshes and their file formats (PLY ASCII/binary, OFF, OBJ, STL ASCII/binary,
+//! glTF binary `.glb`, VTK legacy `.vtk`, VTK XML `.vtp`, GIFTI `.gii`).
 //!
 //! The format is chosen from the file extension ([`Format::from_path`]). Every reader checks
 //! what it returns ([`TriMesh::validate`]): indices in range, finite coordinates. Polygons are
-//! fan-triangulated. Errors name the file, what is wrong and how to fix it.
+//! fan-triangulated. Errors name the file, what is wrong and how to fix it. The VTK formats
+//! also carry per-facet values ([`CellData`], see [`write_with_cell_data`]); glTF and GIFTI
+//! store f32 coordinates.
 //!
 //! ```
 //! use glam::DVec3;
@@ -28,10 +31,15 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
+mod gii;
+mod glb;
 mod obj;
 mod off;
 mod ply;
 mod stl;
+mod vtk;
+mod vtp;
+mod xml;
 pub mod xyz;
 
 pub use xyz::{XyzError, read_xyz, read_xyz_from};
@@ -83,6 +91,25 @@ pub enum InvalidMesh {
     ShortFace { face: usize, len: usize },
     #[error("there are {0} vertices, more than u32 indices can address; split the mesh")]
     TooManyVertices(usize),
+    #[error(
+        "vertex {vertex} has coordinate {value}, beyond the f32 range of this format; \
+         write .ply (double precision) instead"
+    )]
+    BeyondF32 { vertex: usize, value: f64 },
+    #[error(
+        "there are {0} vertices, more than the format's signed 32-bit indices address; write \
+         .ply instead"
+    )]
+    TooManyForI32(usize),
+    #[error(
+        "cell data {name:?} has {len} values for {facets} facets, or its name is not one word \
+         of letters, digits and '_'; give one value per facet"
+    )]
+    BadCellData {
+        name: String,
+        len: usize,
+        facets: usize,
+    },
 }
 
 /// Errors of the readers and writers. Every variant names the file.
@@ -94,8 +121,8 @@ pub enum MeshIoError {
         source: std::io::Error,
     },
     #[error(
-        "{path}: {}; the mesh formats are .ply, .off, .obj and .stl (any case): rename the \
-         file, or from Rust call meshio::read_with / meshio::write_with with an explicit \
+        "{path}: {}; the mesh formats are .ply, .off, .obj, .stl, .glb, .vtk, .vtp and .gii \
+         (any case): rename the file, or from Rust call meshio::read_with / meshio::write_with with an explicit \
          meshio::Format",
         if ext.is_empty() { "no file extension".to_string() } else { format!("unknown mesh file extension {ext:?}") }
     )]
@@ -152,6 +179,14 @@ pub enum Format {
     Off,
     Obj,
     Stl,
+    /// glTF 2.0 binary.
+    Glb,
+    /// VTK legacy (ASCII polydata).
+    Vtk,
+    /// VTK XML polydata.
+    Vtp,
+    /// GIFTI surface.
+    Gii,
 }
 
 impl fmt::Display for Format {
@@ -161,6 +196,10 @@ impl fmt::Display for Format {
             Format::Off => "OFF",
             Format::Obj => "OBJ",
             Format::Stl => "STL",
+            Format::Glb => "glTF binary (.glb)",
+            Format::Vtk => "VTK legacy",
+            Format::Vtp => "VTK XML PolyData",
+            Format::Gii => "GIFTI",
         })
     }
 }
@@ -179,6 +218,10 @@ impl Format {
             "off" => Ok(Format::Off),
             "obj" => Ok(Format::Obj),
             "stl" => Ok(Format::Stl),
+            "glb" => Ok(Format::Glb),
+            "vtk" => Ok(Format::Vtk),
+            "vtp" => Ok(Format::Vtp),
+            "gii" => Ok(Format::Gii),
             _ => Err(MeshIoError::UnknownExtension {
                 path: path.to_owned(),
                 ext,
@@ -335,12 +378,18 @@ pub fn read_from<R: BufRead>(
         Format::Ply => ply::read(&mut reader, path)?,
         Format::Off => off::read(&mut reader, path)?,
         Format::Obj => obj::read(&mut reader, path)?,
-        Format::Stl => {
+        _ => {
             let mut bytes = Vec::new();
             reader
                 .read_to_end(&mut bytes)
                 .map_err(|e| MeshIoError::io(path, e))?;
-            stl::read(&bytes, path)?
+            match format {
+                Format::Stl => stl::read(&bytes, path)?,
+                Format::Glb => glb::read(&bytes, path)?,
+                Format::Vtk => vtk::read(&bytes, path)?,
+                Format::Vtp => vtp::read(&bytes, path)?,
+                _ => gii::read(&bytes, path)?,
+            }
         }
     };
     if mesh.vertices.is_empty() && mesh.triangles.is_empty() {
@@ -386,12 +435,92 @@ pub fn write_with(
     format: Format,
     options: Options,
 ) -> Result<(), MeshIoError> {
+    write_full(path.as_ref(), mesh, format, options, &[])
+}
+
+/// Write a mesh with per-facet values (the format from the extension, default options).
+/// `.vtk` and `.vtp` store them as cell data; the other formats have no place for them and
+/// write the mesh alone. Each [`CellData`] needs one value per triangle and a name of letters,
+/// digits and `_`.
+///
+/// ```
+/// use meshio::{CellData, TriMesh};
+/// use glam::DVec3;
+/// let mesh = TriMesh {
+///     vertices: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+///     triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+/// };
+/// let q = CellData { name: "min_angle_deg".into(), values: vec![45.0, 45.0, 60.0, 45.0] };
+/// let path = std::env::temp_dir().join(format!("meshio-doc-{}.vtk", std::process::id()));
+/// meshio::write_with_cell_data(&path, &mesh, &[q]).unwrap();
+/// assert!(std::fs::read_to_string(&path).unwrap().contains("SCALARS min_angle_deg double 1"));
+/// assert_eq!(meshio::read(&path).unwrap(), mesh);
+/// std::fs::remove_file(&path).unwrap();
+/// ```
+pub fn write_with_cell_data(
+    path: impl AsRef<Path>,
+    mesh: &TriMesh,
+    cells: &[CellData],
+) -> Result<(), MeshIoError> {
     let path = path.as_ref();
+    write_full(
+        path,
+        mesh,
+        Format::from_path(path)?,
+        Options::default(),
+        cells,
+    )
+}
+
+fn write_full(
+    path: &Path,
+    mesh: &TriMesh,
+    format: Format,
+    options: Options,
+    cells: &[CellData],
+) -> Result<(), MeshIoError> {
     validate_for(mesh, path)?;
     let file = std::fs::File::create(path).map_err(|e| MeshIoError::io(path, e))?;
     let mut w = BufWriter::with_capacity(1 << 16, file);
-    write_to(&mut w, mesh, format, options, path)?;
+    write_to_with(&mut w, mesh, format, options, cells, path)?;
     w.flush().map_err(|e| MeshIoError::io(path, e))
+}
+
+/// Per-facet values written as VTK cell data (e.g. the minimum angle, r/sigma).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellData {
+    /// The array name: letters, digits and `_`.
+    pub name: String,
+    /// One value per triangle, in triangle order.
+    pub values: Vec<f64>,
+}
+
+/// The checks of the f32 formats (glTF, GIFTI) and of the cell data.
+fn check_for_format(mesh: &TriMesh, format: Format, cells: &[CellData]) -> Result<(), InvalidMesh> {
+    if matches!(format, Format::Glb | Format::Gii) {
+        for (i, v) in mesh.vertices.iter().enumerate() {
+            if let Some(&value) = v.to_array().iter().find(|c| !(**c as f32).is_finite()) {
+                return Err(InvalidMesh::BeyondF32 { vertex: i, value });
+            }
+        }
+    }
+    if format == Format::Gii && mesh.vertices.len() > i32::MAX as usize {
+        return Err(InvalidMesh::TooManyForI32(mesh.vertices.len()));
+    }
+    for c in cells {
+        let ok_name = !c.name.is_empty()
+            && c.name
+                .chars()
+                .all(|ch| ch.is_ascii_alphanumeric() || ch == '_');
+        if !ok_name || c.values.len() != mesh.triangles.len() {
+            return Err(InvalidMesh::BadCellData {
+                name: c.name.clone(),
+                len: c.values.len(),
+                facets: mesh.triangles.len(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// [`TriMesh::validate`], the error naming `path`.
@@ -410,13 +539,33 @@ pub fn write_to<W: Write>(
     options: Options,
     name: impl AsRef<Path>,
 ) -> Result<(), MeshIoError> {
+    write_to_with(w, mesh, format, options, &[], name.as_ref())
+}
+
+/// [`write_to`] with cell data (see [`write_with_cell_data`]).
+pub fn write_to_with<W: Write>(
+    w: &mut W,
+    mesh: &TriMesh,
+    format: Format,
+    options: Options,
+    cells: &[CellData],
+    name: impl AsRef<Path>,
+) -> Result<(), MeshIoError> {
     let path = name.as_ref();
     validate_for(mesh, path)?;
+    check_for_format(mesh, format, cells).map_err(|source| MeshIoError::Invalid {
+        path: path.to_owned(),
+        source,
+    })?;
     let r = match format {
         Format::Ply => ply::write(w, mesh, options),
         Format::Off => off::write(w, mesh, options),
         Format::Obj => obj::write(w, mesh, options),
         Format::Stl => stl::write(w, mesh, options),
+        Format::Glb => glb::write(w, mesh),
+        Format::Vtk => vtk::write(w, mesh, cells),
+        Format::Vtp => vtp::write(w, mesh, cells),
+        Format::Gii => gii::write(w, mesh),
     };
     r.map_err(|e| MeshIoError::io(path, e))
 }

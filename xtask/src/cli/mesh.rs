@@ -34,7 +34,8 @@ explained in docs/GUIDE.md, \"Default size, forecast and budgets\".";
 #[command(allow_negative_numbers = true, after_help = AFTER_HELP)]
 pub struct MeshArgs {
     /// Surface to mesh: `implicit:NAME` (catalog), `implicit:"EXPR"` (with --bounding-sphere),
-    /// an image (.nii, .nii.gz, a folder of slices, .raw), a mesh (.ply .off .obj .stl) or a
+    /// an image (.nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd, .zarr, a folder of slices, .raw), a
+    /// mesh (.ply .off .obj .stl .glb .vtk .vtp .gii) or a
     /// point set (.xyz, .ply without faces). Default: implicit:torus.
     pub input: Option<String>,
     /// Target facet size: the largest radius of a facet's surface Delaunay ball (about the
@@ -90,7 +91,8 @@ pub struct MeshArgs {
     /// Stop after this many seconds (the mesh so far is written, unmet criteria reported).
     #[arg(long, value_parser = super::output::parse_seconds)]
     pub time_limit: Option<f64>,
-    /// Output mesh (.ply, .off, .obj, .stl). Default: out/NAME.ply.
+    /// Output mesh (.ply, .off, .obj, .stl, .glb, .vtk, .vtp, .gii; .vtk and .vtp carry the
+    /// per-facet min angle and r/sigma as cell data). Default: out/NAME.ply.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Write a JSON report here.
@@ -345,9 +347,9 @@ fn write_views(
         return Ok(());
     }
     let report = if out.two_pass.is_some() {
-        json!({"second": out.stats, "verify": out.report, "angle": a.angle})
+        serde_json::json!({"second": out.stats, "verify": out.report, "angle": a.angle})
     } else {
-        json!({"sigma": out.sigma, "stats": out.stats, "verify": out.report, "angle": a.angle})
+        serde_json::json!({"sigma": out.sigma, "stats": out.stats, "verify": out.report, "angle": a.angle})
     };
     // The mesher's balls are in facet order.
     let balls: Vec<geom::SurfaceBall> = (out.balls.iter().enumerate())
@@ -378,9 +380,41 @@ fn write_views(
 }
 
 fn write_mesh(out_path: &Path, out: &Outcome) -> Result<()> {
+    let cells = facet_quality(out);
     super::output::write_atomically(out_path, |tmp| {
-        meshio::write(tmp, &out.mesh).with_context(|| format!("writing {}", out_path.display()))
+        meshio::write_with_cell_data(tmp, &out.mesh, &cells)
+            .with_context(|| format!("writing {}", out_path.display()))
     })
+}
+
+/// Per-facet quality for the formats that store cell data (`.vtk`, `.vtp`): the smallest
+/// angle in degrees, and the surface Delaunay ball's radius over sigma when the run had one
+/// constant sigma.
+fn facet_quality(out: &Outcome) -> Vec<meshio::CellData> {
+    let m = &out.mesh;
+    let angle = m
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+            verify::quality::triangle_shape(a, b, c).map_or(0.0, |(ang, _, _)| {
+                ang.iter()
+                    .fold(f64::INFINITY, |x, &y| x.min(y))
+                    .to_degrees()
+            })
+        })
+        .collect();
+    let mut cells = vec![meshio::CellData {
+        name: "min_angle_deg".into(),
+        values: angle,
+    }];
+    if let Some(sigma) = out.sigma.filter(|_| out.balls.len() == m.triangles.len()) {
+        cells.push(meshio::CellData {
+            name: "r_over_sigma".into(),
+            values: out.balls.iter().map(|b| b.radius / sigma).collect(),
+        });
+    }
+    cells
 }
 
 /// Write a JSON report atomically (also `verify --report`).

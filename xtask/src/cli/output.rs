@@ -136,8 +136,8 @@ pub fn check_outputs(input: Option<&Path>, outputs: &[(&str, &Path)]) -> Result<
         if flag == "-o" && meshio::Format::from_path(p).is_err() {
             let ext = p.extension().map(|e| e.to_string_lossy().into_owned());
             bail!(
-                "{flag} {}: {}; the mesh formats are .ply, .off, .obj and .stl \
-                 (e.g. {flag} {}.ply)",
+                "{flag} {}: {}; the mesh formats are .ply, .off, .obj, .stl, .glb, .vtk, \
+                 .vtp and .gii (e.g. {flag} {}.ply)",
                 p.display(),
                 ext.map_or("no file extension".to_string(), |e| format!(
                     "unknown mesh file extension \"{e}\""

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct VerifyArgs {
-    /// The mesh to check (.ply, .off, .obj, .stl).
+    /// The mesh to check (.ply, .off, .obj, .stl, .glb, .vtk, .vtp, .gii).
     pub mesh: PathBuf,
     /// Check against this surface (same specs as `mesh`: implicit:NAME, an image, a mesh...).
     #[arg(long)]

@@ -41,6 +41,13 @@ pub enum ImageError {
         path.display()
     )]
     Nifti2 { path: PathBuf },
+    #[error("{}: {format} header field {field} {detail}", path.display())]
+    Field {
+        path: PathBuf,
+        format: &'static str,
+        field: String,
+        detail: String,
+    },
     #[error("{}: NIfTI-1 header field {field} {detail}", path.display())]
     BadHeader {
         path: PathBuf,
@@ -186,7 +193,7 @@ pub enum ImageError {
     },
     #[error("{}: the raw format needs dims and a dtype (e.g. --dims 256,256,128 --dtype u16)", path.display())]
     RawNeedsDims { path: PathBuf },
-    #[error("{}: unknown image format (extension '{ext}'); use .nii, .nii.gz, .hdr, .tif/.tiff (multi-page), .raw with dims, or a folder of slices", path.display())]
+    #[error("{}: unknown image format (extension '{ext}'); use .nii, .nii.gz, .hdr, .nrrd, .nhdr, .mha, .mhd, .zarr (OME-Zarr), .tif/.tiff (multi-page), .raw with dims, or a folder of slices", path.display())]
     UnknownFormat { path: PathBuf, ext: String },
     #[error(
         "the volume has {n} voxels, more than this backend indexes ({max}); crop or downsample it"

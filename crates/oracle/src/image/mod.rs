@@ -2,7 +2,9 @@
 //!
 //! - [`Volume`]: voxels in their native type ([`Voxels`]), dims, a voxel-to-world affine
 //!   (`glam::DAffine3`, voxel centres at integer coordinates) and the intensity scaling.
-//! - Loaders: [`read_nifti`] (NIfTI-1 `.nii`, `.nii.gz`, `.hdr`/`.img`), [`read_slice_folder`]
+//! - Loaders: [`read_nifti`] (NIfTI-1 `.nii`, `.nii.gz`, `.hdr`/`.img`), [`read_nrrd`]
+//!   (`.nrrd`, `.nhdr`), [`read_metaimage`] (`.mha`, `.mhd`), [`read_ome_zarr`] (OME-Zarr
+//!   multiscale level 0, Zarr v2 or v3), [`read_slice_folder`]
 //!   (PNG/TIFF slices, 8/16 bit, natural name order), [`read_tiff_stack`] (multi-page TIFF),
 //!   [`read_raw`] (headerless volume) and [`load_volume`] which picks one from the path.
 //! - [`ImageSurface`]: the [`Surface`](crate::Surface) of the trilinear interpolant at an iso
@@ -56,9 +58,12 @@ mod distance;
 // Documented on helper M's branch (NIfTI reader hardening); allowed until it merges.
 #[allow(missing_docs)]
 mod error;
+mod metaimage;
 #[allow(missing_docs)]
 mod nifti_io;
+mod nrrd;
 mod oracle;
+mod orient;
 mod shared;
 mod stack;
 mod surface;
@@ -66,9 +71,12 @@ pub mod synthetic;
 mod topology;
 #[allow(missing_docs)]
 mod volume;
+mod zarr;
 
 pub use error::ImageError;
+pub use metaimage::read_metaimage;
 pub use nifti_io::{NiftiWriteOptions, Qform, nifti_affine, read_nifti, write_nifti};
+pub use nrrd::read_nrrd;
 pub(crate) use shared::with_view;
 pub use shared::{SharedVoxels, VoxelSource, VoxelView};
 pub use stack::{
@@ -78,3 +86,4 @@ pub use surface::{ImageOptions, ImageSurface, trilinear};
 pub use topology::Topology;
 pub(crate) use volume::with_voxels;
 pub use volume::{Dtype, Stats, Volume, Voxel, Voxels};
+pub use zarr::read_ome_zarr;

@@ -161,7 +161,7 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>, ImageError> {
 /// (ISIZE) are checked (flate2 checks them only when a member is read to its end). Zero bytes
 /// after the last member are allowed (gzip and Python's gzip module skip them); anything else
 /// after it is an error, and so is a corrupt deflate stream (called corrupt, not truncated).
-fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, ImageError> {
+pub(crate) fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, ImageError> {
     use std::io::Read;
     let corrupt = |detail: String| ImageError::CorruptGzip {
         path: path.to_path_buf(),

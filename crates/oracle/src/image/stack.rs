@@ -1,6 +1,6 @@
 //! Image stacks (ours: a folder of 2D slices, a multi-page TIFF) and raw volumes.
 
-use super::{Dtype, ImageError, Volume, Voxels, read_nifti};
+use super::{Dtype, ImageError, Volume, Voxels, read_metaimage, read_nifti, read_nrrd};
 use glam::{DAffine3, DMat3, DVec3};
 use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
@@ -36,8 +36,9 @@ fn spacing_affine(spacing: Option<[f64; 3]>) -> Result<DAffine3, ImageError> {
     Ok(DAffine3::from_mat3(DMat3::from_diagonal(DVec3::from(s))))
 }
 
-/// Read a volume from `path`: a folder of slices, `.nii`/`.nii.gz`/`.hdr`/`.img`, a
-/// `.tif`/`.tiff` (multi-page) or, with `opts.raw`, a raw file.
+/// Read a volume from `path`: a folder of slices, an OME-Zarr folder (with `.zattrs`,
+/// `.zgroup` or `zarr.json`), `.nii`/`.nii.gz`/`.hdr`/`.img`, `.nrrd`/`.nhdr`, `.mha`/`.mhd`,
+/// a `.tif`/`.tiff` (multi-page) or, with `opts.raw`, a raw file.
 ///
 /// ```no_run
 /// use oracle::image::{load_volume, ImageOptions, ImageSurface, LoadOptions};
@@ -50,6 +51,9 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
         return read_raw(path, &raw, opts.spacing);
     }
     if path.is_dir() {
+        if super::zarr::is_zarr(path) {
+            return super::read_ome_zarr(path);
+        }
         return read_slice_folder(path, opts.spacing);
     }
     let name = path
@@ -59,6 +63,10 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
     let ends = |s: &str| name.ends_with(s);
     if ends(".nii") || ends(".nii.gz") || ends(".hdr") || ends(".hdr.gz") || ends(".img") {
         read_nifti(path)
+    } else if ends(".nrrd") || ends(".nhdr") {
+        read_nrrd(path)
+    } else if ends(".mha") || ends(".mhd") {
+        read_metaimage(path)
     } else if ends(".tif") || ends(".tiff") {
         read_tiff_stack(path, opts.spacing)
     } else if ends(".raw") {

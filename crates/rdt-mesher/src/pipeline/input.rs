@@ -124,6 +124,9 @@ pub struct ImageStats {
     pub components: usize,
     /// Seed points given to the mesher.
     pub seed_points: usize,
+    /// The voxel-to-world affine as three rows `[a, b, c, t]` (world = rows x (i, j, k, 1)),
+    /// in the image readers' RAS+ world (see `oracle::image`'s format modules).
+    pub affine: [[f64; 4]; 3],
 }
 
 /// A point-set input's figures.
@@ -303,9 +306,10 @@ impl<'s> Input<'s> {
 
 impl Input<'static> {
     /// Open a surface by spec, with the CLI's defaults: `implicit:NAME` (catalog),
-    /// `implicit:EXPR` (with `opts.bounding_sphere`), an image (`.nii`, `.nii.gz`, `.tif`,
-    /// `.tiff`, `.raw`, a folder of slices, or any file with `opts.load.raw`), a mesh (`.ply`
-    /// `.off` `.obj` `.stl`) or a point set (`.xyz`, a `.ply` without faces).
+    /// `implicit:EXPR` (with `opts.bounding_sphere`), an image (`.nii`, `.nii.gz`, `.nrrd`,
+    /// `.nhdr`, `.mha`, `.mhd`, `.tif`, `.tiff`, `.raw`, an OME-Zarr folder, a folder of slices,
+    /// or any file with `opts.load.raw`), a mesh (`.ply` `.off` `.obj` `.stl` `.glb` `.vtk`
+    /// `.vtp` `.gii`) or a point set (`.xyz`, a `.ply` without faces).
     ///
     /// ```
     /// use rdt_mesher::pipeline::{Input, InputKind, InputOptions};
@@ -349,8 +353,9 @@ impl Input<'static> {
 }
 
 /// Whether [`Input::open`] reads the (existing) file or folder `spec` as an image: a folder,
-/// an image extension (`.nii`, `.nii.gz`, `.tif`, `.tiff`, `.raw`), or `raw` (a raw-volume
-/// layout is given).
+/// an image extension (`.nii`, `.nii.gz`, `.nrrd`, `.nhdr`, `.mha`, `.mhd`, `.tif`, `.tiff`,
+/// `.raw`), or `raw` (a raw-volume layout is given). A folder is a slice stack or an
+/// OME-Zarr store.
 ///
 /// ```
 /// use rdt_mesher::pipeline::is_image_spec;
@@ -361,9 +366,11 @@ impl Input<'static> {
 pub fn is_image_spec(spec: &str, raw: bool) -> bool {
     let lower = spec.to_lowercase();
     Path::new(spec).is_dir()
-        || [".nii", ".nii.gz", ".tif", ".tiff", ".raw"]
-            .iter()
-            .any(|e| lower.ends_with(e))
+        || [
+            ".nii", ".nii.gz", ".nrrd", ".nhdr", ".mha", ".mhd", ".tif", ".tiff", ".raw",
+        ]
+        .iter()
+        .any(|e| lower.ends_with(e))
         || raw
 }
 
@@ -435,6 +442,11 @@ impl Input<'static> {
             range: [st.min, st.max],
             components: comps,
             seed_points: budget,
+            affine: {
+                let a = img.volume().affine();
+                let (m, t) = (a.matrix3, a.translation);
+                [0, 1, 2].map(|r| [m.x_axis[r], m.y_axis[r], m.z_axis[r], t[r]])
+            },
         };
         let mut input = Input::with(
             Held::Owned(Box::new(img)),
@@ -629,12 +641,16 @@ fn polyhedron_summary(s: &oracle::polyhedron::PolyhedronStats) -> String {
 /// use std::path::Path;
 /// assert_eq!(rdt_mesher::pipeline::stem(Path::new("a/brain.nii.gz")), "brain");
 /// assert_eq!(rdt_mesher::pipeline::stem(Path::new("bunny.ply")), "bunny");
+/// assert_eq!(rdt_mesher::pipeline::stem(Path::new("cells.ome.zarr")), "cells");
 /// ```
 pub fn stem(p: &Path) -> String {
     let s = p
         .file_name()
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or_else(|| "surface".into());
+    if let Some(z) = s.strip_suffix(".zarr") {
+        return z.trim_end_matches(".ome").to_string();
+    }
     s.trim_end_matches(".gz")
         .rsplit_once('.')
         .map(|(a, _)| a.to_string())

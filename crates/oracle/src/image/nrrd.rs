@@ -1,0 +1,351 @@
+//! NRRD volumes (ours: file format support; section 6.6.2 meshes them): `.nrrd` with the
+//! data attached after a blank line, or a detached `.nhdr` header naming a `data file`
+//! (relative to the header's folder), `raw` or `gzip` encoding, either `endian`.
+//!
+//! World coordinates: `space directions` (one vector per axis) and `space origin` in the
+//! `space` frame, mapped to the RAS+ world of the NIfTI reader (see [`super::orient`]: an
+//! LPS header, Slicer's and pynrrd's usual one, has x and y negated); without them,
+//! `spacings` (or 1) along the axes, origin 0. Only 3D scalar volumes (`dimension: 3`) are
+//! read; every other case is an error naming the field and the fix.
+
+use super::orient::{self, Frame};
+use super::{Dtype, ImageError, Volume, Voxels};
+use glam::DVec3;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+const FMT: &str = "NRRD";
+
+/// The header's fields (lower-case names) and where the attached data starts.
+struct Header {
+    fields: HashMap<String, String>,
+    data_start: usize,
+}
+
+fn err(path: &Path, field: &str, detail: impl Into<String>) -> ImageError {
+    orient::field(path, FMT, field, detail)
+}
+
+/// Parse the header lines of `bytes` (up to the first blank line or the end).
+fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, ImageError> {
+    if !bytes.starts_with(b"NRRD000") {
+        return Err(err(
+            path,
+            "magic",
+            "(first line) is not NRRD000x: not an NRRD file (check the extension)",
+        ));
+    }
+    let mut fields = HashMap::new();
+    let mut at = 0;
+    let mut first = true;
+    loop {
+        let end = bytes[at..].iter().position(|&b| b == b'\n');
+        let line_end = end.map_or(bytes.len(), |e| at + e);
+        let line = std::str::from_utf8(&bytes[at..line_end])
+            .map_err(|_| err(path, "header", "is not text: the header is damaged"))?
+            .trim_end_matches('\r');
+        at = end.map_or(bytes.len(), |_| line_end + 1);
+        if first {
+            first = false;
+        } else if line.is_empty() {
+            break;
+        } else if !line.starts_with('#') && !line.contains(":=") {
+            let (k, v) = line
+                .split_once(": ")
+                .ok_or_else(|| err(path, line, "is not a `field: value` line; fix the header"))?;
+            fields.insert(k.trim().to_ascii_lowercase(), v.trim().to_string());
+        }
+        if end.is_none() {
+            break;
+        }
+    }
+    Ok(Header {
+        fields,
+        data_start: at,
+    })
+}
+
+fn dtype(path: &Path, t: &str) -> Result<Dtype, ImageError> {
+    Ok(match t.to_ascii_lowercase().as_str() {
+        "signed char" | "int8" | "int8_t" => Dtype::I8,
+        "uchar" | "unsigned char" | "uint8" | "uint8_t" => Dtype::U8,
+        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => {
+            Dtype::I16
+        }
+        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => Dtype::U16,
+        "int" | "signed int" | "int32" | "int32_t" => Dtype::I32,
+        "uint" | "unsigned int" | "uint32" | "uint32_t" => Dtype::U32,
+        "float" => Dtype::F32,
+        "double" => Dtype::F64,
+        _ => {
+            return Err(err(
+                path,
+                "type",
+                format!(
+                    "= {t:?} is not supported; convert the image to int8, uint8, int16, uint16, \
+                     int32, uint32, float or double"
+                ),
+            ));
+        }
+    })
+}
+
+/// `(a,b,c) (d,e,f) (g,h,i)`: three vectors.
+fn directions(path: &Path, s: &str) -> Result<[DVec3; 3], ImageError> {
+    let vecs: Vec<&str> = s.split_whitespace().collect();
+    let bad = || {
+        err(
+            path,
+            "space directions",
+            format!(
+                "= {s:?}: expected three vectors like (1,0,0) (0,1,0) (0,0,1) (no `none` axis: \
+                 a 3D scalar volume)"
+            ),
+        )
+    };
+    if vecs.len() != 3 {
+        return Err(bad());
+    }
+    let mut out = [DVec3::ZERO; 3];
+    for (k, v) in vecs.iter().enumerate() {
+        let inner = v
+            .strip_prefix('(')
+            .and_then(|v| v.strip_suffix(')'))
+            .ok_or_else(bad)?;
+        let n = orient::numbers(inner, 3).ok_or_else(bad)?;
+        out[k] = DVec3::new(n[0], n[1], n[2]);
+    }
+    Ok(out)
+}
+
+/// The voxel-to-world axes and origin, and the frame they are in.
+fn geometry(path: &Path, h: &Header) -> Result<([DVec3; 3], DVec3, Frame), ImageError> {
+    let f = &h.fields;
+    let frame = match (f.get("space"), f.get("space dimension")) {
+        (Some(s), _) => Frame::of_nrrd(s).ok_or_else(|| {
+            err(
+                path,
+                "space",
+                format!(
+                    "= {s:?} is not a 3D space this reader knows; use left-posterior-superior, \
+                     right-anterior-superior, left-anterior-superior or scanner-xyz"
+                ),
+            )
+        })?,
+        (None, Some(d)) if d.trim() == "3" => Frame::Plain,
+        (None, Some(d)) => {
+            return Err(err(
+                path,
+                "space dimension",
+                format!("= {d}: only 3 is supported"),
+            ));
+        }
+        (None, None) => Frame::Plain,
+    };
+    if let Some(d) = f.get("space directions") {
+        let axes = directions(path, d)?;
+        let origin = match f.get("space origin") {
+            Some(o) => {
+                let inner = o.trim().strip_prefix('(').and_then(|v| v.strip_suffix(')'));
+                let n = inner.and_then(|v| orient::numbers(v, 3)).ok_or_else(|| {
+                    err(path, "space origin", format!("= {o:?}: expected (x,y,z)"))
+                })?;
+                DVec3::new(n[0], n[1], n[2])
+            }
+            None => DVec3::ZERO,
+        };
+        return Ok((axes, origin, frame));
+    }
+    let s = match f.get("spacings") {
+        Some(s) => orient::numbers(s, 3).ok_or_else(|| {
+            err(
+                path,
+                "spacings",
+                format!("= {s:?}: expected three finite numbers"),
+            )
+        })?,
+        None => vec![1.0; 3],
+    };
+    Ok((
+        [DVec3::X * s[0], DVec3::Y * s[1], DVec3::Z * s[2]],
+        DVec3::ZERO,
+        frame,
+    ))
+}
+
+fn dims(path: &Path, h: &Header) -> Result<[usize; 3], ImageError> {
+    let f = &h.fields;
+    let d = f.get("dimension").map(|s| s.trim().to_string());
+    if d.as_deref() != Some("3") {
+        return Err(err(
+            path,
+            "dimension",
+            format!(
+                "= {}: only 3D scalar volumes are read (extract one 3D volume, e.g. with \
+                 pynrrd or Slicer)",
+                d.as_deref().unwrap_or("(missing)")
+            ),
+        ));
+    }
+    let s = f
+        .get("sizes")
+        .ok_or_else(|| err(path, "sizes", "is missing; give the three axis sizes"))?;
+    let n: Vec<usize> = s
+        .split_whitespace()
+        .map(|t| t.parse::<usize>().ok().filter(|&v| v > 0))
+        .collect::<Option<_>>()
+        .filter(|v: &Vec<usize>| v.len() == 3)
+        .ok_or_else(|| {
+            err(
+                path,
+                "sizes",
+                format!("= {s:?}: expected three positive whole numbers"),
+            )
+        })?;
+    Ok([n[0], n[1], n[2]])
+}
+
+/// The voxel bytes: from the attached data or the `data file`, skipped and decoded.
+fn data(
+    path: &Path,
+    h: &Header,
+    bytes: Vec<u8>,
+    need: usize,
+) -> Result<(Vec<u8>, PathBuf), ImageError> {
+    let f = &h.fields;
+    let (src, mut raw) = match f.get("data file").or_else(|| f.get("datafile")) {
+        Some(name) => {
+            if name.starts_with("LIST") || name.split_whitespace().count() > 1 {
+                return Err(err(
+                    path,
+                    "data file",
+                    format!("= {name:?}: multi-file data is not read; save one data file"),
+                ));
+            }
+            let p = path.parent().unwrap_or(Path::new(".")).join(name);
+            if !p.is_file() {
+                return Err(err(
+                    path,
+                    "data file",
+                    format!(
+                        "= {name:?}: {} does not exist; put the data file next to the header or \
+                         fix the name",
+                        p.display()
+                    ),
+                ));
+            }
+            let d = orient::read(&p)?;
+            (p, d)
+        }
+        None => {
+            let mut b = bytes;
+            b.drain(..h.data_start.min(b.len()));
+            (path.to_path_buf(), b)
+        }
+    };
+    let num = |k: &str| -> Result<i64, ImageError> {
+        f.get(k).map_or(Ok(0), |v| {
+            v.trim()
+                .parse::<i64>()
+                .map_err(|_| err(path, k, format!("= {v:?}: not a whole number")))
+        })
+    };
+    let line_skip = num("line skip")?;
+    let byte_skip = num("byte skip")?;
+    if line_skip < 0 || byte_skip < -1 {
+        return Err(err(
+            path,
+            "byte skip",
+            "must be 0 or more (or -1 for raw data)",
+        ));
+    }
+    for _ in 0..line_skip {
+        let e = raw
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(raw.len(), |e| e + 1);
+        raw.drain(..e);
+    }
+    let enc = f.get("encoding").map(|s| s.to_ascii_lowercase());
+    let enc = enc.as_deref().unwrap_or("");
+    let mut out = match enc {
+        "raw" => {
+            if byte_skip == -1 {
+                let start = raw.len().saturating_sub(need);
+                raw.drain(..start);
+            }
+            raw
+        }
+        "gzip" | "gz" => super::nifti_io::gunzip(&src, &raw)?,
+        _ => {
+            return Err(err(
+                path,
+                "encoding",
+                format!("= {enc:?} is not supported; save the volume with encoding raw or gzip"),
+            ));
+        }
+    };
+    if enc != "raw" || byte_skip != -1 {
+        let skip = (byte_skip.max(0) as usize).min(out.len());
+        out.drain(..skip);
+    }
+    if out.len() < need {
+        return Err(ImageError::Truncated {
+            path: src,
+            detail: format!(
+                "the voxel data has {} bytes, sizes and type need {need}",
+                out.len()
+            ),
+        });
+    }
+    if out.len() > need {
+        return Err(err(
+            path,
+            "sizes",
+            format!(
+                "and type need {need} bytes but the data has {}; the header does not match the \
+                 data (check sizes, type and byte skip)",
+                out.len()
+            ),
+        ));
+    }
+    Ok((out, src))
+}
+
+/// Read an NRRD volume (`.nrrd` or `.nhdr`); see the module documentation.
+pub fn read_nrrd(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
+    let path = path.as_ref();
+    let bytes = orient::read(path)?;
+    let h = parse_header(path, &bytes)?;
+    let dims = dims(path, &h)?;
+    let ty = h.fields.get("type").ok_or_else(|| {
+        err(
+            path,
+            "type",
+            "is missing; give the voxel type (e.g. type: short)",
+        )
+    })?;
+    let dtype = dtype(path, ty)?;
+    let big = match h.fields.get("endian").map(|s| s.to_ascii_lowercase()) {
+        Some(e) if e == "big" => true,
+        Some(e) if e == "little" => false,
+        None if dtype.size() == 1 => false,
+        other => {
+            return Err(err(
+                path,
+                "endian",
+                format!(
+                    "= {}: multi-byte voxels need endian: little or endian: big",
+                    other.as_deref().unwrap_or("(missing)")
+                ),
+            ));
+        }
+    };
+    let (axes, origin, frame) = geometry(path, &h)?;
+    let need = orient::byte_count(path, FMT, "sizes", dims, dtype.size())?;
+    let (raw, _) = data(path, &h, bytes, need)?;
+    let voxels = Voxels::from_bytes(dtype, &raw, big);
+    let affine = orient::affine(axes, origin, frame);
+    super::volume::check_affine(&affine, Some(path), "space directions / space origin")?;
+    Ok(Volume::new(dims, voxels, affine)?.with_source(path))
+}

@@ -1,0 +1,188 @@
+"""Independent readers of the formats of issue #20 (ours: cross-checks with the Python tools).
+
+The built command line (target/release/xtask) writes each new mesh format, and trimesh (.glb),
+meshio (.vtk), nibabel (.gii) and the standard library's XML parser (.vtp: meshio reads .vtu,
+not .vtp) read it back: the same vertices, the same faces and the same world coordinates as
+the PLY of the same run. Each image fixture of fixtures/images/formats/ is read with nibabel,
+pynrrd, SimpleITK or zarr: the voxels must be the generator's, and the world affine (in
+NIfTI's RAS+ frame; NRRD and MetaImage are LPS+) must be the one the CLI reports.
+Missing packages skip their tests; a missing binary skips everything (build it with
+`cargo build --release -p xtask`).
+"""
+import json
+import os
+import subprocess
+import xml.etree.ElementTree as ET
+
+import pytest
+
+np = pytest.importorskip("numpy")
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+XTASK = os.path.join(ROOT, "target", "release", "xtask")
+FIX = os.path.join(ROOT, "fixtures", "images", "formats")
+LPS = np.diag([-1.0, -1.0, 1.0])
+
+
+def run_mesh(tmp, image, out):
+    if not os.path.exists(XTASK):
+        pytest.skip("target/release/xtask is not built")
+    report = os.path.join(tmp, out + ".json")
+    cmd = [XTASK, "mesh", "-q", image, "--iso", "500", "--size", "1", "--no-verify",
+           "-o", os.path.join(tmp, out), "--report", report]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    with open(report) as f:
+        return json.load(f)
+
+
+def read_ply(path):
+    trimesh = pytest.importorskip("trimesh")
+    m = trimesh.load(path, process=False)
+    return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64)
+
+
+@pytest.fixture(scope="module")
+def meshes(tmp_path_factory):
+    tmp = str(tmp_path_factory.mktemp("formats"))
+    image = os.path.join(FIX, "blob_oblique.nii.gz")
+    for ext in ["ply", "glb", "vtk", "vtp", "gii"]:
+        run_mesh(tmp, image, "m." + ext)
+    v, f = read_ply(os.path.join(tmp, "m.ply"))
+    assert len(v) > 100 and len(f) > 100
+    return tmp, v, f
+
+
+def test_glb_with_trimesh(meshes):
+    tmp, v, f = meshes
+    trimesh = pytest.importorskip("trimesh")
+    m = trimesh.load(os.path.join(tmp, "m.glb"), force="mesh", process=False)
+    assert np.array_equal(np.asarray(m.faces), f)
+    assert np.array_equal(np.asarray(m.vertices, dtype=np.float32), v.astype(np.float32))
+
+
+def test_vtk_with_meshio(meshes):
+    tmp, v, f = meshes
+    meshio = pytest.importorskip("meshio")
+    m = meshio.read(os.path.join(tmp, "m.vtk"))
+    assert np.array_equal(m.points, v)  # double precision, exact
+    assert np.array_equal(m.cells_dict["triangle"], f)
+    angle = np.ravel(m.cell_data["min_angle_deg"][0])
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+
+    def ang(p, q, r):
+        u, w = q - p, r - p
+        return np.degrees(np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), (u * w).sum(1)))
+
+    expect = np.minimum(np.minimum(ang(a, b, c), ang(b, c, a)), ang(c, a, b))
+    assert np.allclose(angle, expect, atol=1e-9)
+    assert angle.min() > 20.0
+    rs = np.ravel(m.cell_data["r_over_sigma"][0])
+    assert rs.max() <= 1.0 + 1e-12 and rs.min() > 0.0
+
+
+def test_vtp_with_xml(meshes):
+    tmp, v, f = meshes
+    root = ET.parse(os.path.join(tmp, "m.vtp")).getroot()
+    assert root.get("type") == "PolyData"
+
+    def array(parent, name=None):
+        for p in root.iter(parent):
+            for d in p.iter("DataArray"):
+                if name is None or d.get("Name") == name:
+                    return np.array(d.text.split(), dtype=np.float64)
+        raise AssertionError(f"no {parent}/{name}")
+
+    assert np.array_equal(array("Points").reshape(-1, 3), v)
+    conn = array("Polys", "connectivity").astype(np.int64)
+    offsets = array("Polys", "offsets").astype(np.int64)
+    assert np.array_equal(offsets, 3 * np.arange(1, len(f) + 1))
+    assert np.array_equal(conn.reshape(-1, 3), f)
+    assert len(array("CellData", "min_angle_deg")) == len(f)
+
+
+def test_gii_with_nibabel(meshes):
+    tmp, v, f = meshes
+    nib = pytest.importorskip("nibabel")
+    g = nib.load(os.path.join(tmp, "m.gii"))
+    coords, tris = g.agg_data(("pointset", "triangle"))
+    assert np.array_equal(tris, f)
+    assert np.array_equal(coords, v.astype(np.float32))  # world millimetres, as stored
+    cs = g.darrays[0].coordsys
+    assert cs.dataspace == cs.xformspace == nib.nifti1.xform_codes["scanner"]
+    assert np.array_equal(np.asarray(cs.xform), np.eye(4))
+
+
+def cli_affine(tmp, image):
+    r = run_mesh(tmp, image, "a.ply")
+    a = np.array(r["input_stats"]["image"]["affine"], dtype=np.float64)
+    assert r["input_stats"]["image"]["dims"] == [24, 20, 16]
+    return a[:, :3], a[:, 3]
+
+
+@pytest.fixture(scope="module")
+def voxels():
+    return np.load(os.path.join(FIX, "blob_voxels_i16.npy"))
+
+
+@pytest.mark.parametrize("name", ["blob_oblique.nii.gz", "blob_aligned.nii.gz"])
+def test_nifti_with_nibabel(tmp_path, voxels, name):
+    nib = pytest.importorskip("nibabel")
+    img = nib.load(os.path.join(FIX, name))
+    assert np.array_equal(np.asarray(img.dataobj), voxels)
+    m, t = cli_affine(str(tmp_path), os.path.join(FIX, name))
+    assert np.array_equal(img.affine[:3, :3], m) and np.array_equal(img.affine[:3, 3], t)
+
+
+@pytest.mark.parametrize("name", ["blob_oblique.nrrd", "blob_oblique_gz.nrrd",
+                                  "blob_oblique_detached.nhdr"])
+def test_nrrd_with_pynrrd(tmp_path, voxels, name):
+    nrrd = pytest.importorskip("nrrd")
+    data, h = nrrd.read(os.path.join(FIX, name))  # index order F: [i, j, k]
+    assert np.array_equal(data, voxels)
+    assert h["space"] == "left-posterior-superior"
+    m, t = cli_affine(str(tmp_path), os.path.join(FIX, name))
+    assert np.array_equal(LPS @ np.asarray(h["space directions"], dtype=np.float64).T, m)
+    assert np.array_equal(LPS @ np.asarray(h["space origin"], dtype=np.float64), t)
+
+
+@pytest.mark.parametrize("name", ["blob_oblique.mha", "blob_oblique.mhd"])
+def test_metaimage_with_simpleitk(tmp_path, voxels, name):
+    sitk = pytest.importorskip("SimpleITK")
+    img = sitk.ReadImage(os.path.join(FIX, name))
+    assert np.array_equal(sitk.GetArrayFromImage(img).transpose(2, 1, 0), voxels)
+    d = np.array(img.GetDirection()).reshape(3, 3)  # ITK: column j = axis j, LPS
+    m_lps = d @ np.diag(img.GetSpacing())
+    m, t = cli_affine(str(tmp_path), os.path.join(FIX, name))
+    assert np.array_equal(LPS @ m_lps, m)
+    assert np.array_equal(LPS @ np.array(img.GetOrigin()), t)
+    # SimpleITK's own voxel-to-world agrees with the CLI's affine on a corner voxel.
+    p = np.array(img.TransformIndexToPhysicalPoint((23, 19, 15)))
+    assert np.allclose(LPS @ p, m @ np.array([23, 19, 15]) + t, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["blob_aligned_v2.ome.zarr", "blob_aligned_v3.ome.zarr"])
+def test_ome_zarr_with_zarr(tmp_path, voxels, name):
+    zarr = pytest.importorskip("zarr")
+    g = zarr.open_group(os.path.join(FIX, name), mode="r")
+    attrs = g.attrs.asdict()
+    ms = (attrs.get("ome", attrs))["multiscales"][0]
+    assert [a["name"] for a in ms["axes"]] == ["z", "y", "x"]
+    ds = ms["datasets"][0]
+    data = np.asarray(g[ds["path"]][...]).transpose(2, 1, 0)  # zyx -> [i, j, k]
+    assert np.array_equal(data, voxels)
+    tr = {c["type"]: c for c in ds["coordinateTransformations"]}
+    scale = np.array(tr["scale"]["scale"][::-1])
+    shift = np.array(tr["translation"]["translation"][::-1])
+    m, t = cli_affine(str(tmp_path), os.path.join(FIX, name))
+    assert np.array_equal(np.diag(scale), m) and np.array_equal(shift, t)
+
+
+def test_the_same_volume_gives_the_same_mesh_bytes(tmp_path):
+    """The Rust test checks it too; here through the files the CLI writes."""
+    out = {}
+    for name in ["blob_aligned.nii.gz", "blob_aligned_v2.ome.zarr", "blob_aligned_v3.ome.zarr"]:
+        run_mesh(str(tmp_path), os.path.join(FIX, name), name + ".ply")
+        with open(os.path.join(str(tmp_path), name + ".ply"), "rb") as f:
+            out[name] = f.read()
+    assert len(set(out.values())) == 1
