@@ -1,4 +1,5 @@
-//! `cargo xtask`: the project's runner (mesh, verify, view, delaunay, regress, bench, paper-table).
+//! `cargo xtask`: the project's runner (mesh, verify, view, delaunay, regress, bench,
+//! paper-table, test).
 
 use clap::{Parser, Subcommand};
 
@@ -25,8 +26,13 @@ macro_rules! out {
 mod cli;
 mod suites;
 
+<<<<<<< HEAD
 use cli::{delaunay, mesh, verify, view};
 use suites::{bench, paper_table, regress};
+=======
+use cli::{delaunay, mesh, verify};
+use suites::{bench, paper_table, regress, test_all};
+>>>>>>> main
 
 #[derive(Parser)]
 #[command(
@@ -60,6 +66,9 @@ enum Cmd {
     Regress(regress::RegressArgs),
     /// The paper's Table 1 on this machine (writes docs/paper-table.{json,md}).
     PaperTable(paper_table::PaperTableArgs),
+    /// The whole test suite, what CI runs: Rust tests, quick regression, the Python package's
+    /// tests, the readers' mutation smoke pass.
+    Test(test_all::TestArgs),
 }
 
 /// The flags, or exit: a bad value of a numeric flag is one `error:` line (the parser's
@@ -112,6 +121,7 @@ fn main() {
         Cmd::Bench(a) => bench::run(a).map(|()| false),
         Cmd::Regress(a) => regress::run(a).map(|()| false),
         Cmd::PaperTable(a) => paper_table::run(a).map(|()| false),
+        Cmd::Test(a) => test_all::run(a).map(|()| false),
     };
     let verdict_failed = match r {
         Ok(failed) => failed,

@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use geom::bvh::TriangleBvh;
 
-use crate::level_set::LevelSet;
+use crate::level_set::{LevelSet, Precision};
 
 /// Exact nearest-triangle queries on a mesh (branch and bound on the BVH).
 ///
@@ -171,8 +171,10 @@ impl<'a> Measure<'a> {
         match self {
             Measure::LevelSet(ls) => format!(
                 "exact distance to the trilinear level set of the image (branch and bound over \
-                 voxel cells, within max(1e-2 d, {:.1e}))",
-                ls.tolerance(0.0)
+                 voxel cells): the maximum within max(1e-2 d, {:.1e}), the mean and rms of \
+                 upper bounds within max(1e-1 d, {:.1e})",
+                ls.tolerance_at(Precision::Fine, 0.0),
+                ls.tolerance_at(Precision::Coarse, 0.0)
             ),
             Measure::Project(_) => "distance to the surface's projection of the sample, checked \
                  by rays from the sample where it is farther than half the triangle's longest \
@@ -184,29 +186,32 @@ impl<'a> Measure<'a> {
     /// A point of S near `p`, its distance, and whether the distance was corrected (rays found
     /// a nearer point than the projection) or only bounded (the search stopped with a gap
     /// larger than its tolerance). `None`: not measured.
-    fn measure(&self, p: DVec3, edge: f64) -> Option<(DVec3, f64, Flag)> {
+    /// The last item is a lower bound of the distance (the distance itself, but for images).
+    fn measure(&self, p: DVec3, edge: f64, prec: Precision) -> Option<(DVec3, f64, Flag, f64)> {
         match self {
             Measure::LevelSet(ls) => {
-                let n = ls.nearest(p);
+                let n = ls.nearest_with(p, prec);
                 let q = n.point?;
-                let exact = n.upper - n.lower <= 2.0 * ls.tolerance(n.upper);
-                Some((q, n.upper, if exact { Flag::Exact } else { Flag::Bounded }))
+                let exact = n.upper - n.lower <= 2.0 * ls.tolerance_at(prec, n.upper);
+                let flag = if exact { Flag::Exact } else { Flag::Bounded };
+                Some((q, n.upper, flag, n.lower))
             }
             Measure::Project(s) => {
                 let q = s.project(p).filter(|q| q.is_finite());
                 let d = q.map(|q| (p - q).length());
                 if d.is_some_and(|d| d <= 0.5 * edge) {
-                    return Some((q?, d?, Flag::Exact));
+                    return Some((q?, d?, Flag::Exact, d?));
                 }
                 let r = oracle::roots::nearest_crossing_on_rays(*s, p)
                     .filter(|r| r.is_finite())
                     .map(|r| (r, (p - r).length()));
-                match (q.zip(d), r) {
-                    (Some((_, d)), Some((r, dr))) if dr < d => Some((r, dr, Flag::Corrected)),
-                    (Some((q, d)), _) => Some((q, d, Flag::Exact)),
-                    (None, Some((r, dr))) => Some((r, dr, Flag::Corrected)),
-                    (None, None) => None,
-                }
+                let (q, d, flag) = match (q.zip(d), r) {
+                    (Some((_, d)), Some((r, dr))) if dr < d => (r, dr, Flag::Corrected),
+                    (Some((q, d)), _) => (q, d, Flag::Exact),
+                    (None, Some((r, dr))) => (r, dr, Flag::Corrected),
+                    (None, None) => return None,
+                };
+                Some((q, d, flag, d))
             }
         }
     }
@@ -230,6 +235,11 @@ struct Counts {
 /// Mesh -> S statistics of samples on the triangles (see [`Measure`]), the counts of samples
 /// not measured, corrected or only bounded and, when `dist` is given, S -> mesh statistics
 /// of the points of S found. Memory is O(number of triangles).
+///
+/// Every sample is measured at [`Precision::Coarse`] (its upper bound goes into the mean and
+/// rms); the samples whose upper bound reaches the largest lower bound of all, the only ones
+/// that may hold the maximum, are measured again at [`Precision::Fine`], and the maximum is
+/// theirs. Invariant: the reported maximum is within the fine tolerance of the true one.
 fn mesh_samples(
     mesh: &TriMesh,
     measure: &Measure<'_>,
@@ -237,21 +247,34 @@ fn mesh_samples(
     dist: Option<&MeshDistance<'_>>,
 ) -> (Acc, Acc, Counts) {
     const CHUNK: usize = 1024;
-    let per_chunk: Vec<(Acc, Acc, Counts)> = mesh
+    struct Chunk {
+        m2s: Acc,
+        s2m: Acc,
+        n: Counts,
+        /// Largest lower bound of the chunk's samples.
+        floor: f64,
+        /// Samples whose upper bound reaches `floor`, in sample order.
+        candidates: Vec<DVec3>,
+    }
+    let per_chunk: Vec<Chunk> = mesh
         .triangles
         .par_chunks(CHUNK)
         .map(|tris| {
             let (mut m2s, mut s2m, mut n) = (Acc::default(), Acc::default(), Counts::default());
             let mut pts = Vec::new();
+            let mut measured: Vec<(DVec3, f64)> = Vec::new();
+            let mut floor = f64::NEG_INFINITY;
             for t in tris {
                 let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
                 let edge = (b - a).length().max((c - b).length()).max((a - c).length());
                 pts.clear();
                 triangle_samples(a, b, c, per_edge, &mut pts);
                 for &p in &pts {
-                    match measure.measure(p, edge) {
-                        Some((q, d, flag)) => {
+                    match measure.measure(p, edge, Precision::Coarse) {
+                        Some((q, d, flag, lower)) => {
                             m2s.add(p, d);
+                            measured.push((p, d));
+                            floor = floor.max(lower);
                             n.corrected += (flag == Flag::Corrected) as usize;
                             n.bounded += (flag == Flag::Bounded) as usize;
                             if let Some(dd) = dist {
@@ -262,16 +285,57 @@ fn mesh_samples(
                     }
                 }
             }
-            (m2s, s2m, n)
+            let candidates = measured
+                .into_iter()
+                .filter(|&(_, d)| d >= floor)
+                .map(|(p, _)| p)
+                .collect();
+            Chunk {
+                m2s,
+                s2m,
+                n,
+                floor,
+                candidates,
+            }
         })
         .collect();
     let (mut m2s, mut s2m, mut n) = (Acc::default(), Acc::default(), Counts::default());
-    for (a, b, f) in &per_chunk {
-        m2s.merge(a);
-        s2m.merge(b);
-        n.fails += f.fails;
-        n.corrected += f.corrected;
-        n.bounded += f.bounded;
+    let floor = per_chunk
+        .iter()
+        .map(|c| c.floor)
+        .fold(f64::NEG_INFINITY, f64::max);
+    for c in &per_chunk {
+        m2s.merge(&c.m2s);
+        s2m.merge(&c.s2m);
+        n.fails += c.n.fails;
+        n.corrected += c.n.corrected;
+        n.bounded += c.n.bounded;
+    }
+    // The maximum, measured finely over the samples that may hold it (in sample order).
+    let candidates: Vec<DVec3> = per_chunk
+        .iter()
+        .flat_map(|c| c.candidates.iter().copied())
+        .collect();
+    if let Measure::LevelSet(_) = measure
+        && !candidates.is_empty()
+    {
+        let fine: Vec<Option<f64>> = candidates
+            .par_iter()
+            .map(|&p| measure.measure(p, 0.0, Precision::Fine).map(|m| m.1))
+            .collect();
+        let mut best: Option<(DVec3, f64)> = None;
+        for (&p, d) in candidates.iter().zip(fine) {
+            if let Some(d) = d
+                && d >= floor
+                && best.is_none_or(|(_, b)| d > b)
+            {
+                best = Some((p, d));
+            }
+        }
+        if let Some((p, d)) = best {
+            m2s.max = d;
+            m2s.argmax = Some(p);
+        }
     }
     (m2s, s2m, n)
 }

@@ -19,17 +19,33 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use glam::{DAffine3, DVec3};
+use oracle::Surface;
 use oracle::image::{ImageSurface, trilinear};
 use rayon::prelude::*;
 
 /// Pyramid levels from this one up store the node signs of their blocks (2^level cells a side).
 const STORED_FROM: u32 = 1;
+/// Newton steps of [`LevelSet::seed`].
+const SEED_STEPS: usize = 2;
 /// Heap pops after which [`LevelSet::nearest`] stops with the bounds it has.
 const MAX_POPS: usize = 1 << 16;
 /// Relative part of the tolerance of [`LevelSet::nearest`] (of the distance).
 const REL_TOL: f64 = 1e-2;
 /// Absolute part of the tolerance (of the smallest voxel size).
 const ABS_TOL: f64 = 5e-2;
+/// The same parts for [`Precision::Coarse`].
+const COARSE_REL_TOL: f64 = 1e-1;
+const COARSE_ABS_TOL: f64 = 2.5e-1;
+
+/// How close [`LevelSet::nearest_with`] brings its bounds together.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// Within max(1% of the distance, 5% of the smallest voxel size): [`LevelSet::tolerance`].
+    Fine,
+    /// Within max(10% of the distance, 25% of the smallest voxel size): enough for means and
+    /// to tell which samples may hold the maximum, at a fraction of the work.
+    Coarse,
+}
 
 /// Sign flags of a set of node values: some positive, some negative, some zero.
 const POS: u8 = 1;
@@ -68,6 +84,8 @@ pub struct LevelSet<'a> {
     /// shifted by one cell so that indices start at 0), x fastest.
     levels: Vec<(Vec<u8>, [usize; 3])>,
     top: u32,
+    /// [`LevelSet::covering_radius`], kept.
+    cover: f64,
 }
 
 /// What [`LevelSet::nearest`] found: the distance to S lies in `[lower, upper]`.
@@ -115,7 +133,9 @@ impl<'a> LevelSet<'a> {
             h,
             levels: Vec::new(),
             top: 0,
+            cover: 0.0,
         };
+        ls.cover = ls.covering_radius();
         ls.build_pyramid();
         ls
     }
@@ -198,10 +218,19 @@ impl<'a> LevelSet<'a> {
     /// The gap [`LevelSet::nearest`] aims at for a distance `d`: 1% of `d` or 5% of the
     /// smallest voxel size, whichever is larger.
     pub fn tolerance(&self, d: f64) -> f64 {
+        self.tolerance_at(Precision::Fine, d)
+    }
+
+    /// The gap aimed at for a distance `d` at precision `prec`.
+    pub fn tolerance_at(&self, prec: Precision, d: f64) -> f64 {
+        let (rel, abs) = match prec {
+            Precision::Fine => (REL_TOL, ABS_TOL),
+            Precision::Coarse => (COARSE_REL_TOL, COARSE_ABS_TOL),
+        };
         if d.is_finite() {
-            (REL_TOL * d).max(ABS_TOL * self.h)
+            (rel * d).max(abs * self.h)
         } else {
-            ABS_TOL * self.h
+            abs * self.h
         }
     }
 
@@ -250,6 +279,12 @@ impl<'a> LevelSet<'a> {
     /// The nearest point of S to `p`, to within [`LevelSet::tolerance`] (or the bounds
     /// reached after a fixed amount of work: `upper - lower` says how far from it).
     pub fn nearest(&self, p: DVec3) -> Nearest {
+        self.nearest_with(p, Precision::Fine)
+    }
+
+    /// [`LevelSet::nearest`] to within [`LevelSet::tolerance_at`] `prec`.
+    pub fn nearest_with(&self, p: DVec3, prec: Precision) -> Nearest {
+        let tol = |d: f64| self.tolerance_at(prec, d);
         let u = self.w2v.transform_point3(p);
         let mut st = Search {
             best: Nearest {
@@ -258,19 +293,24 @@ impl<'a> LevelSet<'a> {
                 lower: 0.0,
             },
             floor: f64::INFINITY,
+            pruned: f64::INFINITY,
             heap: BinaryHeap::new(),
             items: Vec::new(),
         };
         if !p.is_finite() {
             return st.best;
         }
+        if let Some(q) = self.seed(p) {
+            st.best.point = Some(q);
+            st.best.upper = (q - p).length();
+        }
         let (lo, hi) = self.block_box(self.top, [0; 3]);
         st.push(self.lower(p, u, lo, hi), Item::Block(self.top, [0; 3]));
         let mut pops = 0;
         while let Some(Reverse((lb, idx))) = st.heap.pop() {
             let lb = f64::from_bits(lb);
-            if lb >= st.best.upper - self.tolerance(st.best.upper) || pops >= MAX_POPS {
-                st.best.lower = lb.min(st.floor).min(st.best.upper);
+            if lb >= st.best.upper - tol(st.best.upper) || pops >= MAX_POPS {
+                st.best.lower = lb.min(st.floor).min(st.pruned).min(st.best.upper);
                 return st.best;
             }
             pops += 1;
@@ -283,7 +323,7 @@ impl<'a> LevelSet<'a> {
                     if l == 0 {
                         let (o, _) = self.block_box(0, b);
                         let c = self.cell_corners(o);
-                        self.visit_box(p, u, SubBox { o, s: 1.0, c }, &mut st);
+                        self.visit_box(p, u, SubBox { o, s: 1.0, c }, &mut st, &tol);
                         continue;
                     }
                     for k in 0..8 {
@@ -296,14 +336,46 @@ impl<'a> LevelSet<'a> {
                 }
                 Item::Box(bx) => {
                     for child in bx.children() {
-                        self.visit_box(p, u, child, &mut st);
+                        self.visit_box(p, u, child, &mut st, &tol);
                     }
                 }
             }
         }
         // Every box was examined or dropped as smaller than the tolerance.
-        st.best.lower = st.floor.min(st.best.upper);
+        st.best.lower = st.floor.min(st.pruned).min(st.best.upper);
         st.best
+    }
+
+    /// A point of S near `p`, to start [`LevelSet::nearest`] with a small upper bound: a few
+    /// Newton steps on the interpolant, then the image's crossing oracle on the segment from
+    /// `p` to one and a half times the step, when the sign changes there (`None` otherwise).
+    /// Only the bound's value depends on it, never the lower bound: the search still proves
+    /// that nothing of S is nearer than its tolerance allows.
+    fn seed(&self, p: DVec3) -> Option<DVec3> {
+        let f0 = self.img.value(p);
+        if f0 == 0.0 {
+            return Some(p);
+        }
+        let reach = 2.0 * self.cover;
+        let mut q = p;
+        for _ in 0..SEED_STEPS {
+            let (f, g) = (self.img.value(q), self.img.gradient(q));
+            let gg = g.length_squared();
+            if !(gg > 0.0 && f.is_finite()) {
+                return None;
+            }
+            q -= g * (f / gg);
+            let moved = (q - p).length();
+            if moved.is_nan() || moved > reach {
+                return None;
+            }
+        }
+        let far = p + (q - p) * 1.5;
+        let ff = self.img.value(far);
+        if ff == 0.0 {
+            return Some(far);
+        }
+        ((ff < 0.0) != (f0 < 0.0)).then(|| self.img.crossing(p, f0, far, ff))
     }
 
     fn cell_corners(&self, o: DVec3) -> [f64; 8] {
@@ -320,7 +392,7 @@ impl<'a> LevelSet<'a> {
     /// A box (a cell or part of one): nothing if it holds no zero; else its edge crossings
     /// update the best point and, when it is larger than the tolerance, it goes back to the
     /// heap to be split (a smaller one only lowers the floor of the lower bound).
-    fn visit_box(&self, p: DVec3, u: DVec3, bx: SubBox, st: &mut Search) {
+    fn visit_box(&self, p: DVec3, u: DVec3, bx: SubBox, st: &mut Search, tol: &dyn Fn(f64) -> f64) {
         let SubBox { o, s, c } = bx;
         let f = c.iter().fold(0u8, |f, &v| f | flags(v));
         if !mixed(f) {
@@ -355,10 +427,11 @@ impl<'a> LevelSet<'a> {
             }
         }
         let lb = self.lower(p, u, o, o + DVec3::splat(s));
-        if lb >= st.best.upper - self.tolerance(st.best.upper) {
+        if lb >= st.best.upper - tol(st.best.upper) {
+            st.pruned = st.pruned.min(lb);
             return;
         }
-        if self.covering_radius() * s > self.tolerance(lb) {
+        if self.cover * s > tol(lb) {
             st.push(lb, Item::Box(bx));
         } else {
             st.floor = st.floor.min(lb);
@@ -427,6 +500,9 @@ struct Search {
     best: Nearest,
     /// Smallest lower bound of the boxes dropped as smaller than the tolerance.
     floor: f64,
+    /// Smallest lower bound of the boxes dropped as no nearer than the best point minus the
+    /// tolerance (with `floor` and the heap's least bound, what makes `lower` certified).
+    pruned: f64,
     /// Min-heap of (lower bound bits, index in `items`): bounds are non-negative, so their
     /// bits order as the numbers; ties go to the earlier item (deterministic).
     heap: BinaryHeap<Reverse<(u64, usize)>>,

@@ -319,3 +319,45 @@ fn skip_hint_names_each_commands_flag() {
         "{d}"
     );
 }
+
+/// The level-set search at both precisions (the coarse one measures every mesh sample, the
+/// fine one the maximum): its bounds bracket the distance to the dense level set, its gap is
+/// the precision's tolerance, the two nest, and the point it returns lies on S.
+#[test]
+fn level_set_bounds_hold_at_both_precisions() {
+    use verify::level_set::{LevelSet, Precision};
+    let (s, _) = two_blobs();
+    let ls = LevelSet::new(&s);
+    let dense = dense_level_set(&s, [32, 20, 20]);
+    let mut x = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..300 {
+        let p = DVec3::new(
+            next() * 33.0 - 1.0,
+            next() * 21.0 - 1.0,
+            next() * 21.0 - 1.0,
+        );
+        let d = nearest_of(&dense, p);
+        let fine = ls.nearest_with(p, Precision::Fine);
+        let coarse = ls.nearest_with(p, Precision::Coarse);
+        for (n, prec) in [(fine, Precision::Fine), (coarse, Precision::Coarse)] {
+            // Dense points are within 1/8 voxel of S: the true distance is below d + 0.13.
+            assert!(n.lower <= d + 0.13, "{p}: lower {} vs dense {d}", n.lower);
+            assert!(n.lower <= n.upper, "{p}: {n:?}");
+            assert!(
+                n.upper - n.lower <= 2.0 * ls.tolerance_at(prec, n.upper) + 1e-12,
+                "{p}: gap of {n:?} above the {prec:?} tolerance"
+            );
+            let q = n.point.expect("a point of S");
+            assert!(s.value(q).abs() < 1e-6, "{p}: {q} is not on S");
+            assert!((q - p).length() <= n.upper + 1e-12);
+        }
+        assert!(coarse.lower <= fine.upper + 1e-12 && fine.lower <= coarse.upper + 1e-12);
+        assert!(fine.upper <= coarse.upper + ls.tolerance_at(Precision::Fine, coarse.upper));
+    }
+}

@@ -314,6 +314,9 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         write_two_pass_report(a, base(), &out)?;
     } else {
         print_single(&spec, &out, &out_path);
+        if let Some(n) = forecast.and_then(|f| f.overshoot(out.mesh.vertices.len())) {
+            eprintln!("note: {n}");
+        }
         write_report(a, base(), &out)?;
     }
     write_views(a, &spec, opened.kind, &out, html_path.as_deref())?;

@@ -131,6 +131,29 @@ impl Forecast {
         }
     }
 
+    /// A note when a run made more than twice the vertices forecast: the surface has parts
+    /// thinner than sigma (sheets, necks, specks) that the refinement resolves beyond the size
+    /// bound, which an area-only forecast does not count.
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::{AreaEstimate, AreaSource, Forecast};
+    /// let a = AreaEstimate { area: 4.0 * std::f64::consts::PI, source: AreaSource::InputTriangles };
+    /// let f = Forecast::at(a, 0.05); // 3318 vertices
+    /// assert!(f.overshoot(3303).is_none());
+    /// assert!(f.overshoot(9000).unwrap().starts_with("9000 vertices, 2.7 times the forecast"));
+    /// ```
+    pub fn overshoot(&self, vertices: usize) -> Option<String> {
+        let ratio = vertices as f64 / self.vertices.max(1) as f64;
+        (ratio > 2.0).then(|| {
+            format!(
+                "{vertices} vertices, {ratio:.1} times the forecast: the surface has parts \
+                 thinner than sigma (sheets, necks, specks) that the refinement resolves beyond \
+                 the size bound, and the forecast counts area only; a coarser --size changes \
+                 little there"
+            )
+        })
+    }
+
     /// The size bound whose forecast is `vertices` on a surface of this area.
     pub fn size_for(area: f64, vertices: u64) -> f64 {
         (VERTICES_PER_AREA * area / vertices.max(1) as f64).sqrt()

@@ -285,6 +285,12 @@ impl Plan<'_, '_> {
         let mut out = Outcome::new(result);
         out.sigma = Some(sigma);
         out.notes = self.notes;
+        if let Some(n) = self
+            .forecast
+            .and_then(|f| f.overshoot(out.mesh.vertices.len()))
+        {
+            out.notes.push(n);
+        }
         if !self.input.sharp_edges.is_empty() {
             let s = SharpEdges::measure(&self.input.sharp_edges, &out.mesh, sigma);
             out.notes.push(s.to_string());
