@@ -26,13 +26,8 @@ macro_rules! out {
 mod cli;
 mod suites;
 
-<<<<<<< HEAD
 use cli::{delaunay, mesh, verify, view};
-use suites::{bench, paper_table, regress};
-=======
-use cli::{delaunay, mesh, verify};
 use suites::{bench, paper_table, regress, test_all};
->>>>>>> main
 
 #[derive(Parser)]
 #[command(
