@@ -552,7 +552,7 @@ impl Input<'static> {
         name: String,
         smooth: bool,
     ) -> Result<Input<'static>, PipelineError> {
-        let poly = oracle::polyhedron::PolyhedronSurface::new(&mesh)
+        let poly = oracle::polyhedron::PolyhedronSurface::new(mesh)
             .map_err(|e| PipelineError::backend(format!("mesh {spec}"), e))?;
         let size = poly.suggested_size();
         let sharp_edges = poly.sharp_edges(SHARP_DEG);
@@ -565,7 +565,7 @@ impl Input<'static> {
             sharp_edges.len(),
         )];
         let area = AreaEstimate {
-            area: super::forecast::triangle_area(&mesh),
+            area: super::forecast::triangle_area(mesh),
             source: AreaSource::InputTriangles,
         };
         let surface: Box<dyn Surface> = if !smooth {
