@@ -65,7 +65,7 @@ pub(crate) fn write<W: Write>(w: &mut W, mesh: &TriMesh) -> std::io::Result<()> 
         b = bin.len()
     );
     let mut json = json.into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     // `bin` is a multiple of 4 bytes (f32 and u32 entries).
@@ -333,7 +333,7 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
                 Some(a) => g.indices(a)?,
                 None => (0..verts.len() as u64).collect(),
             };
-            if idx.len() % 3 != 0 {
+            if !idx.len().is_multiple_of(3) {
                 return Err(bad(
                     path,
                     format!("{what} has {} indices, not a multiple of 3", idx.len()),

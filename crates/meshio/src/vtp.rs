@@ -81,7 +81,7 @@ fn bad(path: &Path, reason: impl Into<String>) -> MeshIoError {
 /// Read VTK XML polydata (see the module documentation).
 pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshIoError> {
     let text = xml::text(bytes, path, Format::Vtp)?;
-    let doc = xml::parse(&text, path, Format::Vtp)?;
+    let doc = xml::parse(text, path, Format::Vtp)?;
     let root = doc.root_element();
     if root.tag_name().name() != "VTKFile" || root.attribute("type") != Some("PolyData") {
         return Err(bad(

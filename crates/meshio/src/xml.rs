@@ -218,7 +218,7 @@ pub(crate) fn vtk_array(
             }
             let len = Num::U64.decode(&pad(&b[..h], big), big)[0] as usize;
             let data = &b[h..];
-            if data.len() < len || len % num.size() != 0 {
+            if data.len() < len || !len.is_multiple_of(num.size()) {
                 return Err(MeshIoError::Truncated {
                     path: path.to_owned(),
                     detail: format!("{what}: the header says {len} bytes, {} follow", data.len()),
