@@ -135,7 +135,7 @@ def test_nifti_with_nibabel(tmp_path, voxels, name):
 
 
 @pytest.mark.parametrize("name", ["blob_oblique.nrrd", "blob_oblique_gz.nrrd",
-                                  "blob_oblique_detached.nhdr"])
+                                  "blob_oblique_detached.nhdr", "blob_aligned.nrrd"])
 def test_nrrd_with_pynrrd(tmp_path, voxels, name):
     nrrd = pytest.importorskip("nrrd")
     data, h = nrrd.read(os.path.join(FIX, name))  # index order F: [i, j, k]
@@ -146,7 +146,7 @@ def test_nrrd_with_pynrrd(tmp_path, voxels, name):
     assert np.array_equal(LPS @ np.asarray(h["space origin"], dtype=np.float64), t)
 
 
-@pytest.mark.parametrize("name", ["blob_oblique.mha", "blob_oblique.mhd"])
+@pytest.mark.parametrize("name", ["blob_oblique.mha", "blob_oblique.mhd", "blob_aligned.mha"])
 def test_metaimage_with_simpleitk(tmp_path, voxels, name):
     sitk = pytest.importorskip("SimpleITK")
     img = sitk.ReadImage(os.path.join(FIX, name))
@@ -181,7 +181,8 @@ def test_ome_zarr_with_zarr(tmp_path, voxels, name):
 def test_the_same_volume_gives_the_same_mesh_bytes(tmp_path):
     """The Rust test checks it too; here through the files the CLI writes."""
     out = {}
-    for name in ["blob_aligned.nii.gz", "blob_aligned_v2.ome.zarr", "blob_aligned_v3.ome.zarr"]:
+    for name in ["blob_aligned.nii.gz", "blob_aligned.nrrd", "blob_aligned.mha",
+                 "blob_aligned_v2.ome.zarr", "blob_aligned_v3.ome.zarr"]:
         run_mesh(str(tmp_path), os.path.join(FIX, name), name + ".ply")
         with open(os.path.join(str(tmp_path), name + ".ply"), "rb") as f:
             out[name] = f.read()

@@ -67,6 +67,8 @@ fn one_volume_in_every_format_gives_the_same_mesh() {
             "aligned",
             &[
                 "blob_aligned.nii.gz",
+                "blob_aligned.nrrd",
+                "blob_aligned.mha",
                 "blob_aligned_v2.ome.zarr",
                 "blob_aligned_v3.ome.zarr",
             ][..],
