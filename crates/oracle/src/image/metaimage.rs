@@ -131,25 +131,7 @@ fn load_data(
         b.drain(..data_start);
         (path.to_path_buf(), b)
     } else {
-        if file.starts_with("LIST") || file.split_whitespace().count() > 1 {
-            return Err(err(
-                path,
-                "ElementDataFile",
-                format!("= {file}: multi-file data is not read; save one data file"),
-            ));
-        }
-        let p = path.parent().unwrap_or(Path::new(".")).join(file);
-        if !p.is_file() {
-            return Err(err(
-                path,
-                "ElementDataFile",
-                format!(
-                    "= {file}: {} does not exist; put the data file next to the header or fix \
-                     the name",
-                    p.display()
-                ),
-            ));
-        }
+        let p = orient::data_file(path, FMT, "ElementDataFile", file)?;
         let mut d = orient::read(&p)?;
         let hs = f.get("HeaderSize").map_or(Ok(0i64), |v| {
             v.parse::<i64>()

@@ -215,25 +215,7 @@ fn data(
     let f = &h.fields;
     let (src, mut raw) = match f.get("data file").or_else(|| f.get("datafile")) {
         Some(name) => {
-            if name.starts_with("LIST") || name.split_whitespace().count() > 1 {
-                return Err(err(
-                    path,
-                    "data file",
-                    format!("= {name:?}: multi-file data is not read; save one data file"),
-                ));
-            }
-            let p = path.parent().unwrap_or(Path::new(".")).join(name);
-            if !p.is_file() {
-                return Err(err(
-                    path,
-                    "data file",
-                    format!(
-                        "= {name:?}: {} does not exist; put the data file next to the header or \
-                         fix the name",
-                        p.display()
-                    ),
-                ));
-            }
+            let p = orient::data_file(path, FMT, "data file", name)?;
             let d = orient::read(&p)?;
             (p, d)
         }

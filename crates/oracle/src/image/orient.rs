@@ -77,6 +77,38 @@ pub(crate) fn field(
     }
 }
 
+/// The data file a header names (NRRD `data file`, MetaImage `ElementDataFile`), beside the
+/// header: one file that exists, else an error naming the header, the field and the fix.
+pub(crate) fn data_file(
+    header: &Path,
+    format: &'static str,
+    key: &str,
+    name: &str,
+) -> Result<std::path::PathBuf, ImageError> {
+    if name.starts_with("LIST") || name.split_whitespace().count() > 1 {
+        return Err(field(
+            header,
+            format,
+            key,
+            format!("= {name}: multi-file data is not read; save one data file"),
+        ));
+    }
+    let p = header.parent().unwrap_or(Path::new(".")).join(name);
+    if !p.is_file() {
+        return Err(field(
+            header,
+            format,
+            key,
+            format!(
+                "= {name}: {} does not exist; put the data file next to the header or fix the \
+                 name",
+                p.display()
+            ),
+        ));
+    }
+    Ok(p)
+}
+
 /// Read a file, the error naming it.
 pub(crate) fn read(path: &Path) -> Result<Vec<u8>, ImageError> {
     std::fs::read(path).map_err(|source| ImageError::Io {
