@@ -36,7 +36,7 @@ fn every_scan_component_is_accounted_for_and_a_removed_piece_is_missed() {
     let rep = out.report.as_ref().unwrap();
     let acc = rep.scan_components.as_ref().expect("images are accounted");
     assert_eq!(
-        acc.meshed + acc.split + acc.dropped + acc.missed,
+        acc.meshed + acc.split + acc.dropped + acc.missed + acc.vanishing,
         acc.scan,
         "{}",
         acc.summary()
@@ -75,6 +75,71 @@ fn every_scan_component_is_accounted_for_and_a_removed_piece_is_missed() {
         "{}",
         acc3.summary()
     );
+}
+
+#[test]
+fn voxels_at_the_iso_value_inside_the_solid_are_not_surfaces() {
+    // A 12^3 block at 2 in a background of 0, meshed at iso 1: five single voxels and a line
+    // of three at 1 (the iso value) inside it are punctures of zero volume, a 2^3 block of
+    // zeros is a real cavity (a second surface).
+    let n = 20;
+    let idx = |i: usize, j: usize, k: usize| i + n * (j + n * k);
+    let mut v = vec![0f32; n * n * n];
+    for k in 4..16 {
+        for j in 4..16 {
+            for i in 4..16 {
+                v[idx(i, j, k)] = 2.0;
+            }
+        }
+    }
+    for [i, j, k] in [[6, 6, 6], [6, 13, 6], [13, 6, 6], [13, 13, 13], [6, 6, 13]] {
+        v[idx(i, j, k)] = 1.0;
+    }
+    for i in 7..10 {
+        v[idx(i, 10, 13)] = 1.0;
+    }
+    for c in 0..8 {
+        v[idx(10 + (c & 1), 10 + ((c >> 1) & 1), 9 + (c >> 2))] = 0.0;
+    }
+    let vol = oracle::image::Volume::new(
+        [n; 3],
+        oracle::image::Voxels::F32(v),
+        glam::DAffine3::IDENTITY,
+    )
+    .unwrap();
+    let opts = oracle::image::ImageOptions {
+        iso: Some(1.0),
+        ..Default::default()
+    };
+    let input = Input::image(
+        oracle::image::ImageSurface::new(vol, &opts).unwrap(),
+        "block",
+    );
+    assert_eq!(input.components, Some(2));
+    let req = Request {
+        size: SizeRequest::Size(1.0),
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+    let rep = out.report.as_ref().unwrap();
+    let acc = rep.scan_components.as_ref().unwrap();
+    assert_eq!(
+        (acc.scan, acc.meshed, acc.vanishing, acc.missed),
+        (8, 2, 6, 0),
+        "{}",
+        acc.summary()
+    );
+    assert_eq!(rep.status("components-sampled"), Some(Status::Pass));
+    assert!(
+        !out
+            .stats
+            .unmet
+            .iter()
+            .any(|u| matches!(u, rdt_mesher::Unmet::ControlPoints { .. })),
+        "every control point is on the mesh: {:?}",
+        out.stats.unmet
+    );
+    assert_eq!(verify::topology::vertex_components(&out.mesh).len(), 2);
 }
 
 /// The vertices of the mesh piece with the fewest vertices (the lowest-numbered on ties).

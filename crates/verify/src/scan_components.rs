@@ -11,6 +11,9 @@
 //! - a component with no vertex on it is *dropped* when it was removed on request (`--min-component`:
 //!   a vertex of each removed piece is passed in [`account`]'s `dropped`) and *missed*
 //!   otherwise; every missed component is listed with a point on it and its size;
+//! - a component of zero volume (an outside region whose voxels all have the iso value:
+//!   a puncture of the inside, [`oracle::image::Topology::component_vanishing`]) with no
+//!   piece is *vanishing*: it is not a surface, nothing is expected of the mesh there;
 //! - a piece whose vertices lie on no component (none of its cells' corners straddle the
 //!   iso level) is *unassigned*.
 //!
@@ -33,6 +36,8 @@ pub enum Fate {
     Dropped,
     /// No mesh piece and not removed on request.
     Missed,
+    /// Zero volume (voxels equal to the iso value, enclosed by the inside): not a surface.
+    Vanishing,
 }
 
 /// One scan component and its mesh pieces.
@@ -65,27 +70,28 @@ pub struct ScanComponents {
     pub dropped: usize,
     /// Scan components with no piece, not removed on request.
     pub missed: usize,
+    /// Scan components of zero volume (not surfaces), without a piece.
+    pub vanishing: usize,
     /// Mesh pieces on no scan component.
     pub unassigned_pieces: usize,
-    /// Every missed, dropped and split component (missed first, then dropped, then split;
-    /// the largest first within each).
+    /// Every missed, dropped, split and vanishing component (in that order; the largest first
+    /// within each).
     pub components: Vec<ScanComponent>,
 }
 
 impl ScanComponents {
     /// Whether scan component `i` has a mesh piece.
     pub fn has_piece(&self, i: usize) -> bool {
-        !self
-            .components
-            .iter()
-            .any(|c| c.index == i && matches!(c.fate, Fate::Missed | Fate::Dropped))
+        !self.components.iter().any(|c| {
+            c.index == i && matches!(c.fate, Fate::Missed | Fate::Dropped | Fate::Vanishing)
+        })
     }
 
-    /// Whether scan component `i` was removed on request.
-    pub fn dropped(&self, i: usize) -> bool {
+    /// Whether scan component `i` needs no piece: removed on request, or of zero volume.
+    pub fn excused(&self, i: usize) -> bool {
         self.components
             .iter()
-            .any(|c| c.index == i && c.fate == Fate::Dropped)
+            .any(|c| c.index == i && matches!(c.fate, Fate::Dropped | Fate::Vanishing))
     }
 
     /// One line: `450 found by the voxel scan: 440 meshed, 3 split, 2 dropped, 5 missed`.
@@ -98,6 +104,10 @@ impl ScanComponents {
             (self.split, "split into pieces"),
             (self.dropped, "dropped (--min-component)"),
             (self.missed, "missed"),
+            (
+                self.vanishing,
+                "of zero volume (voxels equal to the iso value: not surfaces)",
+            ),
             (self.unassigned_pieces, "mesh pieces on no component"),
         ] {
             if n > 0 {
@@ -145,7 +155,9 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
     }
     let mut components: Vec<ScanComponent> = (0..n)
         .filter_map(|i| {
+            let vanishing = topo.component_vanishing.get(i).copied().unwrap_or(false);
             let fate = match per[i] {
+                0 if vanishing => Fate::Vanishing,
                 _ if per[i] == 0 && touched[i] => return None,
                 0 if was_dropped[i] => Fate::Dropped,
                 0 => Fate::Missed,
@@ -164,7 +176,9 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
     let rank = |f: Fate| match f {
         Fate::Missed => 0,
         Fate::Dropped => 1,
-        _ => 2,
+        Fate::Split => 2,
+        Fate::Vanishing => 3,
+        Fate::Meshed => 4,
     };
     components.sort_by(|a, b| {
         (rank(a.fate), std::cmp::Reverse(a.crossing_edges), a.index).cmp(&(
@@ -183,6 +197,7 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
         split: count(Fate::Split),
         dropped: count(Fate::Dropped),
         missed: count(Fate::Missed),
+        vanishing: count(Fate::Vanishing),
         unassigned_pieces: unassigned,
         components,
     }

@@ -351,7 +351,7 @@ fn components_sampled_check(
         let far_seeds = cov.uncovered;
         for s in cov.seeds.iter_mut().filter(|s| !s.covered) {
             let c = img.component_of(DVec3::from_array(s.seed));
-            s.covered = c.is_some_and(|c| acc.has_piece(c) || acc.dropped(c));
+            s.covered = c.is_some_and(|c| acc.has_piece(c) || acc.excused(c));
         }
         cov.uncovered = cov.seeds.iter().filter(|s| !s.covered).count();
         let worst = acc

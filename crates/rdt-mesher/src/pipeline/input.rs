@@ -427,10 +427,19 @@ impl Input<'static> {
         // Room among the control points for a seed tetrahedron on every small component.
         let img = img.with_seed_budget(None);
         let budget = img.seed_budget();
+        let vanishing = img.topology().vanishing_components;
         let note = format!(
-            "image: {} surface component(s) found by the voxel scan (iso {}); {budget} seed points",
+            "image: {} surface component(s) found by the voxel scan (iso {}{}); {budget} seed points",
             comps,
-            img.iso()
+            img.iso(),
+            if vanishing > 0 {
+                format!(
+                    "; and {vanishing} of zero volume, where voxels equal the iso value inside \
+                     the solid: not surfaces, not meshed"
+                )
+            } else {
+                String::new()
+            }
         );
         let area = super::forecast::voxel_crossing_area(&img);
         let h = img.volume().spacing();

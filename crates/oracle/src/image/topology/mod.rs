@@ -41,6 +41,7 @@ mod reference;
 mod scan;
 mod seeds;
 mod tets;
+mod vanishing;
 
 #[cfg(test)]
 pub(crate) use reference::compute_reference;
@@ -52,7 +53,7 @@ mod tests {
     use super::*;
     use crate::image::{ImageOptions, ImageSurface, Volume, Voxels};
     use crate::roots::SplitMix64;
-    use glam::DAffine3;
+    use glam::{DAffine3, DVec3};
 
     fn check(dims: [usize; 3], data: Vec<f32>, iso: f64) -> usize {
         let vol = Volume::new(dims, Voxels::F32(data), DAffine3::IDENTITY).unwrap();
@@ -72,6 +73,19 @@ mod tests {
             "dims {dims:?}"
         );
         assert_eq!(a.component_seeds.len(), b.component_seeds.len());
+        assert_eq!(
+            (
+                a.vanishing_components,
+                &a.component_vanishing,
+                a.surface_components
+            ),
+            (
+                b.vanishing_components,
+                &b.component_vanishing,
+                b.surface_components
+            ),
+            "dims {dims:?}"
+        );
         for p in a.component_seeds.iter().chain(&a.extra_seeds) {
             assert!(crate::Surface::value(&s, *p).abs() < 1e-9);
         }
@@ -125,6 +139,110 @@ mod tests {
         assert_eq!(labels, (0..6).map(Some).collect::<Vec<_>>());
         // Far from S: no component.
         assert_eq!(s.component_of(glam::DVec3::new(12.0, 12.0, 12.0)), None);
+    }
+
+    /// A block of 6^3 voxels at 2 (inside at iso 1) in a background of 0, with the voxels
+    /// `ones` set to 1 (the iso value: outside by the convention, a puncture).
+    fn block_with_ties(ones: &[[usize; 3]]) -> ImageSurface {
+        let n = 10;
+        let mut v = vec![0f32; n * n * n];
+        for k in 2..8 {
+            for j in 2..8 {
+                for i in 2..8 {
+                    v[i + n * (j + n * k)] = 2.0;
+                }
+            }
+        }
+        for &[i, j, k] in ones {
+            v[i + n * (j + n * k)] = 1.0;
+        }
+        let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+        let opts = ImageOptions {
+            iso: Some(1.0),
+            ..Default::default()
+        };
+        ImageSurface::new(vol, &opts).unwrap()
+    }
+
+    #[test]
+    fn voxels_at_the_iso_value_inside_the_solid_vanish() {
+        // One voxel, and a line of three, at the iso value: punctures, no surface.
+        for ones in [vec![[4, 4, 4]], vec![[3, 4, 4], [4, 4, 4], [5, 4, 4]]] {
+            let s = block_with_ties(&ones);
+            let t = s.topology();
+            assert_eq!((t.outside_components, t.vanishing_components), (2, 1));
+            assert_eq!(t.surface_components, 1, "only the block's boundary");
+            assert_eq!(t.component_vanishing.iter().filter(|&&v| v).count(), 1);
+            // No seed there, and the interpolant is <= 0 (inside or on S) all around.
+            let p = DVec3::new(4.0, 4.0, 4.0);
+            assert!(
+                crate::Surface::seed_points(&s, 0)
+                    .iter()
+                    .all(|q| q.distance(p) > 1.0)
+            );
+            let mut rng = SplitMix64(5);
+            for _ in 0..2000 {
+                let q = p + DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0
+                    - DVec3::ONE;
+                assert!(crate::Surface::value(&s, q) <= 0.0, "{q}");
+            }
+        }
+        // A whole cell of ties encloses volume under the convention: a cavity, not vanishing.
+        let cube: Vec<[usize; 3]> = (0..8)
+            .map(|c| [4 + (c & 1), 4 + ((c >> 1) & 1), 4 + (c >> 2)])
+            .collect();
+        let t = block_with_ties(&cube).topology().clone();
+        assert_eq!((t.vanishing_components, t.surface_components), (0, 2));
+        // A tie beside a voxel truly outside (0) is part of a real cavity.
+        let s = {
+            let n = 10;
+            let mut v = vec![0f32; n * n * n];
+            for k in 2..8 {
+                for j in 2..8 {
+                    for i in 2..8 {
+                        v[i + n * (j + n * k)] = 2.0;
+                    }
+                }
+            }
+            v[4 + n * (4 + n * 4)] = 1.0;
+            v[5 + n * (4 + n * 4)] = 0.0;
+            let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+            let opts = ImageOptions {
+                iso: Some(1.0),
+                ..Default::default()
+            };
+            ImageSurface::new(vol, &opts).unwrap()
+        };
+        let t = s.topology();
+        assert_eq!((t.vanishing_components, t.surface_components), (0, 2));
+    }
+
+    #[test]
+    fn run_based_matches_node_based_with_ties() {
+        // Small integers at an integer iso value: many nodes exactly at it.
+        let mut rng = SplitMix64(78);
+        let mut vanishing = 0;
+        for _ in 0..200 {
+            let dims = [
+                1 + (rng.next_u64() % 40) as usize,
+                1 + (rng.next_u64() % 6) as usize,
+                1 + (rng.next_u64() % 6) as usize,
+            ];
+            let n = dims[0] * dims[1] * dims[2];
+            let data: Vec<f32> = (0..n).map(|_| (rng.next_u64() % 4) as f32).collect();
+            check(dims, data.clone(), 1.0);
+            let vol = Volume::new(dims, Voxels::F32(data), DAffine3::IDENTITY).unwrap();
+            if let Ok(s) = ImageSurface::new(
+                vol,
+                &ImageOptions {
+                    iso: Some(1.0),
+                    ..Default::default()
+                },
+            ) {
+                vanishing += s.topology().vanishing_components;
+            }
+        }
+        assert!(vanishing > 10, "too few vanishing components: {vanishing}");
     }
 
     #[test]

@@ -98,6 +98,7 @@ impl Pairs {
         outside_components: usize,
         edges: usize,
         extra_edges: Vec<Edge>,
+        vanishing: &super::vanishing::Vanishing,
     ) -> Topology {
         let [nx, ny, _] = s.dims_isize().map(|v| v as usize);
         let bg = s.background_value();
@@ -132,12 +133,18 @@ impl Pairs {
         let mut tets: Vec<Option<[DVec3; 4]>> = vec![None; pairs.len()];
         for &i in order.iter() {
             let (key, info) = pairs[i];
-            tets[i] = component_tet(s, aff, [nx, ny], key, info, &depth, &point);
+            if !vanishing.contains(key.1) {
+                tets[i] = component_tet(s, aff, [nx, ny], key, info, &depth, &point);
+            }
         }
+        let vanishing_components = vanishing.count();
         let mut topo = Topology {
             inside_components,
             outside_components,
-            surface_components: (inside_components + outside_components).saturating_sub(1),
+            surface_components: (inside_components + outside_components)
+                .saturating_sub(1 + vanishing_components),
+            vanishing_components,
+            component_vanishing: pairs.iter().map(|(k, _)| vanishing.contains(k.1)).collect(),
             crossing_edges: edges,
             component_seeds: Vec::with_capacity(pairs.len()),
             component_edges: Vec::with_capacity(pairs.len()),

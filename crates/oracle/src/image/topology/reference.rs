@@ -120,6 +120,10 @@ pub(crate) fn compute_reference(s: &ImageSurface) -> Topology {
             }
         }
     };
+    let node_runs: Vec<(u32, usize, usize, usize, bool)> = (0..n)
+        .map(|p| (p as u32, p / nx, p % nx, p % nx, ins(p)))
+        .collect();
+    let vanishing = super::vanishing::find(s, [nx, ny, nz], &node_runs, &mut dsu, ext);
     for_each_crossing(&mut |_, _, _, _| edges += 1);
     let stride = edges.div_ceil(4096).max(1);
     let mut pairs = Pairs::default();
@@ -134,7 +138,7 @@ pub(crate) fn compute_reference(s: &ImageSurface) -> Topology {
         };
         let key = if ins(p) { (rp, rq) } else { (rq, rp) };
         pairs.add(key, (p, axd, q), c);
-        if count.is_multiple_of(stride) {
+        if count.is_multiple_of(stride) && !vanishing.contains(key.1) {
             extra_edges.push((p, axd, q));
         }
         count += 1;
@@ -146,5 +150,6 @@ pub(crate) fn compute_reference(s: &ImageSurface) -> Topology {
         outside_components,
         edges,
         extra_edges,
+        &vanishing,
     )
 }

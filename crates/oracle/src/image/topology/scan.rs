@@ -321,6 +321,18 @@ pub(crate) fn compute(s: &ImageSurface, bits: &[u64]) -> Topology {
             }
         }
     }
+    let run_list: Vec<(u32, usize, usize, usize, bool)> = (0..runs.rows)
+        .flat_map(|r| {
+            let runs = &runs;
+            (runs.row_first[r]..runs.row_first[r + 1]).map(move |t| {
+                let x0 = runs.run_x[t] as usize;
+                (t as u32, r, x0, runs.run_end(t, r), runs.run_ins[t])
+            })
+        })
+        .collect();
+    let vanishing =
+        super::vanishing::find(s, [runs.nx, runs.ny, runs.nz], &run_list, &mut dsu, ext);
+    drop(run_list);
     let mut edges = 0usize;
     runs.for_each_edge(ext, &mut |_, _, _, _| edges += 1);
     let stride = edges.div_ceil(4096).max(1);
@@ -335,7 +347,8 @@ pub(crate) fn compute(s: &ImageSurface, bits: &[u64]) -> Topology {
             (rq, rp)
         };
         pairs.add(key, e, c);
-        if count.is_multiple_of(stride) {
+        // A vanishing region's crossings are its zero nodes: no seed of S there.
+        if count.is_multiple_of(stride) && !vanishing.contains(key.1) {
             extra_edges.push(e);
         }
         count += 1;
@@ -357,6 +370,7 @@ pub(crate) fn compute(s: &ImageSurface, bits: &[u64]) -> Topology {
         outside_components,
         edges,
         extra_edges,
+        &vanishing,
     );
     topo.labels = Some(std::sync::Arc::new(labels));
     topo

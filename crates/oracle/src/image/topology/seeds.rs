@@ -10,8 +10,16 @@ pub struct Topology {
     pub inside_components: usize,
     /// Connected components of the outside region, including the unbounded one.
     pub outside_components: usize,
-    /// Connected components of the surface: `inside + outside - 1`.
+    /// Connected components of the surface: `inside + outside - 1`, less the vanishing ones.
     pub surface_components: usize,
+    /// Outside regions of zero volume (every node at the iso value, no whole cell of them:
+    /// punctures of the inside, see `vanishing`); counted in `outside_components`, not in
+    /// `surface_components`.
+    pub vanishing_components: usize,
+    /// For each of `component_seeds`: whether its component vanishes (its outside region has
+    /// zero volume). Such components get no seed tetrahedron and are left out of
+    /// [`Topology::seed_points_within`].
+    pub component_vanishing: Vec<bool>,
     /// Number of grid edges (including edges to the padding) with a sign change.
     pub crossing_edges: usize,
     /// One world-space point on each pair (inside component, outside component) that touch:
@@ -47,7 +55,7 @@ impl Topology {
         self.seed_points_within(seed, Self::SEED_BUDGET)
     }
 
-    /// All component seeds, then the tetrahedra ([`Topology::component_tets`]) of the
+    /// All component seeds (but the vanishing ones), then the tetrahedra ([`Topology::component_tets`]) of the
     /// components in increasing size (fewest crossing edges first), as many as two thirds of
     /// the budget left by the seeds allow (three points each), then extra seeds chosen from
     /// `seed` (deterministic), up to `budget` points in all (more only when there are more
@@ -65,7 +73,11 @@ impl Topology {
     /// more of the nilearn fixture's surface stayed unmeshed at iso 2.
     /// [`Topology::full_seed_budget`] fits every tetrahedron.
     pub fn seed_points_within(&self, seed: u64, budget: usize) -> Vec<DVec3> {
-        let mut out = self.component_seeds.clone();
+        let vanishing = |i: usize| self.component_vanishing.get(i).copied().unwrap_or(false);
+        let mut out: Vec<DVec3> = (0..self.component_seeds.len())
+            .filter(|&i| !vanishing(i))
+            .map(|i| self.component_seeds[i])
+            .collect();
         let mut order: Vec<usize> = (0..self.component_seeds.len()).collect();
         order.sort_by_key(|&i| (self.component_edges.get(i).copied().unwrap_or(0), i));
         let mut room = budget.saturating_sub(out.len()) * 2 / 9;
@@ -94,7 +106,7 @@ impl Topology {
     /// tetrahedron (at least [`Topology::SEED_BUDGET`]); pass the mesher as many control
     /// points.
     pub fn full_seed_budget(&self) -> usize {
-        let n = self.component_seeds.len();
+        let n = self.component_vanishing.iter().filter(|&&v| !v).count();
         let tets = self.component_tets.iter().filter(|t| !t.is_empty()).count();
         Self::SEED_BUDGET.max(n + (9 * tets).div_ceil(2) + 1)
     }
