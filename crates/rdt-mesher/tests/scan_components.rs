@@ -131,8 +131,7 @@ fn voxels_at_the_iso_value_inside_the_solid_are_not_surfaces() {
     );
     assert_eq!(rep.status("components-sampled"), Some(Status::Pass));
     assert!(
-        !out
-            .stats
+        !out.stats
             .unmet
             .iter()
             .any(|u| matches!(u, rdt_mesher::Unmet::ControlPoints { .. })),

@@ -89,13 +89,12 @@ impl Pairs {
     }
 
     /// The topology, with pairs in key order (deterministic). `exterior` is the root of the
-    /// unbounded outside region.
+    /// unbounded outside region; then the numbers of inside and outside regions.
     pub fn finish(
         self,
         s: &ImageSurface,
         exterior: u32,
-        inside_components: usize,
-        outside_components: usize,
+        (inside_components, outside_components): (usize, usize),
         edges: usize,
         extra_edges: Vec<Edge>,
         vanishing: &super::vanishing::Vanishing,

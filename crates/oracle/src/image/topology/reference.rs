@@ -146,8 +146,7 @@ pub(crate) fn compute_reference(s: &ImageSurface) -> Topology {
     pairs.finish(
         s,
         dsu.find(ext),
-        inside_components,
-        outside_components,
+        (inside_components, outside_components),
         edges,
         extra_edges,
         &vanishing,

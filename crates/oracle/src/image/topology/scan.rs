@@ -366,8 +366,7 @@ pub(crate) fn compute(s: &ImageSurface, bits: &[u64]) -> Topology {
     let mut topo = pairs.finish(
         s,
         exterior,
-        inside_components,
-        outside_components,
+        (inside_components, outside_components),
         edges,
         extra_edges,
         &vanishing,
