@@ -99,9 +99,45 @@ impl MedialAxisEstimate {
     /// Build from a sample of S (points on S), keeping Voronoi vertices within `keep` (the
     /// bounding sphere enlarged three times: the outer medial axis matters too).
     pub fn new(sample: &[DVec3], lambda: f64, keep: BoundingSphere) -> Result<Self, MeshError> {
+        Self::build(sample, lambda, None, keep)
+    }
+
+    /// [`MedialAxisEstimate::new`] with a lambda of each Voronoi vertex: the largest
+    /// `local_lambda` of the vertices of its Delaunay cell (one value per sample point, in
+    /// `sample`'s order), for a sample whose spacing varies (`crate::adaptive`): a Voronoi
+    /// vertex is kept when the smallest enclosing ball of its nearest samples is large for
+    /// the sample's spacing there. `lambda` is the thinning scale (the smallest local value).
+    pub fn with_local_lambda(
+        sample: &[DVec3],
+        local_lambda: &[f64],
+        lambda: f64,
+        keep: BoundingSphere,
+    ) -> Result<Self, MeshError> {
+        assert_eq!(
+            sample.len(),
+            local_lambda.len(),
+            "one lambda per sample point"
+        );
+        Self::build(sample, lambda, Some(local_lambda), keep)
+    }
+
+    fn build(
+        sample: &[DVec3],
+        lambda: f64,
+        local_lambda: Option<&[f64]>,
+        keep: BoundingSphere,
+    ) -> Result<Self, MeshError> {
         let mut tri = Triangulation::new();
         // Spatially sorted insertion (BRIO + Hilbert): several times faster than the mesh's order.
-        tri.insert_bulk(sample)?;
+        let ids = tri.insert_bulk(sample)?;
+        // lambda of each vertex of Del(sample) (duplicates: the largest).
+        let vertex_lambda: Option<Vec<f64>> = local_lambda.map(|l| {
+            let mut v = vec![0.0f64; tri.num_vertices()];
+            for (id, &x) in ids.iter().zip(l) {
+                v[id.index()] = v[id.index()].max(x);
+            }
+            v
+        });
         let far = BoundingSphere {
             center: keep.center,
             radius: keep.radius * 3.0,
@@ -111,8 +147,14 @@ impl MedialAxisEstimate {
         let mut candidates: Vec<(DVec3, f64)> = Vec::new();
         // The lambda-medial vertices.
         for (&c, &cc) in cells.iter().zip(&centers) {
-            let pts = tri.cell_vertices(c).map(|v| tri.point(v));
-            if cc.is_finite() && far.contains(cc) && smallest_enclosing_radius(&pts) >= lambda {
+            let vs = tri.cell_vertices(c);
+            let pts = vs.map(|v| tri.point(v));
+            let lambda_here = match &vertex_lambda {
+                None => lambda,
+                Some(l) => vs.iter().map(|v| l[v.index()]).fold(0.0, f64::max),
+            };
+            if cc.is_finite() && far.contains(cc) && smallest_enclosing_radius(&pts) >= lambda_here
+            {
                 candidates.push((cc, cc.distance(pts[0])));
             }
         }
