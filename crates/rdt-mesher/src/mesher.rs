@@ -33,9 +33,17 @@ pub fn mesh_with_progress(
     })
 }
 
+/// The callback of [`mesh_in_rounds`] between two rounds: the sample, Del(E) when it has no
+/// scaffold point; whether to go on.
+pub(crate) type Between<'b> = dyn FnMut(&[glam::DVec3], Option<&delaunay3::Triangulation>) -> Result<bool, MeshError>
+    + Send
+    + 'b;
+
 /// [`mesh_with_progress`] in rounds (not in the paper; the adaptive mode of
 /// `crate::adaptive`): after each complete refinement, `between` sees the sample (the
-/// vertices of Del(E), scaffold points left out, in vertex order) and returns whether to go on;
+/// vertices of Del(E), scaffold points left out, in vertex order), and Del(E) itself when it
+/// has no scaffold point (then it is the Delaunay triangulation of the sample), and returns
+/// whether to go on;
 /// it may change the size function that `opts.criteria` reads (a field whose values change
 /// only inside `between`). Then every restricted facet is re-judged and the refinement
 /// continues on the same Del(E). A budget stop ends the rounds.
@@ -43,7 +51,7 @@ pub(crate) fn mesh_in_rounds(
     surface: &dyn Surface,
     opts: &MeshOptions,
     progress: &mut (dyn FnMut(Progress) + Send),
-    between: &mut (dyn FnMut(&[glam::DVec3]) -> Result<bool, MeshError> + Send),
+    between: &mut Between<'_>,
 ) -> Result<MeshResult, MeshError> {
     opts.validate()?;
     rayon::scope(|_| {
@@ -55,7 +63,8 @@ pub(crate) fn mesh_in_rounds(
                 .filter(|&v| !r.scaffold.contains(v))
                 .map(|v| r.tri.point(v))
                 .collect();
-            if !between(&sample)? {
+            let tri = (r.scaffold.count() == 0).then_some(&*r.tri);
+            if !between(&sample, tri)? {
                 break;
             }
             r.requeue_all()?;

@@ -99,45 +99,31 @@ impl MedialAxisEstimate {
     /// Build from a sample of S (points on S), keeping Voronoi vertices within `keep` (the
     /// bounding sphere enlarged three times: the outer medial axis matters too).
     pub fn new(sample: &[DVec3], lambda: f64, keep: BoundingSphere) -> Result<Self, MeshError> {
-        Self::build(sample, lambda, None, keep)
-    }
-
-    /// [`MedialAxisEstimate::new`] with a lambda of each Voronoi vertex: the largest
-    /// `local_lambda` of the vertices of its Delaunay cell (one value per sample point, in
-    /// `sample`'s order), for a sample whose spacing varies (`crate::adaptive`): a Voronoi
-    /// vertex is kept when the smallest enclosing ball of its nearest samples is large for
-    /// the sample's spacing there. `lambda` is the thinning scale (the smallest local value).
-    pub fn with_local_lambda(
-        sample: &[DVec3],
-        local_lambda: &[f64],
-        lambda: f64,
-        keep: BoundingSphere,
-    ) -> Result<Self, MeshError> {
-        assert_eq!(
-            sample.len(),
-            local_lambda.len(),
-            "one lambda per sample point"
-        );
-        Self::build(sample, lambda, Some(local_lambda), keep)
-    }
-
-    fn build(
-        sample: &[DVec3],
-        lambda: f64,
-        local_lambda: Option<&[f64]>,
-        keep: BoundingSphere,
-    ) -> Result<Self, MeshError> {
         let mut tri = Triangulation::new();
         // Spatially sorted insertion (BRIO + Hilbert): several times faster than the mesh's order.
-        let ids = tri.insert_bulk(sample)?;
-        // lambda of each vertex of Del(sample) (duplicates: the largest).
-        let vertex_lambda: Option<Vec<f64>> = local_lambda.map(|l| {
-            let mut v = vec![0.0f64; tri.num_vertices()];
-            for (id, &x) in ids.iter().zip(l) {
-                v[id.index()] = v[id.index()].max(x);
-            }
-            v
-        });
+        tri.insert_bulk(sample)?;
+        Ok(Self::of_triangulation(&tri, Some(lambda), lambda, keep))
+    }
+
+    /// The poles alone (no lambda-medial vertices) of the vertices of `tri`, a Delaunay
+    /// triangulation of a sample of S, thinned at the scale `lambda` (see the type's docs),
+    /// for a sample whose spacing varies (`crate::adaptive`): a lambda-medial axis with one
+    /// lambda keeps spurious Voronoi vertices near S where the spacing exceeds lambda (the
+    /// chair: minimum 0.013 for a true 0.066), and with a lambda following the spacing it
+    /// adds little to the poles (the chair, 222k samples: minimum 0.0664 against 0.0688,
+    /// mean equal within 0.5%) for three times the points.
+    pub fn poles_of(tri: &Triangulation, lambda: f64, keep: BoundingSphere) -> Self {
+        Self::of_triangulation(tri, None, lambda, keep)
+    }
+
+    /// From Del(E): the lambda-medial vertices (with `medial_lambda`) and the poles,
+    /// thinned at `lambda` / [`THINNING_CELLS`].
+    fn of_triangulation(
+        tri: &Triangulation,
+        medial_lambda: Option<f64>,
+        lambda: f64,
+        keep: BoundingSphere,
+    ) -> Self {
         let far = BoundingSphere {
             center: keep.center,
             radius: keep.radius * 3.0,
@@ -146,14 +132,15 @@ impl MedialAxisEstimate {
         let centers: Vec<DVec3> = cells.iter().map(|&c| tri.circumcenter(c)).collect();
         let mut candidates: Vec<(DVec3, f64)> = Vec::new();
         // The lambda-medial vertices.
-        for (&c, &cc) in cells.iter().zip(&centers) {
-            let vs = tri.cell_vertices(c);
-            let pts = vs.map(|v| tri.point(v));
-            let lambda_here = match &vertex_lambda {
-                None => lambda,
-                Some(l) => vs.iter().map(|v| l[v.index()]).fold(0.0, f64::max),
-            };
-            if cc.is_finite() && far.contains(cc) && smallest_enclosing_radius(&pts) >= lambda_here
+        for (&c, &cc) in cells
+            .iter()
+            .zip(&centers)
+            .filter(|_| medial_lambda.is_some())
+        {
+            let pts = tri.cell_vertices(c).map(|v| tri.point(v));
+            if cc.is_finite()
+                && far.contains(cc)
+                && Some(smallest_enclosing_radius(&pts)) >= medial_lambda
             {
                 candidates.push((cc, cc.distance(pts[0])));
             }
@@ -161,7 +148,7 @@ impl MedialAxisEstimate {
         let lambda_vertices = candidates.len();
         // The poles (a hull sample's Voronoi cell is unbounded: only its inner pole is finite).
         let mut poles = 0;
-        for vp in delaunay3::poles::poles_from_centers(&tri, &cells, &centers, |_| None) {
+        for vp in delaunay3::poles::poles_from_centers(tri, &cells, &centers, |_| None) {
             for pole in [vp.plus, vp.minus].into_iter().flatten() {
                 if far.contains(pole.point) {
                     candidates.push((pole.point, pole.distance_squared.sqrt()));
@@ -189,7 +176,7 @@ impl MedialAxisEstimate {
         }
         let arr: Vec<[f64; 3]> = vertices.iter().map(|v| v.to_array()).collect();
         let tree = ImmutableKdTree::new_from_slice(&arr).expect("finite points");
-        Ok(MedialAxisEstimate {
+        MedialAxisEstimate {
             vertices,
             tree,
             lambda,
@@ -197,7 +184,7 @@ impl MedialAxisEstimate {
             min_radius,
             lambda_vertices,
             poles,
-        })
+        }
     }
 
     /// Estimated distance from `p` to the medial axis (>= 0).
