@@ -130,6 +130,11 @@ fn adaptive_ellipsoid_is_an_eps_sample_for_the_true_dm() {
         let ratios: Vec<f64> = v.iter().map(|&p| m.distance(p) / dm_true(p)).collect();
         let hi = ratios.iter().copied().fold(0.0, f64::max);
         let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+        eprintln!(
+            "eps {eps}: {} vertices, max r / d_M {worst:.4}, d_M^inf estimate {:.4}, estimate / d_M max {hi:.3} mean {mean:.3}",
+            v.len(),
+            a.dm_inf_estimate
+        );
         assert!(
             hi < 1.0 / sizing::EPS_PRIME_FACTOR,
             "eps {eps}: estimate / d_M up to {hi}"
@@ -181,6 +186,10 @@ fn adaptive_certificate_matches_the_true_dm_and_two_pass_count() {
     let (na, nt) = (
         out.mesh.vertices.len() as f64,
         two.mesh.vertices.len() as f64,
+    );
+    eprintln!(
+        "certificate {:.4}, true {truth:.4}; adaptive {na} vs two-pass {nt} vertices",
+        cert.eps_achieved
     );
     assert!(
         (na / nt - 1.0).abs() < 0.15,
