@@ -356,6 +356,12 @@ fn run<'py>(
                             d.set_item("queue", p.queue)?;
                         }
                         Event::Verifying => d.set_item("stage", "verifying")?,
+                        Event::Round(r) => {
+                            d.set_item("stage", "round")?;
+                            d.set_item("round", r.round)?;
+                            d.set_item("sample_points", r.vertices)?;
+                            d.set_item("dm_inf_estimate", r.dm_inf_estimate)?;
+                        }
                     }
                     if let Err(err) = cb.call1((d,)) {
                         cancel.cancel();

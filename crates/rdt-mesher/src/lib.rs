@@ -42,10 +42,12 @@
 //! | manifold patch (6.6.1), scaffold (ours) | `levels` |
 //! | output mesh, stats, outcomes | `output`, [`Stats`], [`StopReason`], [`Unmet`] |
 //! | sizing fields, two passes (6.5) | [`sizing`] |
+//! | adaptive rounds without a uniform pass (ours, after 6.5) | [`adaptive`] |
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod adaptive;
 pub mod criteria;
 mod error;
 pub mod init;

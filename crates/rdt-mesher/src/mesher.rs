@@ -33,6 +33,49 @@ pub fn mesh_with_progress(
     })
 }
 
+/// The callback of [`mesh_in_rounds`] between two rounds: the sample, Del(E) when it has no
+/// scaffold point; whether to go on.
+pub(crate) type Between<'b> = dyn FnMut(&[glam::DVec3], Option<&delaunay3::Triangulation>) -> Result<bool, MeshError>
+    + Send
+    + 'b;
+
+/// [`mesh_with_progress`] in rounds (not in the paper; the adaptive mode of
+/// `crate::adaptive`): after each complete refinement, `between` sees the sample (the
+/// vertices of Del(E), scaffold points left out, in vertex order), and Del(E) itself when it
+/// has no scaffold point (then it is the Delaunay triangulation of the sample), and returns
+/// whether to go on;
+/// it may change the size function that `opts.criteria` reads (a field whose values change
+/// only inside `between`). Then every restricted facet is re-judged and the refinement
+/// continues on the same Del(E). A budget stop ends the rounds.
+pub(crate) fn mesh_in_rounds(
+    surface: &dyn Surface,
+    opts: &MeshOptions,
+    progress: &mut (dyn FnMut(Progress) + Send),
+    between: &mut Between<'_>,
+) -> Result<MeshResult, MeshError> {
+    opts.validate()?;
+    rayon::scope(|_| {
+        let mut r = Mesher::new(surface, opts);
+        r.run(progress)?;
+        while r.stats.stopped_by.is_none() {
+            let sample: Vec<glam::DVec3> = (0..r.tri.num_vertices())
+                .map(delaunay3::VertexId::from_index)
+                .filter(|&v| !r.scaffold.contains(v))
+                .map(|v| r.tri.point(v))
+                .collect();
+            let tri = (r.scaffold.count() == 0).then_some(&*r.tri);
+            if !between(&sample, tri)? {
+                break;
+            }
+            r.requeue_all()?;
+            r.refine_loop(progress)?;
+        }
+        let mut out = r.finish()?;
+        crate::levels::repair::apply(&mut out, opts);
+        Ok(out)
+    })
+}
+
 /// Insertions between two calls of the progress callback.
 const PROGRESS_EVERY: usize = 500;
 

@@ -102,6 +102,28 @@ impl MedialAxisEstimate {
         let mut tri = Triangulation::new();
         // Spatially sorted insertion (BRIO + Hilbert): several times faster than the mesh's order.
         tri.insert_bulk(sample)?;
+        Ok(Self::of_triangulation(&tri, Some(lambda), lambda, keep))
+    }
+
+    /// The poles alone (no lambda-medial vertices) of the vertices of `tri`, a Delaunay
+    /// triangulation of a sample of S, thinned at the scale `lambda` (see the type's docs),
+    /// for a sample whose spacing varies (`crate::adaptive`): a lambda-medial axis with one
+    /// lambda keeps spurious Voronoi vertices near S where the spacing exceeds lambda (the
+    /// chair: minimum 0.013 for a true 0.066), and with a lambda following the spacing it
+    /// adds little to the poles (the chair, 222k samples: minimum 0.0664 against 0.0688,
+    /// mean equal within 0.5%) for three times the points.
+    pub fn poles_of(tri: &Triangulation, lambda: f64, keep: BoundingSphere) -> Self {
+        Self::of_triangulation(tri, None, lambda, keep)
+    }
+
+    /// From Del(E): the lambda-medial vertices (with `medial_lambda`) and the poles,
+    /// thinned at `lambda` / [`THINNING_CELLS`].
+    fn of_triangulation(
+        tri: &Triangulation,
+        medial_lambda: Option<f64>,
+        lambda: f64,
+        keep: BoundingSphere,
+    ) -> Self {
         let far = BoundingSphere {
             center: keep.center,
             radius: keep.radius * 3.0,
@@ -110,16 +132,23 @@ impl MedialAxisEstimate {
         let centers: Vec<DVec3> = cells.iter().map(|&c| tri.circumcenter(c)).collect();
         let mut candidates: Vec<(DVec3, f64)> = Vec::new();
         // The lambda-medial vertices.
-        for (&c, &cc) in cells.iter().zip(&centers) {
+        for (&c, &cc) in cells
+            .iter()
+            .zip(&centers)
+            .filter(|_| medial_lambda.is_some())
+        {
             let pts = tri.cell_vertices(c).map(|v| tri.point(v));
-            if cc.is_finite() && far.contains(cc) && smallest_enclosing_radius(&pts) >= lambda {
+            if cc.is_finite()
+                && far.contains(cc)
+                && Some(smallest_enclosing_radius(&pts)) >= medial_lambda
+            {
                 candidates.push((cc, cc.distance(pts[0])));
             }
         }
         let lambda_vertices = candidates.len();
         // The poles (a hull sample's Voronoi cell is unbounded: only its inner pole is finite).
         let mut poles = 0;
-        for vp in delaunay3::poles::poles_from_centers(&tri, &cells, &centers, |_| None) {
+        for vp in delaunay3::poles::poles_from_centers(tri, &cells, &centers, |_| None) {
             for pole in [vp.plus, vp.minus].into_iter().flatten() {
                 if far.contains(pole.point) {
                     candidates.push((pole.point, pole.distance_squared.sqrt()));
@@ -147,7 +176,7 @@ impl MedialAxisEstimate {
         }
         let arr: Vec<[f64; 3]> = vertices.iter().map(|v| v.to_array()).collect();
         let tree = ImmutableKdTree::new_from_slice(&arr).expect("finite points");
-        Ok(MedialAxisEstimate {
+        MedialAxisEstimate {
             vertices,
             tree,
             lambda,
@@ -155,7 +184,7 @@ impl MedialAxisEstimate {
             min_radius,
             lambda_vertices,
             poles,
-        })
+        }
     }
 
     /// Estimated distance from `p` to the medial axis (>= 0).

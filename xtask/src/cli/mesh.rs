@@ -53,6 +53,10 @@ pub struct MeshArgs {
     /// its medial axis), for --epsilon (default: the catalog's or the backend's value).
     #[arg(long, allow_hyphen_values = true, value_parser = positive("--dm-inf", "d_M^inf", "0.3"))]
     pub dm_inf: Option<f64>,
+    /// With --epsilon: adaptive rounds on one triangulation, d_M estimated from each round's
+    /// sample, no uniform pass and no d_M^inf (the default when the input knows no d_M^inf).
+    #[arg(long, requires = "epsilon", conflicts_with = "dm_inf")]
+    pub adaptive: bool,
     /// Initial sample: control points (6.4.3) or persistent facets (6.2).
     #[arg(long, default_value = "control-points", value_parser = names::<Initialization>(Initialization::ALL.map(Initialization::name)))]
     pub initialization: Initialization,
@@ -209,6 +213,7 @@ fn request(a: &MeshArgs) -> Result<Request> {
     Ok(Request {
         size: match (a.size, a.epsilon) {
             (Some(s), _) => SizeRequest::Size(s),
+            (None, Some(e)) if a.adaptive => SizeRequest::Adaptive { epsilon: e },
             (None, Some(e)) => SizeRequest::Epsilon {
                 epsilon: e,
                 dm_inf: a.dm_inf,
@@ -295,6 +300,9 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
                 p.sample_points, p.restricted_facets, p.queue
             )),
             Event::Verifying => bar.set_message("verifying"),
+            Event::Round(r) => {
+                bar.suspend(|| eprintln!("{}", super::mesh_adaptive::round_line(&r)))
+            }
         })
         .map_err(|e| cli_error(e, &spec))?;
     bar.finish_and_clear();
@@ -308,6 +316,9 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
     }
     if out.two_pass.is_some() {
         print_two_pass(&spec, &out);
+    }
+    if out.adaptive.is_some() {
+        outln!("{}", super::mesh_adaptive::summary(&spec, &out));
     }
     write_mesh(&out_path, &out)?;
     if out.two_pass.is_some() {

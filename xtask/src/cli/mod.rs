@@ -5,6 +5,7 @@
 pub mod delaunay;
 pub mod input;
 pub mod mesh;
+pub mod mesh_adaptive;
 pub use rdt_mesher::pipeline::report as mesh_report;
 pub mod output;
 pub mod points;

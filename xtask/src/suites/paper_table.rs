@@ -127,6 +127,20 @@ struct Row {
     certificate: Option<String>,
     paper_first_size: Option<u64>,
     paper_second_size: [u64; 2],
+    /// Smooth surfaces: the adaptive mode at the paper's eps = 0.09 (bipolar oracle).
+    adaptive: Option<AdaptiveRun>,
+}
+
+/// The adaptive mode (`rdt_mesher::adaptive`) on one surface, at eps = 0.09 whatever the
+/// two passes' eps.
+#[derive(Serialize)]
+struct AdaptiveRun {
+    pass: Pass,
+    rounds: usize,
+    converged: bool,
+    dm_inf_estimate: f64,
+    /// Loose-epsilon certificate at 0.09 (d_M by Voronoi poles of the final sample).
+    certificate: Option<String>,
 }
 
 const EPS: f64 = 0.09;
@@ -217,6 +231,7 @@ fn singular_row(
         certificate: None,
         paper_first_size: None,
         paper_second_size: p.map_or([0, 0], |p| [p.1[0].6, p.1[1].6]),
+        adaptive: None,
     })
 }
 
@@ -276,7 +291,7 @@ fn two_pass_row(
         let r = sizing::second_pass(&s, &first, eps, sigma0, &o, &mut |_| {})?.result;
         second.push(Pass::of(label, &r.stats));
         if kind == OracleKind::Bipolar && !a.no_verify {
-            certificate = Some(certify(&s, &first, &r, eps));
+            certificate = Some(certify(&s, &first.mesh.vertices, &r, eps));
         }
     }
     Ok(Row {
@@ -290,10 +305,35 @@ fn two_pass_row(
         certificate,
         paper_first_size: p.and_then(|p| p.0.map(|f| f.1)),
         paper_second_size: p.map_or([0, 0], |p| [p.1[0].6, p.1[1].6]),
+        adaptive: Some(adaptive_run(name, s, base, a)?),
     })
 }
 
-fn certify(s: &dyn Surface, first: &MeshResult, second: &MeshResult, eps: f64) -> String {
+/// The adaptive mode at eps = 0.09 (no d_M^inf, no uniform pass), timed from the start.
+fn adaptive_run(
+    name: &str,
+    s: &dyn Surface,
+    base: &MeshOptions,
+    a: &PaperTableArgs,
+) -> Result<AdaptiveRun> {
+    eprintln!("{name}: adaptive rounds at eps {EPS}");
+    let t = std::time::Instant::now();
+    let r = rdt_mesher::adaptive::adaptive(s, EPS, base, &mut |_| {}, &mut |_| {})
+        .with_context(|| format!("adaptive mode on {name}"))?;
+    let mut pass = Pass::of(OracleKind::Bipolar.name(), &r.result.stats);
+    pass.total_s = t.elapsed().as_secs_f64();
+    let certificate = (!a.no_verify).then(|| certify(s, &r.result.mesh.vertices, &r.result, EPS));
+    Ok(AdaptiveRun {
+        pass,
+        rounds: r.rounds.len() + 1,
+        converged: r.converged,
+        dm_inf_estimate: r.dm_inf_estimate,
+        certificate,
+    })
+}
+
+/// The loose-epsilon certificate of `second` at `eps`, d_M by the Voronoi poles of `samples`.
+fn certify(s: &dyn Surface, samples: &[glam::DVec3], second: &MeshResult, eps: f64) -> String {
     let balls = rdt_mesher::pipeline::verify_balls(&second.balls);
     let vo = verify::Options {
         self_intersections: false,
@@ -301,7 +341,7 @@ fn certify(s: &dyn Surface, first: &MeshResult, second: &MeshResult, eps: f64) -
         surface_balls: Some(balls),
         epsilon: Some(eps),
         dm: verify::DmSource::Poles,
-        surface_samples: Some(first.mesh.vertices.clone()),
+        surface_samples: Some(samples.to_vec()),
         ..Default::default()
     };
     let rep = verify::check_against(&second.mesh, s, &vo);
@@ -387,8 +427,38 @@ fn markdown(rows: &[Row], a: &PaperTableArgs) -> String {
             r.certificate.as_deref().unwrap_or("-")
         ));
     }
+    s.push_str(ADAPTIVE_NOTES);
+    s.push_str("| Surface | two passes: eps | 1st + 2nd (B) time (s) | 2nd (B) size | adaptive: time (s) | size | rounds | d_M^inf estimate | loose-eps certificate at 0.09 (d_M by Voronoi poles of the final sample) |\n|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        let (Some(ad), Some(f)) = (&r.adaptive, &r.first) else {
+            continue;
+        };
+        let b = &r.second[1];
+        s.push_str(&format!(
+            "| {} | {} | {:.2} | {}{} | {:.2} | {}{} | {}{} | {:.4} | {} |\n",
+            r.surface,
+            r.mode,
+            f.total_s + b.total_s,
+            b.vertices,
+            flag(b),
+            ad.pass.total_s,
+            ad.pass.vertices,
+            flag(&ad.pass),
+            ad.rounds,
+            if ad.converged { "" } else { " (not stable)" },
+            ad.dm_inf_estimate,
+            ad.certificate.as_deref().unwrap_or("-")
+        ));
+    }
     s
 }
+
+const ADAPTIVE_NOTES: &str = "\nAdaptive mode (`cargo xtask mesh --epsilon 0.09` without d_M^inf; \
+`rdt_mesher::adaptive`, not in the paper): always at the paper's eps = 0.09, bipolar oracle, no \
+uniform pass and no d_M^inf: rounds on one triangulation, sigma = max(floor, 0.081 d) with d the \
+distance to the Voronoi poles of the previous round's sample, until a round adds < 5% of the \
+points. Its time includes every round (the two passes' column adds their two passes, not the \
+d_M^inf estimate).\n\n";
 
 const NOTES: &str = "Notes.\n\n\
 - Smooth surfaces: eps = 0.09 as in the paper where d_M^inf is known (sphere 1, ellipsoid 0.16, \

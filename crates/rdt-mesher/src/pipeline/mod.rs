@@ -49,7 +49,9 @@ pub use input::{
     ImageStats, Input, InputKind, InputOptions, InputStats, PointStats, ReadAs, SHARP_DEG,
     image_labels, is_image_spec, stem,
 };
-pub use outcome::{Failure, Outcome, SharpEdges, Stage, TwoPassOutcome, Verdict, verify_balls};
+pub use outcome::{
+    AdaptiveOutcome, Failure, Outcome, SharpEdges, Stage, TwoPassOutcome, Verdict, verify_balls,
+};
 pub use plan::{Event, Plan, plan};
 pub use request::{Request, SizeRequest, cgal_criteria};
 

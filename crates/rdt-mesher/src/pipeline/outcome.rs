@@ -140,6 +140,25 @@ impl TwoPassOutcome {
     }
 }
 
+/// Details of an adaptive run ([`crate::adaptive`]).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct AdaptiveOutcome {
+    /// The requested epsilon.
+    pub epsilon: f64,
+    /// eps' = 0.9 epsilon.
+    pub eps_prime: f64,
+    /// The constant size of round 0.
+    pub sigma0: f64,
+    /// Floor of the output's size function.
+    pub floor: f64,
+    /// The last estimate of d_M^inf.
+    pub dm_inf_estimate: f64,
+    /// The rounds after round 0.
+    pub rounds: Vec<crate::adaptive::Round>,
+    /// Stopped on a stable estimate (not on a budget or the round limit).
+    pub converged: bool,
+}
+
 /// Sharp edges of a mesh input and how far the output is from them.
 ///
 /// ```
@@ -226,6 +245,8 @@ pub struct Outcome {
     pub sigma: Option<f64>,
     /// Two-pass mode: its details and first pass.
     pub two_pass: Option<TwoPassOutcome>,
+    /// Adaptive mode: its rounds.
+    pub adaptive: Option<AdaptiveOutcome>,
     /// The input's notes and the size chosen.
     pub notes: Vec<String>,
     /// Mesh input with sharp edges (single pass): the output's distance to them.
@@ -245,6 +266,7 @@ impl Outcome {
             stats: result.stats,
             sigma: None,
             two_pass: None,
+            adaptive: None,
             notes: Vec::new(),
             sharp_edges: None,
             report: None,

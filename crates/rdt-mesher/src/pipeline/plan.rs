@@ -32,6 +32,8 @@ pub enum Event {
     Meshing(Progress),
     /// Meshing is done; the verification runs.
     Verifying,
+    /// Adaptive mode: a round's estimate, before the round runs.
+    Round(crate::adaptive::Round),
 }
 
 /// How sigma was chosen.
@@ -39,6 +41,7 @@ pub enum Event {
 enum Mode {
     Constant(f64),
     TwoPass { epsilon: f64, dm_inf: f64 },
+    Adaptive { epsilon: f64 },
 }
 
 /// A validated request on an input, before meshing: the size chosen, the notes saying why,
@@ -81,7 +84,7 @@ pub fn plan<'p, 's>(
         criteria: Criteria {
             size: match mode {
                 Mode::Constant(s) => Some(Sizing::Constant(s)),
-                Mode::TwoPass { .. } => None,
+                Mode::TwoPass { .. } | Mode::Adaptive { .. } => None,
             },
             min_angle_deg: request.min_angle_deg,
             max_distance: request.max_distance,
@@ -139,9 +142,12 @@ fn size_mode(
                 (Some(d), _) => return Err(PipelineError::InvalidDmInf(d)),
                 (None, Some(d)) => d,
                 (None, None) => {
-                    return Err(PipelineError::NoDmInf {
-                        input: input.name.clone(),
-                    });
+                    notes.push(format!(
+                        "{} gives no d_M^inf: adaptive rounds (d_M estimated from each round's \
+                         sample; --dm-inf for the two passes)",
+                        input.name
+                    ));
+                    return Ok((Mode::Adaptive { epsilon }, None));
                 }
             };
             let (f, n) = budget::check(input, area(), epsilon * dm, budgets, Some(dm))?;
@@ -151,6 +157,12 @@ fn size_mode(
                 dm_inf: dm,
             };
             (mode, f)
+        }
+        SizeRequest::Adaptive { epsilon } => {
+            if !(epsilon > 0.0 && epsilon < 1.0) {
+                return Err(PipelineError::InvalidEpsilon(epsilon));
+            }
+            (Mode::Adaptive { epsilon }, None)
         }
         SizeRequest::Auto => {
             let (sigma, f, n) = budget::auto_size(input, area(), budgets);
@@ -186,7 +198,7 @@ impl Plan<'_, '_> {
     pub fn sigma(&self) -> Option<f64> {
         match self.mode {
             Mode::Constant(s) => Some(s),
-            Mode::TwoPass { .. } => None,
+            Mode::TwoPass { .. } | Mode::Adaptive { .. } => None,
         }
     }
 
@@ -201,7 +213,7 @@ impl Plan<'_, '_> {
     /// ```
     pub fn two_pass(&self) -> Option<(f64, f64)> {
         match self.mode {
-            Mode::Constant(_) => None,
+            Mode::Constant(_) | Mode::Adaptive { .. } => None,
             Mode::TwoPass { epsilon, dm_inf } => Some((epsilon, dm_inf)),
         }
     }
@@ -265,6 +277,7 @@ impl Plan<'_, '_> {
         let mut out = match self.mode {
             Mode::Constant(sigma) => self.single_pass(sigma, progress)?,
             Mode::TwoPass { epsilon, dm_inf } => self.two_passes(epsilon, dm_inf, progress)?,
+            Mode::Adaptive { epsilon } => self.adaptive_rounds(epsilon, progress)?,
         };
         out.decide();
         Ok(out)
@@ -342,6 +355,53 @@ impl Plan<'_, '_> {
             medial_points: tp.medial.len(),
             dm_inf_estimate: tp.dm_inf_estimate,
             first: tp.first,
+        });
+        Ok(out)
+    }
+}
+
+impl Plan<'_, '_> {
+    /// Adaptive mode (`crate::adaptive`); the certificate's d_M: the Voronoi poles of the
+    /// final sample (`verify`'s own estimate, not the field the rounds refined to).
+    fn adaptive_rounds(
+        self,
+        epsilon: f64,
+        progress: &mut (dyn FnMut(Event) + Send),
+    ) -> Result<Outcome, PipelineError> {
+        let surface = self.input.surface();
+        // Both callbacks report to `progress` (never at the same time).
+        let shared = std::sync::Mutex::new(progress);
+        let report = |e: Event| (shared.lock().expect("a progress callback panicked"))(e);
+        let mut meshing = |p| report(Event::Meshing(p));
+        let mut rounds = |r: &crate::adaptive::Round| report(Event::Round(*r));
+        let a =
+            crate::adaptive::adaptive(surface, epsilon, &self.options, &mut meshing, &mut rounds)
+                .map_err(|source| PipelineError::Mesh {
+                input: self.input.name.clone(),
+                two_pass: false,
+                source,
+            })?;
+        let progress = shared.into_inner().expect("a progress callback panicked");
+        let mut out = Outcome::new(a.result);
+        out.notes = self.notes;
+        if self.request.verify {
+            progress(Event::Verifying);
+            let eps = Some(self.request.certify_epsilon.unwrap_or(epsilon));
+            let vopts = verify::Options {
+                dm: verify::DmSource::Poles,
+                surface_samples: Some(out.sample.clone()),
+                ..verify_options(self.input, self.request, &out, eps)
+            };
+            out.report = Some(verify::check_against(&out.mesh, surface, &vopts));
+        }
+        out.adaptive = Some(super::AdaptiveOutcome {
+            epsilon,
+            eps_prime: a.eps_prime,
+            sigma0: a.sigma0,
+            floor: a.floor,
+            dm_inf_estimate: a.dm_inf_estimate,
+            rounds: a.rounds,
+            converged: a.converged,
         });
         Ok(out)
     }

@@ -27,8 +27,16 @@ pub enum SizeRequest {
     Epsilon {
         /// Target epsilon, in (0, 1).
         epsilon: f64,
-        /// d_M^inf, if not the input's.
+        /// d_M^inf, if not the input's. With neither, the adaptive mode runs
+        /// ([`SizeRequest::Adaptive`]).
         dm_inf: Option<f64>,
+    },
+    /// Adaptive eps-sampling without a uniform pass ([`crate::adaptive`]): rounds of
+    /// refinement on one Del(E), sigma = max(floor, 0.9 epsilon d_M) with d_M estimated from
+    /// the current sample, until stable. Needs no d_M^inf.
+    Adaptive {
+        /// Target epsilon, in (0, 1).
+        epsilon: f64,
     },
 }
 

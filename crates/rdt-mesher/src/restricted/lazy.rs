@@ -40,10 +40,29 @@ impl Mesher<'_> {
         bound: (f64, DVec3),
         center: DVec3,
     ) -> Result<(f64, f64), MeshError> {
+        let sigma = self.opts.criteria.sigma_checked(center)?;
+        self.ball_badness_with(verts, bound, center, sigma)
+    }
+
+    /// [`Mesher::ball_badness`] with sigma(center) given (a field's value is checked here).
+    pub(super) fn ball_badness_with(
+        &self,
+        verts: [VertexId; 3],
+        bound: (f64, DVec3),
+        center: DVec3,
+        sigma: Option<f64>,
+    ) -> Result<(f64, f64), MeshError> {
+        if let Some(s) = sigma
+            && !(s > 0.0 && s.is_finite())
+        {
+            return Err(MeshError::InvalidSizeField {
+                value: s,
+                at: center,
+            });
+        }
         let pts = verts.map(|v| self.tri.point(v));
         let radius = pts.iter().map(|v| v.distance(center)).fold(0.0, f64::max);
         let criteria = &self.opts.criteria;
-        let sigma = criteria.sigma_checked(center)?;
         // The bound includes SCAFFOLD_BAD for a facet at a scaffold point: never kept (see
         // `crate::levels`).
         let bad = criteria.badness_from_bound(bound, center, radius, sigma);

@@ -18,6 +18,7 @@
 
 mod complex;
 mod lazy;
+mod resize;
 mod test;
 mod update;
 #[cfg(test)]

@@ -200,19 +200,38 @@ impl Mesher<'_> {
         let dt = t.elapsed();
         self.t_oracle += dt;
         self.policy.observe(Calls::Crossings, dt, eager);
-        for (pf, hit) in pending.iter().zip(&hits) {
+        // A size field (not a constant) is evaluated here, in parallel when it pays: it is a
+        // pure function of the ball center, so the values are those `register_facet` would
+        // compute.
+        let field = matches!(self.opts.criteria.size, Some(crate::Sizing::Field(_)));
+        let sigmas: Vec<Option<f64>> = if field {
+            let this = &*self;
+            let jobs: Vec<(&PendingFacet, Option<(DVec3, bool)>)> =
+                pending.iter().zip(hits.iter().copied()).collect();
+            self.policy
+                .field(jobs.len())
+                .map(&jobs, |&(pf, hit)| match hit {
+                    Some((c, _)) if !pf.lazy && c.is_finite() => this.opts.criteria.sigma_at(c),
+                    _ => None,
+                })
+        } else {
+            vec![None; pending.len()]
+        };
+        for ((pf, hit), sigma) in pending.iter().zip(&hits).zip(sigmas) {
             if let Some(hit) = *hit {
-                self.register_facet(pf, hit)?;
+                self.register_facet(pf, hit, sigma)?;
             }
         }
         Ok(())
     }
 
     /// Last half of a facet test: register a restricted facet and queue it if bad.
+    /// `sigma`: the size field at the ball center when already evaluated.
     fn register_facet(
         &mut self,
         pf: &PendingFacet,
         (center, outward_from_cell): (DVec3, bool),
+        sigma: Option<f64>,
     ) -> Result<(), MeshError> {
         let PendingFacet { f, m, verts, .. } = *pf;
         let key = sorted3(verts);
@@ -224,7 +243,10 @@ impl Mesher<'_> {
             if !center.is_finite() {
                 return Err(OracleError::NaN(center.x, center.y, center.z).into());
             }
-            let (radius, bad) = self.ball_badness(verts, (pf.lb, pf.cc), center)?;
+            let (radius, bad) = match sigma {
+                Some(s) => self.ball_badness_with(verts, (pf.lb, pf.cc), center, Some(s))?,
+                None => self.ball_badness(verts, (pf.lb, pf.cc), center)?,
+            };
             (center, radius, bad)
         };
         let oriented = if outward_from_cell {

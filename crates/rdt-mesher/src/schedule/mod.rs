@@ -136,6 +136,9 @@ impl CostEstimate {
 /// Circumcenters of at least this many created cells (and facet preparations) are computed
 /// in parallel.
 const PARALLEL_CELLS: usize = 256;
+/// Size-field evaluations from which [`Policy::field`] runs them in parallel (a field of the
+/// adaptive mode costs a few microseconds a call: 16 calls pay rayon's fork-join).
+const PARALLEL_FIELD: usize = 16;
 
 /// A batch of oracle calls runs in parallel when it is expected to take longer than this.
 const PARALLEL_BATCH_NS: f64 = 20_000.0;
@@ -177,6 +180,12 @@ impl Policy {
     /// The mode of the current batch (conflict-zone searches, output measures).
     pub fn batch(&self) -> Exec {
         Exec::new(self.tuner.parallel())
+    }
+
+    /// For `n` evaluations of a size field (`crate::Sizing::Field`, e.g. a nearest-point
+    /// query, microseconds each): parallel from `PARALLEL_FIELD`.
+    pub fn field(&self, n: usize) -> Exec {
+        Exec::new(n >= PARALLEL_FIELD && self.tuner.parallel())
     }
 
     /// For a section of `n` cells or facets (no oracle call): parallel from `PARALLEL_CELLS`.

@@ -1,0 +1,286 @@
+//! Section 6.5 without its uniform first pass (not in the paper: progressive rounds on one
+//! Del(E)). The paper sizes sigma = eps' d_M from the lambda-medial axis of a uniform
+//! eps-sample; here d_M is estimated from the current sample, the size function tightened,
+//! and the refinement of section 6.1 continued on the same triangulation, until a round adds
+//! few points (the estimate is stable under refinement).
+//!
+//! Round 0 samples S at the constant sigma_0 = bounding radius / [`FIRST_SIZE_DIVISOR`]. Before
+//! round k >= 1, with E the sample so far and sigma_{k-1} the size function it was refined to:
+//!
+//! - d_k = distance to the Voronoi poles of E ([`MedialAxisEstimate::poles_of`], computed on
+//!   the mesher's own Del(E) when it has no scaffold point; no lambda-medial vertices: with
+//!   one lambda they keep spurious vertices near S where the spacing varies, see there);
+//! - m_k = min over E of d_k, the current estimate of d_M^inf;
+//! - sigma_k(x) = max(f_k, eps' d_k(x)), eps' = [`EPS_PRIME_FACTOR`] eps, with the floor
+//!   f_k = max(eps' m_k, f_{k-1} / [`MAX_SHRINK`]) (f_0 = sigma_0).
+//!
+//! Invariants: every sigma_k is positive (f_k > 0) and 1-Lipschitz (d_k is 1-Lipschitz, eps' <
+//! 1, and a max with a constant keeps the constant of Lipschitz), as lemma 6.2 needs; the
+//! field's values change only between rounds, so each round is section 6.1's algorithm with
+//! a fixed sigma; points are never removed, so the output is refined to the last sigma_k
+//! (every surface Delaunay ball has r <= sigma_k(c)). The floor shrinks at most
+//! [`MAX_SHRINK`] times a round, so a coarse round's estimate (blurred at its own spacing)
+//! cannot refine the next round below a quarter of its scale at once.
+//!
+//! Stop (the estimate is stable under refinement): before round k >= 2, when f_{k-1} was not
+//! capped by the shrink bound and round k-1 added less than [`STABLE_GROWTH`] of the points;
+//! or, to save one estimate, after round k when its floor is not capped and the points it
+//! should need, sum over E of max(1, (sigma_{k-1} / sigma_k)^2), are fewer than (1 +
+//! [`STABLE_GROWTH`]) |E|. Also after [`MAX_ROUNDS`] rounds, or at a budget (then the
+//! certificate says how far the output is).
+//!
+//! What is proven and what is estimated: the paper's theorems hold where the final sigma <=
+//! eps d_M. d_M itself is estimated: the pole of a sample p is at distance >= the radius of
+//! the largest medial ball at p (that ball's center is in p's Voronoi cell) and the poles
+//! converge to the medial axis as the sample densifies (Amenta & Bern); the margin eps' = 0.9
+//! eps absorbs an estimate up to 1/0.9 of d_M. The certificate (`verify`'s loose-epsilon check)
+//! measures r / d_M at every surface Delaunay ball with d_M from the poles of the final sample
+//! (a second estimate, on the final sample, not this module's field); the tests check it
+//! against the ellipsoid's closed-form d_M.
+
+use crate::sizing::{EPS_PRIME_FACTOR, LAMBDA_FACTOR, MedialAxisEstimate};
+use crate::{Criteria, MeshError, MeshOptions, MeshResult, Progress, Sizing};
+use glam::DVec3;
+use oracle::Surface;
+use rayon::prelude::*;
+use std::sync::{Arc, RwLock};
+use std::time::Instant;
+
+/// sigma_0 = bounding radius / this (as [`crate::sizing::estimate_dm_inf`] starts).
+pub const FIRST_SIZE_DIVISOR: f64 = 20.0;
+/// The floor shrinks at most this many times a round.
+pub const MAX_SHRINK: f64 = 4.0;
+/// A round adding less than this fraction of the sample means the estimate is stable.
+pub const STABLE_GROWTH: f64 = 0.05;
+/// At most this many rounds (round 0 included).
+pub const MAX_ROUNDS: usize = 10;
+
+/// What one round started from (reported before it runs).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Round {
+    /// Round number (1 = the first estimate, after the uniform round 0).
+    pub round: usize,
+    /// Points of the sample the estimate was made from.
+    pub vertices: usize,
+    /// m_k: the current estimate of d_M^inf.
+    pub dm_inf_estimate: f64,
+    /// f_k: the floor of the new size function.
+    pub floor: f64,
+    /// Whether the floor was held by the shrink bound (the estimate is below it).
+    pub capped: bool,
+    /// Medial points of the estimate (after thinning).
+    pub medial_points: usize,
+    /// Seconds since the run started.
+    pub seconds: f64,
+}
+
+/// Result of [`adaptive`].
+pub struct Adaptive {
+    /// The mesh of the last round.
+    pub result: MeshResult,
+    /// The rounds after round 0, in order; the last one may be the stopping check only
+    /// (`stopped_on_stable`).
+    pub rounds: Vec<Round>,
+    /// eps' = 0.9 eps.
+    pub eps_prime: f64,
+    /// The constant size of round 0.
+    pub sigma0: f64,
+    /// The estimate the output was refined to (`None`: round 0 only, e.g. a budget stop).
+    pub medial: Option<Arc<MedialAxisEstimate>>,
+    /// Floor of the output's size function.
+    pub floor: f64,
+    /// The last estimate of d_M^inf (from the final sample when the rounds converged).
+    pub dm_inf_estimate: f64,
+    /// The rounds stopped because the estimate was stable (not on a budget or round limit).
+    pub converged: bool,
+}
+
+/// The size function of the current round (see the module docs).
+struct Field {
+    /// Distinguishes rounds in the memo of [`shared_field`].
+    id: u64,
+    medial: Option<Arc<MedialAxisEstimate>>,
+    eps_prime: f64,
+    floor: f64,
+}
+
+impl Field {
+    fn at(&self, p: DVec3) -> f64 {
+        match &self.medial {
+            None => self.floor,
+            Some(m) => (self.eps_prime * m.distance(p)).max(self.floor),
+        }
+    }
+}
+
+/// A sizing field reading the current [`Field`] (the mesher asks twice at the same point:
+/// the last value on each thread is memoized, keyed by the round).
+fn shared_field(state: Arc<RwLock<Field>>) -> Sizing {
+    use std::cell::Cell;
+    thread_local! {
+        static LAST: Cell<(u64, [u64; 3], f64)> = const { Cell::new((0, [0; 3], 0.0)) };
+    }
+    Sizing::Field(Arc::new(move |p: DVec3| {
+        let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+        let f = state.read().expect("the field is never poisoned");
+        LAST.with(|last| {
+            let (i, k, v) = last.get();
+            if i == f.id && k == key {
+                return v;
+            }
+            let v = f.at(p);
+            last.set((f.id, key, v));
+            v
+        })
+    }))
+}
+
+/// Round ids, unique in the process (the memo of [`shared_field`] is per thread).
+fn next_id() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static IDS: AtomicU64 = AtomicU64::new(1);
+    IDS.fetch_add(1, Ordering::Relaxed)
+}
+
+/// Adaptive eps-sampling of `surface` (see the module docs): `eps` in (0, 1); `base` gives
+/// everything but the size (oracle, angle, budgets, seed). `on_round` sees each round
+/// before it runs.
+///
+/// ```
+/// use rdt_mesher::{adaptive::adaptive, MeshOptions};
+/// use oracle::{BoundingSphere, Surface};
+/// use glam::DVec3;
+/// struct Ellipsoid; // semi-axes 1, 0.6, 0.4: d_M^inf = 0.16
+/// impl Surface for Ellipsoid {
+///     fn bounding_sphere(&self) -> BoundingSphere {
+///         BoundingSphere { center: DVec3::ZERO, radius: 2.0 }
+///     }
+///     fn value(&self, p: DVec3) -> f64 {
+///         p.x * p.x + (p.y / 0.6).powi(2) + (p.z / 0.4).powi(2) - 1.0
+///     }
+/// }
+/// let a = adaptive(&Ellipsoid, 0.3, &MeshOptions::default(), &mut |_| {}, &mut |_| {})
+///     .unwrap();
+/// assert!(a.converged && a.result.stats.criteria_met);
+/// assert!((a.dm_inf_estimate - 0.16).abs() < 0.03, "{}", a.dm_inf_estimate);
+/// ```
+pub fn adaptive(
+    surface: &dyn Surface,
+    eps: f64,
+    base: &MeshOptions,
+    progress: &mut (dyn FnMut(Progress) + Send),
+    on_round: &mut (dyn FnMut(&Round) + Send),
+) -> Result<Adaptive, MeshError> {
+    if !(eps > 0.0 && eps < 1.0) {
+        return Err(MeshError::InvalidSize(eps));
+    }
+    let start = Instant::now();
+    let keep = surface.bounding_sphere();
+    let sigma0 = keep.radius / FIRST_SIZE_DIVISOR;
+    if !(sigma0 > 0.0 && sigma0.is_finite()) {
+        return Err(MeshError::InvalidSize(sigma0));
+    }
+    let eps_prime = EPS_PRIME_FACTOR * eps;
+    let state = Arc::new(RwLock::new(Field {
+        id: next_id(),
+        medial: None,
+        eps_prime,
+        floor: sigma0,
+    }));
+    let mut opts = base.clone();
+    opts.criteria = Criteria {
+        size: Some(shared_field(state.clone())),
+        ..base.criteria.clone()
+    };
+    let mut rounds: Vec<Round> = Vec::new();
+    let mut last_capped = true;
+    let mut last_size = 0usize;
+    let mut converged = false;
+    let mut latest = f64::INFINITY;
+    let mut last_round = false;
+    let result = crate::mesher::mesh_in_rounds(surface, &opts, progress, &mut |sample, tri| {
+        if last_round {
+            converged = true;
+            return Ok(false);
+        }
+        let k = rounds.len() + 1;
+        let prev = state.read().expect("the field is never poisoned");
+        let prev_floor = prev.floor;
+        // The sample's Delaunay triangulation: the mesher's, when it has no scaffold point.
+        let own;
+        let tri = match tri {
+            Some(t) => t,
+            None => {
+                let mut t = delaunay3::Triangulation::new();
+                t.insert_bulk(sample)?;
+                own = t;
+                &own
+            }
+        };
+        let medial = Arc::new(MedialAxisEstimate::poles_of(
+            tri,
+            LAMBDA_FACTOR * prev_floor,
+            keep,
+        ));
+        let eval: Vec<(f64, f64)> = sample
+            .par_iter()
+            .map(|&p| (medial.distance(p), prev.at(p)))
+            .collect();
+        drop(prev);
+        let m = eval.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
+        latest = m;
+        let stable = k >= 2
+            && !last_capped
+            && (sample.len() as f64) < (1.0 + STABLE_GROWTH) * last_size as f64;
+        let cap = prev_floor / MAX_SHRINK;
+        // (A NaN estimate counts as capped.)
+        let capped = (eps_prime * m).partial_cmp(&cap) != Some(std::cmp::Ordering::Greater);
+        let floor = if capped { cap } else { eps_prime * m };
+        // Points the new size function should need: the sample's density grows as
+        // (old sigma / new sigma)^2 where the size shrinks.
+        let predicted: f64 = eval
+            .iter()
+            .map(|&(d, old)| (old / (eps_prime * d).max(floor)).powi(2).max(1.0))
+            .sum();
+        let round = Round {
+            round: k,
+            vertices: sample.len(),
+            dm_inf_estimate: m,
+            floor,
+            capped,
+            medial_points: medial.len(),
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        on_round(&round);
+        rounds.push(round);
+        if stable {
+            converged = true;
+            return Ok(false);
+        }
+        // Few points to add: refine to this estimate and stop (no estimate after it).
+        last_round = !capped && k >= 2 && predicted < (1.0 + STABLE_GROWTH) * sample.len() as f64;
+        if k >= MAX_ROUNDS {
+            return Ok(false);
+        }
+        last_capped = capped;
+        last_size = sample.len();
+        *state.write().expect("the field is never poisoned") = Field {
+            id: next_id(),
+            medial: Some(medial),
+            eps_prime,
+            floor,
+        };
+        Ok(true)
+    })?;
+    let f = state.read().expect("the field is never poisoned");
+    Ok(Adaptive {
+        result,
+        rounds,
+        eps_prime,
+        sigma0,
+        medial: f.medial.clone(),
+        floor: f.floor,
+        dm_inf_estimate: latest,
+        converged,
+    })
+}

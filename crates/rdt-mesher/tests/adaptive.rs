@@ -1,0 +1,208 @@
+//! The adaptive mode (`rdt_mesher::adaptive`, after section 6.5) against an independent d_M:
+//! the ellipsoid with semi-axes a = 1, b = 0.6, c = 0.4, whose medial axis is known in closed
+//! form (the filled ellipse of semi-axes (a^2 - c^2) / a = 0.84 and (b^2 - c^2) / b = 1/3 in
+//! the plane z = 0), so d_M(x) is the distance to that planar region, computed here without
+//! any sample. d_M ranges from c^2 / a = 0.16 (ends of the long axis) to c = 0.4.
+
+use glam::{DVec2, DVec3};
+use oracle::catalog;
+use rdt_mesher::adaptive::{Adaptive, adaptive};
+use rdt_mesher::pipeline::{Input, Request, SizeRequest, run};
+use rdt_mesher::{MeshOptions, sizing};
+
+/// Semi-axes of the medial ellipse of the catalog ellipsoid (a, b, c = 1, 0.6, 0.4).
+const ALPHA: f64 = 0.84;
+const BETA: f64 = (0.36 - 0.16) / 0.6;
+
+/// Distance from `q` (any quadrant) to the ellipse curve x^2/e0^2 + y^2/e1^2 = 1 (e0 >= e1),
+/// by bisection on the Lagrange parameter (Eberly, "Distance from a point to an ellipse"):
+/// exact up to rounding after 200 halvings.
+fn distance_to_ellipse(q: DVec2, e0: f64, e1: f64) -> f64 {
+    let (y0, y1) = (q.x.abs(), q.y.abs());
+    let closest = if y1 > 0.0 {
+        if y0 > 0.0 {
+            let z0 = y0 / e0;
+            let z1 = y1 / e1;
+            let g = z0 * z0 + z1 * z1 - 1.0;
+            if g != 0.0 {
+                let r0 = (e0 / e1) * (e0 / e1);
+                let f = |s: f64| (r0 * z0 / (s + r0)).powi(2) + (z1 / (s + 1.0)).powi(2) - 1.0;
+                let mut lo = z1 - 1.0;
+                let mut hi = if g < 0.0 {
+                    0.0
+                } else {
+                    (r0 * z0).hypot(z1) - 1.0
+                };
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if f(mid) > 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                let s = 0.5 * (lo + hi);
+                DVec2::new(r0 * y0 / (s + r0), y1 / (s + 1.0))
+            } else {
+                DVec2::new(y0, y1)
+            }
+        } else {
+            DVec2::new(0.0, e1)
+        }
+    } else {
+        let numer = e0 * y0;
+        let denom = e0 * e0 - e1 * e1;
+        if numer < denom {
+            let x = numer / denom;
+            DVec2::new(e0 * x, e1 * (1.0 - x * x).max(0.0).sqrt())
+        } else {
+            DVec2::new(e0, 0.0)
+        }
+    };
+    closest.distance(DVec2::new(y0, y1))
+}
+
+/// d_M of the catalog ellipsoid at `p`: the distance to its medial axis (closed form).
+fn dm_true(p: DVec3) -> f64 {
+    let q = DVec2::new(p.x, p.y);
+    let inside = (q.x / ALPHA).powi(2) + (q.y / BETA).powi(2) <= 1.0;
+    let planar = if inside {
+        0.0
+    } else {
+        distance_to_ellipse(q, ALPHA, BETA)
+    };
+    planar.hypot(p.z)
+}
+
+#[test]
+fn closed_form_dm_of_the_ellipsoid() {
+    // Ends of the axes: c^2 / a, c^2 / b... (b-end: distance to the medial tip (0, 1/3, 0)
+    // is 0.6 - 1/3), c.
+    assert!((dm_true(DVec3::X) - 0.16).abs() < 1e-12);
+    assert!((dm_true(DVec3::new(0.0, 0.6, 0.0)) - (0.6 - BETA)).abs() < 1e-12);
+    assert!((dm_true(DVec3::new(0.0, 0.0, 0.4)) - 0.4).abs() < 1e-12);
+    // A generic point: the foot point is on the ellipse and the distance is minimal among
+    // dense samples of it.
+    let p = DVec3::new(0.7, 0.45, 0.1);
+    let d = dm_true(p);
+    let brute = (0..200_000)
+        .map(|i| {
+            let t = i as f64 / 200_000.0 * std::f64::consts::TAU;
+            DVec3::new(ALPHA * t.cos(), BETA * t.sin(), 0.0).distance(p)
+        })
+        .fold(f64::INFINITY, f64::min);
+    assert!(d <= brute + 1e-12 && brute - d < 1e-5, "{d} vs {brute}");
+}
+
+fn ellipsoid_adaptive(eps: f64) -> Adaptive {
+    let s = catalog::surface("ellipsoid").unwrap();
+    adaptive(&s, eps, &MeshOptions::default(), &mut |_| {}, &mut |_| {}).unwrap()
+}
+
+/// The paper's sampling condition against the true d_M: every surface Delaunay ball of the
+/// adaptive mesh has r <= eps d_M(c). The size function aims at 0.9 eps d_M with an estimated
+/// d_M, so this holds when the estimate is at most 1/0.9 of the true d_M at the ball centers.
+#[test]
+fn adaptive_ellipsoid_is_an_eps_sample_for_the_true_dm() {
+    for eps in [0.09, 0.2] {
+        let a = ellipsoid_adaptive(eps);
+        assert!(a.converged, "eps {eps}: rounds {:?}", a.rounds);
+        assert!(a.result.stats.criteria_met);
+        let worst = a
+            .result
+            .balls
+            .iter()
+            .map(|b| b.radius / dm_true(b.center))
+            .fold(0.0, f64::max);
+        assert!(worst <= eps, "eps {eps}: max r / d_M = {worst}");
+        // Not oversampled either: the worst ball is near the target.
+        assert!(worst > 0.7 * eps, "eps {eps}: max r / d_M = {worst}");
+        // The d_M^inf estimate is near 0.16.
+        assert!(
+            (a.dm_inf_estimate - 0.16).abs() < 0.02,
+            "eps {eps}: d_M^inf estimate {}",
+            a.dm_inf_estimate
+        );
+        // The estimate of the last round against the truth at the samples: never more than
+        // 1/0.9 above it (else the sampling condition could fail), and within 10% on average.
+        let m = a.medial.as_ref().unwrap();
+        let v = &a.result.mesh.vertices;
+        let ratios: Vec<f64> = v.iter().map(|&p| m.distance(p) / dm_true(p)).collect();
+        let hi = ratios.iter().copied().fold(0.0, f64::max);
+        let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+        eprintln!(
+            "eps {eps}: {} vertices, max r / d_M {worst:.4}, d_M^inf estimate {:.4}, estimate / d_M max {hi:.3} mean {mean:.3}",
+            v.len(),
+            a.dm_inf_estimate
+        );
+        assert!(
+            hi < 1.0 / sizing::EPS_PRIME_FACTOR,
+            "eps {eps}: estimate / d_M up to {hi}"
+        );
+        assert!(
+            (mean - 1.0).abs() < 0.1,
+            "eps {eps}: mean estimate / d_M {mean}"
+        );
+    }
+}
+
+/// The pipeline's certificate (d_M by Voronoi poles of the final sample) against the true
+/// one: the achieved eps it reports is within 10% of max r / d_M with the closed form; and
+/// the vertex count is within 15% of the two-pass mode's (whose d_M^inf, 0.16, is known).
+#[test]
+fn adaptive_certificate_matches_the_true_dm_and_two_pass_count() {
+    let input = Input::open("implicit:ellipsoid", &Default::default()).unwrap();
+    let eps = 0.09;
+    let req = Request {
+        size: SizeRequest::Adaptive { epsilon: eps },
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+    assert!(out.verdict.passed(), "{:?}", out.verdict);
+    let cert = out.report.as_ref().unwrap().certificate.as_ref().unwrap();
+    let truth = out
+        .balls
+        .iter()
+        .map(|b| b.radius / dm_true(b.center))
+        .fold(0.0, f64::max);
+    assert!(
+        (cert.eps_achieved / truth - 1.0).abs() < 0.1,
+        "certificate {} vs true {truth}",
+        cert.eps_achieved
+    );
+    assert!(cert.eps_achieved <= eps && truth <= eps);
+    let two = run(
+        &input,
+        &Request {
+            size: SizeRequest::Epsilon {
+                epsilon: eps,
+                dm_inf: None,
+            },
+            verify: false,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let (na, nt) = (
+        out.mesh.vertices.len() as f64,
+        two.mesh.vertices.len() as f64,
+    );
+    eprintln!(
+        "certificate {:.4}, true {truth:.4}; adaptive {na} vs two-pass {nt} vertices",
+        cert.eps_achieved
+    );
+    assert!(
+        (na / nt - 1.0).abs() < 0.15,
+        "adaptive {na} vs two-pass {nt}"
+    );
+}
+
+/// Bad epsilons are refused, never a panic.
+#[test]
+fn adaptive_refuses_bad_epsilon() {
+    let s = catalog::surface("sphere").unwrap();
+    for eps in [0.0, 1.0, -0.1, f64::NAN, f64::INFINITY] {
+        let r = adaptive(&s, eps, &MeshOptions::default(), &mut |_| {}, &mut |_| {});
+        assert!(r.is_err(), "eps {eps}");
+    }
+}
