@@ -192,6 +192,9 @@ pub struct Input<'s> {
     pub area: Option<AreaEstimate>,
     /// Images: the voxel spacing (geometric mean over the axes), in world units.
     pub voxel_spacing: Option<f64>,
+    /// Point sets and meshes: the data the output must be supported by (the points; samples
+    /// of the input triangles), for `verify`'s `data-support` check.
+    pub support_data: Option<Vec<DVec3>>,
 }
 
 impl std::fmt::Debug for Input<'_> {
@@ -236,6 +239,7 @@ impl<'s> Input<'s> {
             },
             area: None,
             voxel_spacing: None,
+            support_data: None,
         }
     }
 
@@ -515,6 +519,7 @@ impl Input<'static> {
             points: cloud.points.len(),
             normals_given: had_normals,
         });
+        input.support_data = Some(cloud.points.clone());
         input.notes.push(format!(
             "point set: {} points, normals {}; suggested size {size:.5}",
             cloud.points.len(),
@@ -527,6 +532,9 @@ impl Input<'static> {
         Ok(input)
     }
 }
+
+/// Samples of an input mesh's triangles for the `data-support` check (about this many).
+const MESH_SUPPORT_SAMPLES: usize = 40_000;
 
 fn open_mesh(spec: &str, smooth: bool) -> Result<Input<'static>, PipelineError> {
     let path = Path::new(spec);
@@ -594,6 +602,7 @@ impl Input<'static> {
         input.stats.polyhedron = Some(pstats);
         input.sharp_edges = sharp_edges;
         input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);
+        input.support_data = Some(verify::data_support::mesh_samples(mesh, MESH_SUPPORT_SAMPLES));
         Ok(input)
     }
 }
