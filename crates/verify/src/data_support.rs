@@ -426,7 +426,11 @@ pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Op
         .filter(|&t| per_tri[t].1 < 0.5)
         .collect();
     let mut regions = unsupported_regions(mesh, &bad, &per_tri, &band);
-    regions.sort_by(|a, b| b.area.total_cmp(&a.area).then(a.triangles.cmp(&b.triangles)));
+    regions.sort_by(|a, b| {
+        b.area
+            .total_cmp(&a.area)
+            .then(a.triangles.cmp(&b.triangles))
+    });
     let ml = opts.max_listed;
     Some(DataSupport {
         data_points: data.len(),

@@ -49,6 +49,7 @@ pub mod level_set;
 pub mod medial;
 pub mod quality;
 pub mod scan_components;
+pub mod scan_sim;
 mod surface_checks;
 pub mod topology;
 

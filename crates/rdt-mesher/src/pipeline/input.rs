@@ -602,7 +602,10 @@ impl Input<'static> {
         input.stats.polyhedron = Some(pstats);
         input.sharp_edges = sharp_edges;
         input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);
-        input.support_data = Some(verify::data_support::mesh_samples(mesh, MESH_SUPPORT_SAMPLES));
+        input.support_data = Some(verify::data_support::mesh_samples(
+            mesh,
+            MESH_SUPPORT_SAMPLES,
+        ));
         Ok(input)
     }
 }
