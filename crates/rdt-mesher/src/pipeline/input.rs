@@ -504,10 +504,12 @@ impl Input<'static> {
         name: String,
     ) -> Result<Input<'static>, PipelineError> {
         let had_normals = cloud.normals.is_some();
-        let ps = oracle::pointset::PointSetSurface::from_cloud(&cloud, &Default::default())
+        let params = oracle::pointset::PointSetParams::scan();
+        let ps = oracle::pointset::PointSetSurface::from_cloud(&cloud, &params)
             .map_err(|e| PipelineError::backend(format!("point set {spec}"), e))?;
         let size = ps.suggested_size();
         let dm = ps.dm_inf_hint();
+        let ps_stats = ps.stats().clone();
         let mut input = Input::with(
             Held::Owned(Box::new(ps)),
             name,
@@ -520,14 +522,18 @@ impl Input<'static> {
             normals_given: had_normals,
         });
         input.support_data = Some(cloud.points.clone());
+        let st = ps_stats;
         input.notes.push(format!(
-            "point set: {} points, normals {}; suggested size {size:.5}",
+            "point set: {} points, normals {}; suggested size {size:.5}; surface trusted within the data's band (median {:.3e} = 2 x spacing {:.3e} + 3 x noise {:.3e}), far-field sign beyond",
             cloud.points.len(),
             if had_normals {
                 "given"
             } else {
                 "estimated (PCA + propagation)"
-            }
+            },
+            st.median_band,
+            st.median_spacing,
+            st.noise,
         ));
         Ok(input)
     }
