@@ -10,8 +10,9 @@
 //! seed 0) and verified (with the `data-support` check against the points). A row passes
 //! when the mesh is a closed manifold with one component of the source's genus, `verify`
 //! passes, and the two-sided Hausdorff distance to the source mesh is within 0.75% of the
-//! diagonal (noise <= 0.3%) or 1.25% (noise 0.5%); a missing-patch row also needs the
-//! hole reported as an unsupported region (its centroid within the hole's radius).
+//! diagonal (noise <= 0.3%) or 1.25% (noise 0.5%); a missing-patch row instead needs the
+//! hole reported as an unsupported region (its centroid within the hole's radius); its
+//! Hausdorff distance is listed, not bounded (the bridge has no data to follow).
 //!
 //! Deterministic: the same table (but the times) on any machine and thread count.
 
@@ -199,10 +200,11 @@ fn run_row(model: &'static str, genus: i64, spec: &ScanSpec, size: f64) -> Resul
         })
     });
     let closed = topo.is_closed_oriented_manifold();
+    // A missing patch: the bridge is not held to the Hausdorff bound (no data there).
     let pass = closed
         && genus_v == vec![Some(genus)]
         && report.passed()
-        && hausdorff <= bound
+        && (hausdorff <= bound || scan.hole.is_some())
         && hole_flagged.unwrap_or(true);
     Ok(Row {
         name,

@@ -120,7 +120,7 @@ pub struct PointSetParams {
     /// Kernel support radius `R_i` in units of the local spacing.
     pub bandwidth: f64,
     /// The local spacing used for `R_i` is clamped to at most this multiple of the median
-    /// spacing (1.5; 3.5 keeps a 10:1 density step's sparse side fully supported).
+    /// spacing (default 1.5; larger values use a second grid for the large supports).
     pub max_spacing_ratio: f64,
     /// Trust the IMLS value only within the data's band: `b_i = 2 s_i + 3 ν` about each point
     /// (`s_i` its spacing, `ν` the estimated noise); beyond 1.5 `b_i` from every point, the
@@ -142,11 +142,12 @@ impl Default for PointSetParams {
 }
 
 impl PointSetParams {
-    /// The settings for scans (what `mesh` uses on point sets): the defaults, with
-    /// `max_spacing_ratio` 3.5 and the support band on.
+    /// The settings for scans (what `mesh` uses on point sets): the defaults with the support
+    /// band on. (A wider `max_spacing_ratio`, 2.5 or 3.5, was measured on the 10:1 scans:
+    /// larger supports on the sparse side smooth thin parts more, Hausdorff 1.19% instead of
+    /// 1.07% of the diagonal on fertility; `bandwidth` 2.2 was worse too.)
     pub fn scan() -> Self {
         PointSetParams {
-            max_spacing_ratio: 3.5,
             support_band: true,
             ..Default::default()
         }
