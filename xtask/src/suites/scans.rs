@@ -265,7 +265,8 @@ fn markdown(rows: &[Row], points: usize, size: f64) -> String {
             100.0 * r.hausdorff_bound,
             r.verify,
             r.data_support,
-            r.hole_flagged.map_or("-".into(), |h| if h { "yes" } else { "NO" }.to_string()),
+            r.hole_flagged
+                .map_or("-".into(), |h| if h { "yes" } else { "NO" }.to_string()),
             if r.pass { "yes" } else { "**no**" }
         );
     }
@@ -276,12 +277,18 @@ fn markdown(rows: &[Row], points: usize, size: f64) -> String {
 
 pub fn run(a: &ScansArgs) -> Result<()> {
     if !(a.size > 0.0 && a.size < 1.0) {
-        bail!("--size {}: a fraction of the diagonal in (0, 1), e.g. 0.006", a.size);
+        bail!(
+            "--size {}: a fraction of the diagonal in (0, 1), e.g. 0.006",
+            a.size
+        );
     }
     let mut rows = Vec::new();
     for (model, genus, spec) in specs(a.quick, a.points) {
         let name = row_name(model, &spec);
-        if a.filter.as_ref().is_some_and(|f| !name.contains(f.as_str())) {
+        if a.filter
+            .as_ref()
+            .is_some_and(|f| !name.contains(f.as_str()))
+        {
             continue;
         }
         let r = run_row(model, genus, &spec, a.size)?;

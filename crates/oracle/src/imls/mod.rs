@@ -267,7 +267,8 @@ impl PointSetSurface {
         let radius: Vec<f64> = spacing
             .iter()
             .map(|&s| {
-                params.bandwidth * s.clamp(0.5 * med_spacing, params.max_spacing_ratio * med_spacing)
+                params.bandwidth
+                    * s.clamp(0.5 * med_spacing, params.max_spacing_ratio * med_spacing)
             })
             .collect();
         let max_radius = radius.iter().copied().fold(0.0, f64::max);
