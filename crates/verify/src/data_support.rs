@@ -230,7 +230,7 @@ impl DataBand {
                     .execute();
                 let nb: Vec<u32> = res
                     .iter()
-                    .map(|r| r.item as u32)
+                    .map(|r| r.item)
                     .filter(|&j| j as usize != i)
                     .take(kn)
                     .collect();
@@ -415,7 +415,7 @@ pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Op
         })
         .collect();
     let mut data_components = data_components(&band, &covered, opts.min_data_component);
-    data_components.sort_by(|a, b| b.points.cmp(&a.points));
+    data_components.sort_by_key(|d| std::cmp::Reverse(d.points));
     let uncovered_data_components = data_components
         .iter()
         .filter(|d| d.covered_share < opts.min_share)

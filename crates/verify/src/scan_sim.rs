@@ -95,7 +95,7 @@ pub fn simulate(mesh: &TriMesh, spec: &ScanSpec) -> Scan {
         hole: None,
         diagonal: diag,
     };
-    if !(total > 0.0) || spec.points == 0 {
+    if total.is_nan() || total <= 0.0 || spec.points == 0 {
         return scan;
     }
     let pick = |rng: &mut SplitMix64| -> (DVec3, DVec3) {
