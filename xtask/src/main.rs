@@ -27,7 +27,7 @@ mod cli;
 mod suites;
 
 use cli::{delaunay, mesh, verify, view};
-use suites::{bench, paper_table, regress, test_all};
+use suites::{bench, paper_table, regress, scans, test_all};
 
 #[derive(Parser)]
 #[command(
@@ -59,6 +59,8 @@ enum Cmd {
     Bench(bench::BenchArgs),
     /// Regression suite over the catalog: guarantees and golden counts.
     Regress(regress::RegressArgs),
+    /// Simulated scans of the fixture models: topology and Hausdorff table (GUIDE).
+    Scans(scans::ScansArgs),
     /// The paper's Table 1 on this machine (writes docs/paper-table.{json,md}).
     PaperTable(paper_table::PaperTableArgs),
     /// The whole test suite, what CI runs: Rust tests, quick regression, the Python package's
@@ -115,6 +117,7 @@ fn main() {
         Cmd::View(a) => view::run(a).map(|()| false),
         Cmd::Bench(a) => bench::run(a).map(|()| false),
         Cmd::Regress(a) => regress::run(a).map(|()| false),
+        Cmd::Scans(a) => scans::run(a).map(|()| false),
         Cmd::PaperTable(a) => paper_table::run(a).map(|()| false),
         Cmd::Test(a) => test_all::run(a).map(|()| false),
     };

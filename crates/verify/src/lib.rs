@@ -42,12 +42,14 @@ use serde::Serialize;
 
 pub mod bvh;
 pub mod certificate;
+pub mod data_support;
 pub mod distance;
 pub mod intersect;
 pub mod level_set;
 pub mod medial;
 pub mod quality;
 pub mod scan_components;
+pub mod scan_sim;
 mod surface_checks;
 pub mod topology;
 
@@ -57,6 +59,7 @@ pub use geom::predicates;
 pub use certificate::{
     ComponentCoverage, EpsilonCertificate, HausdorffBound, SeedCoverage, SurfaceBall,
 };
+pub use data_support::{DataSupport, SupportOptions};
 pub use distance::{DistanceStats, Geometry, MeshDistance, NormalDeviation};
 pub use intersect::SelfIntersections;
 pub use medial::{MedialAxisEstimate, MedialError, estimate_dm};
@@ -204,7 +207,7 @@ pub struct Check {
     /// Stable name: `input`, `closed`, `edge-manifold`, `vertex-manifold`, `oriented`,
     /// `components`, `duplicate-vertices`, `degenerate-triangles`, `unreferenced-vertices`,
     /// `self-intersections`, `angles`, `radius-edge`, `area-volume`, `hausdorff`, `normals`,
-    /// `loose-epsilon`, `components-sampled`, `theorem-4.7`.
+    /// `loose-epsilon`, `components-sampled`, `theorem-4.7`, `data-support`.
     pub name: String,
     pub status: Status,
     pub detail: String,
@@ -226,6 +229,8 @@ pub struct Report {
     /// Images: the mesh's pieces against the voxel scan's components.
     pub scan_components: Option<scan_components::ScanComponents>,
     pub hausdorff_bound: Option<HausdorffBound>,
+    /// Point-set and mesh inputs: the mesh against the input data ([`data_support`]).
+    pub data_support: Option<DataSupport>,
     pub checks: Vec<Check>,
 }
 
@@ -277,7 +282,7 @@ impl Report {
         std::fs::write(path, self.to_json())
     }
 
-    fn push(&mut self, name: &str, status: Status, detail: String) {
+    pub(crate) fn push(&mut self, name: &str, status: Status, detail: String) {
         self.checks.push(Check {
             name: name.to_owned(),
             status,
@@ -286,7 +291,7 @@ impl Report {
     }
 }
 
-fn pass_fail(ok: bool) -> Status {
+pub(crate) fn pass_fail(ok: bool) -> Status {
     if ok { Status::Pass } else { Status::Fail }
 }
 
@@ -387,6 +392,7 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
         components_sampled: None,
         scan_components: None,
         hausdorff_bound: None,
+        data_support: None,
         checks: Vec::new(),
     };
     if !input_checks(&mut r, mesh) {

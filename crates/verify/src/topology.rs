@@ -87,12 +87,13 @@ impl Topology {
     }
 }
 
-struct Dsu(Vec<u32>);
+/// Union-find over `0..n` (path halving; the smaller root wins: deterministic).
+pub(crate) struct Dsu(Vec<u32>);
 impl Dsu {
-    fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         Dsu((0..n as u32).collect())
     }
-    fn find(&mut self, mut x: u32) -> u32 {
+    pub(crate) fn find(&mut self, mut x: u32) -> u32 {
         while self.0[x as usize] != x {
             let p = self.0[self.0[x as usize] as usize];
             self.0[x as usize] = p;
@@ -100,7 +101,7 @@ impl Dsu {
         }
         x
     }
-    fn union(&mut self, a: u32, b: u32) {
+    pub(crate) fn union(&mut self, a: u32, b: u32) {
         let (a, b) = (self.find(a), self.find(b));
         if a != b {
             let (lo, hi) = if a < b { (a, b) } else { (b, a) };

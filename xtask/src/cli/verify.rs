@@ -118,7 +118,10 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
                 surface_samples_source: source,
                 ..opts
             };
-            verify::check_against(&mesh, opened.surface(), &opts)
+            let mut r = verify::check_against(&mesh, opened.surface(), &opts);
+            // Point sets and meshes: the data-support check (the mesh's mean edge as sigma).
+            rdt_mesher::pipeline::data_support(&mut r, &opened, &mesh, mean_edge(&mesh));
+            r
         }
         None => verify::check(&mesh, &opts),
     };
@@ -150,6 +153,21 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The mean edge length of `mesh` (0 for an empty mesh).
+fn mean_edge(mesh: &meshio::TriMesh) -> f64 {
+    let v = &mesh.vertices;
+    let sum: f64 = mesh
+        .triangles
+        .iter()
+        .filter(|t| t.iter().all(|&i| (i as usize) < v.len()))
+        .map(|t| {
+            let [a, b, c] = t.map(|i| v[i as usize]);
+            (b - a).length() + (c - b).length() + (a - c).length()
+        })
+        .sum();
+    sum / (3 * mesh.triangles.len()).max(1) as f64
 }
 
 /// Dense samples of S for the S -> mesh side, when the input gives them: the triangles of an

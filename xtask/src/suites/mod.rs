@@ -6,4 +6,5 @@ mod hard_volumes;
 pub mod paper_table;
 pub mod regress;
 pub mod regress_images;
+pub mod scans;
 pub mod test_all;

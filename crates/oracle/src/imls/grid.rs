@@ -11,6 +11,8 @@ pub(crate) struct Item {
     pub n: DVec3,
     /// Squared support radius.
     pub r2: f64,
+    /// `1 / b²`, `b` the data-support band radius (0: no band, every point trusted).
+    pub b2inv: f64,
 }
 
 #[derive(Clone, Debug)]
@@ -26,7 +28,13 @@ pub(crate) struct Grid {
 impl Grid {
     /// `cell` ≥ every support radius. The cell size grows if the grid would have far more
     /// cells than points (sparse, spread-out input).
-    pub fn new(points: &[DVec3], normals: &[DVec3], radius: &[f64], cell: f64) -> Self {
+    pub fn new(
+        points: &[DVec3],
+        normals: &[DVec3],
+        radius: &[f64],
+        band: Option<&[f64]>,
+        cell: f64,
+    ) -> Self {
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for p in points {
             lo = lo.min(*p);
@@ -63,6 +71,7 @@ impl Grid {
             p: DVec3::ZERO,
             n: DVec3::ZERO,
             r2: 0.0,
+            b2inv: 0.0,
         };
         let mut items = vec![dummy; points.len()];
         for (i, &c) in cid.iter().enumerate() {
@@ -70,6 +79,7 @@ impl Grid {
                 p: points[i],
                 n: normals[i],
                 r2: radius[i] * radius[i],
+                b2inv: band.map_or(0.0, |b| 1.0 / (b[i] * b[i])),
             };
             fill[c] += 1;
         }
@@ -123,6 +133,59 @@ impl Grid {
     }
 }
 
+/// The points split by support radius into grids of fitting cell sizes (ours): with a
+/// non-uniform density, the few large supports of the sparse regions do not make every query
+/// of the dense regions scan large cells. Level 0 holds the radii up to `split`, level 1 the
+/// others (if any). One level (`split` ≥ every radius) is exactly the single grid.
+#[derive(Clone, Debug)]
+pub(crate) struct Levels {
+    /// Each level's grid and its largest radius (the query radius).
+    levels: Vec<(Grid, f64)>,
+}
+
+impl Levels {
+    pub fn new(
+        points: &[DVec3],
+        normals: &[DVec3],
+        radius: &[f64],
+        band: Option<&[f64]>,
+        split: f64,
+    ) -> Self {
+        let max = radius.iter().copied().fold(0.0, f64::max);
+        if max <= split {
+            let g = Grid::new(points, normals, radius, band, max);
+            return Levels {
+                levels: vec![(g, max)],
+            };
+        }
+        let mut levels = Vec::new();
+        for big in [false, true] {
+            let idx: Vec<usize> = (0..points.len())
+                .filter(|&i| (radius[i] > split) == big)
+                .collect();
+            if idx.is_empty() {
+                continue;
+            }
+            let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            let p: Vec<DVec3> = idx.iter().map(|&i| points[i]).collect();
+            let n: Vec<DVec3> = idx.iter().map(|&i| normals[i]).collect();
+            let r = pick(radius);
+            let b = band.map(pick);
+            let m = r.iter().copied().fold(0.0, f64::max);
+            levels.push((Grid::new(&p, &n, &r, b.as_deref(), m), m));
+        }
+        Levels { levels }
+    }
+
+    /// Visit every item whose support may contain `x` (callers test `r2`).
+    #[inline]
+    pub fn for_each_near(&self, x: DVec3, mut f: impl FnMut(&Item)) {
+        for (g, r) in &self.levels {
+            g.for_each_near(x, *r, &mut f);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,7 +203,7 @@ mod tests {
             .collect();
         let rmax = rad.iter().copied().fold(0.0, f64::max);
         for cell in [rmax, 10.0 * rmax, 1e-6] {
-            let g = Grid::new(&pts, &nrm, &rad, cell.max(rmax));
+            let g = Grid::new(&pts, &nrm, &rad, None, cell.max(rmax));
             for _ in 0..300 {
                 let x = rng.unit_vector() * 2.0 * rng.next_f64() + DVec3::splat(0.1);
                 let mut seen = 0;

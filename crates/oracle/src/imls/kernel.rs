@@ -22,6 +22,27 @@ pub(super) struct Sums {
     /// ∇ of `num` and `den` (when asked for).
     pub dnum: DVec3,
     pub dden: DVec3,
+    /// Smallest `|x − p_i|² / b_i²` over the points whose support contains `x` (the squared
+    /// distance in band radii; `∞` if none, 0 without the support band).
+    pub band2: f64,
+}
+
+/// Beyond this many band radii from every point, the value is the far field alone (blended
+/// from 1 band radius).
+const BAND_OUT: f64 = 1.5;
+
+/// The weight of the IMLS value at `band2` (squared distance in band radii): 1 within the
+/// band, 0 beyond [`BAND_OUT`], smooth in between.
+fn band_weight(band2: f64) -> f64 {
+    if band2 <= 1.0 {
+        return 1.0;
+    }
+    let t = band2.sqrt();
+    if t >= BAND_OUT {
+        return 0.0;
+    }
+    let a = (BAND_OUT - t) / (BAND_OUT - 1.0);
+    a * a * (3.0 - 2.0 * a)
 }
 
 /// Total kernel weight below which the IMLS blends into the far field (`∓ max_radius`).
@@ -54,8 +75,8 @@ impl PointSetSurface {
     /// The IMLS value `Σ φ n·(x − p) / Σ φ` where the total kernel weight is at least the
     /// blending threshold (near the points); `None` elsewhere.
     pub(crate) fn near_value(&self, x: DVec3) -> Option<f64> {
-        let (num, den, _) = self.sums(x);
-        (den >= MIN_WEIGHT).then(|| num / den)
+        let s = self.sums_impl::<false>(x);
+        (s.den >= MIN_WEIGHT && s.band2 <= 1.0).then(|| s.num / s.den)
     }
 
     /// The value inside the bounding sphere, with the far field (`∓ max_radius`, given the
@@ -66,6 +87,38 @@ impl PointSetSurface {
             return num / den;
         }
         blend(num, den, far(den))
+    }
+
+    /// The value inside the bounding sphere from the kernel sums at `x` (what
+    /// [`Surface::value`] and [`Self::value_grad`] both return), and whether it is the plain
+    /// IMLS quotient (its gradient exact).
+    pub(super) fn value_from_sums(&self, x: DVec3, s: &Sums) -> (f64, bool) {
+        let w = band_weight(s.band2);
+        if w < 1.0 {
+            // Out of the data's band: the far field (flood-filled sign, else the winding
+            // number), blended with the IMLS value near the band's edge.
+            let far = match self.far_cache.get(x) {
+                1 => self.max_radius,
+                -1 => -self.max_radius,
+                _ => self.far_value_uncached(x, s.den),
+            };
+            if w == 0.0 {
+                return (far, false);
+            }
+            let near = if s.den >= MIN_WEIGHT {
+                s.num / s.den
+            } else {
+                blend(s.num, s.den, self.far_value(x, s.num, s.den, s.nsum))
+            };
+            return (w * near + (1.0 - w) * far, false);
+        }
+        if s.den >= MIN_WEIGHT {
+            return (s.num / s.den, true);
+        }
+        (
+            blend(s.num, s.den, self.far_value(x, s.num, s.den, s.nsum)),
+            false,
+        )
     }
 
     /// The input point nearest to `x` and its squared distance.
@@ -88,11 +141,18 @@ impl PointSetSurface {
     /// sums are computed by the same operations either way (bit-identical).
     #[inline]
     pub(super) fn sums_impl<const GRAD: bool>(&self, x: DVec3) -> Sums {
-        let mut s = Sums::default();
-        self.grid.for_each_near(x, self.max_radius, |it| {
+        let mut s = Sums {
+            band2: if self.banded { f64::INFINITY } else { 0.0 },
+            ..Default::default()
+        };
+        let banded = self.banded;
+        self.grid.for_each_near(x, |it| {
             let d = x - it.p;
             let d2 = d.length_squared();
             if d2 < it.r2 {
+                if banded {
+                    s.band2 = s.band2.min(d2 * it.b2inv);
+                }
                 let u = 1.0 - d2 / it.r2;
                 let u2 = u * u;
                 let w = u2 * u2;
@@ -120,14 +180,10 @@ impl PointSetSurface {
             return (self.value(x), DVec3::NAN);
         }
         let s = self.sums_impl::<true>(x);
-        if s.den >= MIN_WEIGHT {
-            let f = s.num / s.den;
-            return (f, (s.dnum - f * s.dden) / s.den);
+        match self.value_from_sums(x, &s) {
+            (f, true) => (f, (s.dnum - f * s.dden) / s.den),
+            (f, false) => (f, DVec3::NAN),
         }
-        (
-            blend(s.num, s.den, self.far_value(x, s.num, s.den, s.nsum)),
-            DVec3::NAN,
-        )
     }
 
     /// Far-field value: `∓ max_radius`, negative inside. `(num, den, nsum)` are the kernel

@@ -109,8 +109,9 @@ pub enum PointSetError {
 }
 
 /// Tuning of [`PointSetSurface`]. The defaults suit uniform samples with noise up to about the
-/// sample spacing.
+/// sample spacing; [`PointSetParams::scan`] suits scans (non-uniform density, noise, holes).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct PointSetParams {
     /// Neighbours used for normal estimation (PCA) and the orientation graph.
     pub k_normals: usize,
@@ -118,6 +119,14 @@ pub struct PointSetParams {
     pub k_spacing: usize,
     /// Kernel support radius `R_i` in units of the local spacing.
     pub bandwidth: f64,
+    /// The local spacing used for `R_i` is clamped to at most this multiple of the median
+    /// spacing (default 1.5; larger values use a second grid for the large supports).
+    pub max_spacing_ratio: f64,
+    /// Trust the IMLS value only within the data's band: `b_i = 2 s_i + 3 ν` about each point
+    /// (`s_i` its spacing, `ν` the estimated noise); beyond 1.5 `b_i` from every point, the
+    /// value is the far field (its sign from the flood-filled regions or the winding number),
+    /// blended in between. Removes zero-sets the data does not support.
+    pub support_band: bool,
 }
 
 impl Default for PointSetParams {
@@ -126,6 +135,21 @@ impl Default for PointSetParams {
             k_normals: 24,
             k_spacing: 8,
             bandwidth: 3.0,
+            max_spacing_ratio: 1.5,
+            support_band: false,
+        }
+    }
+}
+
+impl PointSetParams {
+    /// The settings for scans (what `mesh` uses on point sets): the defaults with the support
+    /// band on. (A wider `max_spacing_ratio`, 2.5 or 3.5, was measured on the 10:1 scans:
+    /// larger supports on the sparse side smooth thin parts more, Hausdorff 1.19% instead of
+    /// 1.07% of the diagonal on fertility; `bandwidth` 2.2 was worse too.)
+    pub fn scan() -> Self {
+        PointSetParams {
+            support_band: true,
+            ..Default::default()
         }
     }
 }
@@ -145,6 +169,11 @@ pub struct PointSetStats {
     pub median_radius: f64,
     /// Connected regions that no kernel reaches (outside, inside...), each signed once.
     pub far_components: usize,
+    /// Estimated noise ν (median RMS distance of a point's neighbours to their plane; 0
+    /// without the support band).
+    pub noise: f64,
+    /// Median support band radius `2 s_i + 3 ν` (0 without the support band).
+    pub median_band: f64,
 }
 
 /// A surface defined by a point set (an IMLS surface). See the module documentation.
@@ -174,7 +203,9 @@ pub struct PointSetSurface {
     /// Largest `radius` (query radius).
     max_radius: f64,
     /// Points, normals and radii bucketed for the kernel sums.
-    grid: grid::Grid,
+    grid: grid::Levels,
+    /// The support band is on ([`PointSetParams::support_band`]).
+    banded: bool,
     tree: ImmutableKdTree<f64, 3>,
     lo: DVec3,
     hi: DVec3,
@@ -235,7 +266,10 @@ impl PointSetSurface {
         // isolated points).
         let radius: Vec<f64> = spacing
             .iter()
-            .map(|&s| params.bandwidth * s.clamp(0.5 * med_spacing, 1.5 * med_spacing))
+            .map(|&s| {
+                params.bandwidth
+                    * s.clamp(0.5 * med_spacing, params.max_spacing_ratio * med_spacing)
+            })
             .collect();
         let max_radius = radius.iter().copied().fold(0.0, f64::max);
         let estimated = normals.is_none();
@@ -247,7 +281,17 @@ impl PointSetSurface {
             None => estimate_normals(points, &knn, params.k_normals),
         };
         let (gwn, gwn_coarse) = winding_trees(points, &normals, &spacing, med_spacing);
-        let grid = grid::Grid::new(points, &normals, &radius, max_radius);
+        let noise = if params.support_band {
+            plane_noise(points, &knn)
+        } else {
+            0.0
+        };
+        let band: Option<Vec<f64>> = params
+            .support_band
+            .then(|| spacing.iter().map(|&s| 2.0 * s + 3.0 * noise).collect());
+        // Default clamp: one grid, as before; wider clamps: a second grid for the large radii.
+        let split = params.bandwidth * (1.5 * med_spacing);
+        let grid = grid::Levels::new(points, &normals, &radius, band.as_deref(), split);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for p in points {
             lo = lo.min(*p);
@@ -265,12 +309,15 @@ impl PointSetSurface {
             median_spacing: med_spacing,
             median_radius: median(&radius),
             far_components: 0,
+            noise,
+            median_band: band.as_deref().map_or(0.0, median),
         };
         let mut surface = PointSetSurface {
             points: points.to_vec(),
             normals,
             max_radius,
             grid,
+            banded: params.support_band,
             tree,
             lo,
             hi,
@@ -342,6 +389,13 @@ fn validate(
     let n = points.len();
     if n < MIN_POINTS {
         return Err(PointSetError::TooFewPoints(n));
+    }
+    if !(params.max_spacing_ratio.is_finite() && params.max_spacing_ratio >= 0.5) {
+        return Err(PointSetError::BadParameter {
+            name: "max_spacing_ratio",
+            value: params.max_spacing_ratio,
+            hint: "at least 0.5, e.g. 1.5 (uniform samples) or 3.5 (scans)",
+        });
     }
     if !(params.bandwidth.is_finite() && params.bandwidth > 0.0) {
         return Err(PointSetError::BadParameter {
@@ -479,6 +533,23 @@ fn mean_spacing(points: &[DVec3], knn: &[Vec<u32>], k_spacing: usize) -> Vec<f64
                 / m as f64
         })
         .collect()
+}
+
+/// The estimated noise: the median over the points of the RMS distance of the point and its
+/// neighbours to their least-squares plane (the root of the smallest covariance eigenvalue
+/// over the count).
+fn plane_noise(points: &[DVec3], knn: &[Vec<u32>]) -> f64 {
+    let r: Vec<f64> = knn
+        .par_iter()
+        .enumerate()
+        .map(|(i, nb)| {
+            let pts = nb.iter().map(|&j| points[j as usize]).chain([points[i]]);
+            let (cov, _) = linalg::covariance(pts);
+            let (vals, _) = linalg::sym_eigen(cov);
+            (vals[0].max(0.0) / (nb.len() + 1) as f64).sqrt()
+        })
+        .collect();
+    median(&r)
 }
 
 /// The median (the upper one for an even count) of `v`.

@@ -2,7 +2,7 @@
 //! Newton projection, P1 seeds and the P2 hint from shrinking balls.
 
 use super::PointSetSurface;
-use super::kernel::{MIN_WEIGHT, blend};
+use super::kernel::MIN_WEIGHT;
 use super::lfs::LfsSample;
 use crate::roots::{Ends, SplitMix64};
 use crate::{BoundingSphere, Surface};
@@ -22,11 +22,8 @@ impl Surface for PointSetSurface {
             // Positive on and outside the bounding sphere (far from every point).
             return dc - self.sphere.radius + self.max_radius;
         }
-        let (num, den, nsum) = self.sums(x);
-        if den >= MIN_WEIGHT {
-            return num / den;
-        }
-        blend(num, den, self.far_value(x, num, den, nsum))
+        let s = self.sums_impl::<false>(x);
+        self.value_from_sums(x, &s).0
     }
 
     /// Points on the MLS surface: the highest and lowest input points of each component
@@ -106,7 +103,8 @@ impl Surface for PointSetSurface {
                 step
             };
             if len < tol {
-                return Some(x);
+                // With the support band: only zeros the data supports.
+                return (!self.banded || s.band2 <= 1.0).then_some(x);
             }
         }
         None

@@ -192,6 +192,9 @@ pub struct Input<'s> {
     pub area: Option<AreaEstimate>,
     /// Images: the voxel spacing (geometric mean over the axes), in world units.
     pub voxel_spacing: Option<f64>,
+    /// Point sets and meshes: the data the output must be supported by (the points; samples
+    /// of the input triangles), for `verify`'s `data-support` check.
+    pub support_data: Option<Vec<DVec3>>,
 }
 
 impl std::fmt::Debug for Input<'_> {
@@ -236,6 +239,7 @@ impl<'s> Input<'s> {
             },
             area: None,
             voxel_spacing: None,
+            support_data: None,
         }
     }
 
@@ -509,10 +513,12 @@ impl Input<'static> {
         name: String,
     ) -> Result<Input<'static>, PipelineError> {
         let had_normals = cloud.normals.is_some();
-        let ps = oracle::pointset::PointSetSurface::from_cloud(&cloud, &Default::default())
+        let params = oracle::pointset::PointSetParams::scan();
+        let ps = oracle::pointset::PointSetSurface::from_cloud(&cloud, &params)
             .map_err(|e| PipelineError::backend(format!("point set {spec}"), e))?;
         let size = ps.suggested_size();
         let dm = ps.dm_inf_hint();
+        let ps_stats = ps.stats().clone();
         let mut input = Input::with(
             Held::Owned(Box::new(ps)),
             name,
@@ -524,18 +530,26 @@ impl Input<'static> {
             points: cloud.points.len(),
             normals_given: had_normals,
         });
+        input.support_data = Some(cloud.points.clone());
+        let st = ps_stats;
         input.notes.push(format!(
-            "point set: {} points, normals {}; suggested size {size:.5}",
+            "point set: {} points, normals {}; suggested size {size:.5}; surface trusted within the data's band (median {:.3e} = 2 x spacing {:.3e} + 3 x noise {:.3e}), far-field sign beyond",
             cloud.points.len(),
             if had_normals {
                 "given"
             } else {
                 "estimated (PCA + propagation)"
-            }
+            },
+            st.median_band,
+            st.median_spacing,
+            st.noise,
         ));
         Ok(input)
     }
 }
+
+/// Samples of an input mesh's triangles for the `data-support` check (about this many).
+const MESH_SUPPORT_SAMPLES: usize = 40_000;
 
 fn open_mesh(spec: &str, smooth: bool) -> Result<Input<'static>, PipelineError> {
     let path = Path::new(spec);
@@ -603,6 +617,10 @@ impl Input<'static> {
         input.stats.polyhedron = Some(pstats);
         input.sharp_edges = sharp_edges;
         input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);
+        input.support_data = Some(verify::data_support::mesh_samples(
+            mesh,
+            MESH_SUPPORT_SAMPLES,
+        ));
         Ok(input)
     }
 }

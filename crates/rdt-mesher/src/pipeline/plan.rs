@@ -314,7 +314,9 @@ impl Plan<'_, '_> {
             progress(Event::Verifying);
             let epsilon = (self.request.certify_epsilon).or(self.input.dm_inf().map(|d| sigma / d));
             let vopts = verify_options(self.input, self.request, &out, epsilon);
-            out.report = Some(verify::check_against(&out.mesh, surface, &vopts));
+            let mut report = verify::check_against(&out.mesh, surface, &vopts);
+            data_support(&mut report, self.input, &out.mesh, sigma);
+            out.report = Some(report);
         }
         Ok(out)
     }
@@ -344,7 +346,9 @@ impl Plan<'_, '_> {
                 surface_samples: Some(tp.first.mesh.vertices.clone()),
                 ..verify_options(self.input, self.request, &out, eps)
             };
-            out.report = Some(verify::check_against(&out.mesh, surface, &vopts));
+            let mut report = verify::check_against(&out.mesh, surface, &vopts);
+            data_support(&mut report, self.input, &out.mesh, tp.sigma0);
+            out.report = Some(report);
         }
         out.two_pass = Some(TwoPassOutcome {
             epsilon,
@@ -392,7 +396,9 @@ impl Plan<'_, '_> {
                 surface_samples: Some(out.sample.clone()),
                 ..verify_options(self.input, self.request, &out, eps)
             };
-            out.report = Some(verify::check_against(&out.mesh, surface, &vopts));
+            let mut report = verify::check_against(&out.mesh, surface, &vopts);
+            data_support(&mut report, self.input, &out.mesh, a.floor);
+            out.report = Some(report);
         }
         out.adaptive = Some(super::AdaptiveOutcome {
             epsilon,
@@ -405,6 +411,30 @@ impl Plan<'_, '_> {
         });
         Ok(out)
     }
+}
+
+/// Point-set and mesh inputs: the `data-support` check of the output against the input's
+/// data (the band at least `sigma / 2` for a mesh's exact samples, whose output chords lie
+/// up to about that far from them at sharp edges).
+pub fn data_support(
+    report: &mut verify::Report,
+    input: &Input,
+    mesh: &meshio::TriMesh,
+    sigma: f64,
+) {
+    let Some(data) = &input.support_data else {
+        return;
+    };
+    let min_band = if input.kind == super::InputKind::Polyhedron {
+        0.5 * sigma
+    } else {
+        0.0
+    };
+    let opts = verify::SupportOptions {
+        min_band,
+        ..Default::default()
+    };
+    verify::data_support::add_check(report, mesh, data, &opts);
 }
 
 /// The verifier's options common to both modes: the mesh's surface balls, the certified

@@ -1,0 +1,589 @@
+//! Data support (not in the paper: the paper assumes S known; with point sets and meshes the
+//! data is all we know of S): is every part of a mesh backed by the input data, and is every
+//! part of the data covered by the mesh?
+//!
+//! - The *band* of the data: around data point `p_i`, the ball of radius
+//!   `b_i = 2 s_i + 3 ν`, with `s_i` the local spacing (mean distance to the `k_spacing`
+//!   nearest data points) and `ν` the estimated noise (the median over the data of the RMS
+//!   distance of a point's `k_noise` nearest neighbours to their best-fit plane: the normal
+//!   spread of a noisy sample, about its standard deviation), raised to [`SupportOptions::min_band`].
+//! - A mesh sample is *supported* when its nearest data point `p_i` is within `b_i`. Each
+//!   triangle's share is that of its samples (a barycentric grid); a mesh component is
+//!   supported when at least [`SupportOptions::min_share`] of its area is.
+//! - A data component (a component of the graph joining every data point to its `k_spacing`
+//!   nearest neighbours; pieces under [`SupportOptions::min_data_component`] points are
+//!   ignored) is covered when at least `min_share` of its points lie within their band of the
+//!   mesh.
+//! - The unsupported triangles (share below one half) that touch one another form the
+//!   *unsupported regions*: where the mesh bridges a hole in the data. They are reported
+//!   (area, size, location) but fail nothing by themselves.
+//!
+//! Invariants: deterministic (parallel maps collected in order, sequential reductions); the
+//! check FAILs iff some mesh component is unsupported or some data component is uncovered.
+
+use glam::{DMat3, DVec3};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use meshio::TriMesh;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::num::NonZeroUsize;
+
+use crate::distance::{MeshDistance, triangle_samples};
+use crate::topology::{Dsu, vertex_components};
+
+/// Parameters of the data-support check.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SupportOptions {
+    /// Neighbours for the local spacing (default 8).
+    pub k_spacing: usize,
+    /// Neighbours for the noise estimate (default 24).
+    pub k_noise: usize,
+    /// Least supported share of a mesh component's area, and least covered share of a data
+    /// component's points (default 0.5).
+    pub min_share: f64,
+    /// Smallest band radius (default 0; e.g. half the mesh size for exact mesh data, where
+    /// the chords of the output are farther from the input than its clean samples' spacing).
+    pub min_band: f64,
+    /// Data components with fewer points are not required to be covered (default 10).
+    pub min_data_component: usize,
+    /// Lists keep at most this many entries (default 20).
+    pub max_listed: usize,
+}
+
+impl Default for SupportOptions {
+    fn default() -> Self {
+        SupportOptions {
+            k_spacing: 8,
+            k_noise: 24,
+            min_share: 0.5,
+            min_band: 0.0,
+            min_data_component: 10,
+            max_listed: 20,
+        }
+    }
+}
+
+/// One mesh component's support.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ComponentSupport {
+    /// Index of its first triangle (as in [`crate::Component::first_triangle`]).
+    pub first_triangle: usize,
+    pub triangles: usize,
+    pub area: f64,
+    /// Share of the area within the band of the data.
+    pub supported_share: f64,
+    /// Area-weighted centroid.
+    pub centroid: [f64; 3],
+    /// Bounding-box diagonal.
+    pub extent: f64,
+}
+
+/// A data component and how much of it the mesh covers.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct DataComponent {
+    pub points: usize,
+    /// Share of its points within their band of the mesh.
+    pub covered_share: f64,
+    pub centroid: [f64; 3],
+    pub extent: f64,
+}
+
+/// Touching unsupported triangles: a region where the mesh bridges missing data.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct UnsupportedRegion {
+    pub triangles: usize,
+    pub area: f64,
+    pub centroid: [f64; 3],
+    /// Bounding-box diagonal (the hole's size).
+    pub extent: f64,
+    /// Distance from the centroid to the nearest data point.
+    pub distance_to_data: f64,
+}
+
+/// What the data-support check measured.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct DataSupport {
+    pub data_points: usize,
+    pub median_spacing: f64,
+    /// Estimated noise ν (normal spread of the data).
+    pub noise: f64,
+    pub median_band: f64,
+    /// Share of the whole mesh area within the band.
+    pub supported_share: f64,
+    /// Every mesh component, in the order of [`crate::topology::vertex_components`].
+    pub components: Vec<ComponentSupport>,
+    pub components_total: usize,
+    /// Data components of at least `min_data_component` points, largest first.
+    pub data_components: Vec<DataComponent>,
+    pub data_components_total: usize,
+    /// Unsupported regions, largest area first.
+    pub unsupported_regions: Vec<UnsupportedRegion>,
+    pub unsupported_regions_total: usize,
+    /// Mesh components below `min_share`, and data components not covered.
+    pub unsupported_components: usize,
+    pub uncovered_data_components: usize,
+    pub min_share: f64,
+}
+
+impl DataSupport {
+    /// Every mesh component supported and every data component covered.
+    pub fn passed(&self) -> bool {
+        self.unsupported_components == 0 && self.uncovered_data_components == 0
+    }
+
+    /// The check's one-line detail.
+    pub fn detail(&self) -> String {
+        let fmt_p = |p: [f64; 3]| format!("({:.4}, {:.4}, {:.4})", p[0], p[1], p[2]);
+        let mut s = format!(
+            "{:.1}% of the area within the band of {} data points (median band {:.3e} = 2 x spacing {:.3e} + 3 x noise {:.3e})",
+            100.0 * self.supported_share,
+            self.data_points,
+            self.median_band,
+            self.median_spacing,
+            self.noise
+        );
+        if let Some(c) = self
+            .components
+            .iter()
+            .min_by(|a, b| a.supported_share.total_cmp(&b.supported_share))
+        {
+            s += &format!(
+                "; worst of {} mesh components: {:.1}% supported ({} triangles, {:.3e} across, at {})",
+                self.components_total,
+                100.0 * c.supported_share,
+                c.triangles,
+                c.extent,
+                fmt_p(c.centroid)
+            );
+        }
+        if self.unsupported_components > 0 {
+            s += &format!(
+                "; {} mesh components below {:.0}% support",
+                self.unsupported_components,
+                100.0 * self.min_share
+            );
+        }
+        s += &format!("; {} data components", self.data_components_total);
+        if self.uncovered_data_components > 0 {
+            let worst = self
+                .data_components
+                .iter()
+                .min_by(|a, b| a.covered_share.total_cmp(&b.covered_share));
+            if let Some(d) = worst {
+                s += &format!(
+                    ", {} not covered (worst: {} points, {:.1}% covered, at {})",
+                    self.uncovered_data_components,
+                    d.points,
+                    100.0 * d.covered_share,
+                    fmt_p(d.centroid)
+                );
+            }
+        } else {
+            s += ", all covered";
+        }
+        if let Some(r) = self.unsupported_regions.first() {
+            s += &format!(
+                "; {} unsupported regions bridged (no data; largest: {} triangles, area {:.3e}, {:.3e} across, at {}, {:.3e} from the data)",
+                self.unsupported_regions_total,
+                r.triangles,
+                r.area,
+                r.extent,
+                fmt_p(r.centroid),
+                r.distance_to_data
+            );
+        }
+        s
+    }
+}
+
+/// The data's spacing, noise and band, and a kd-tree over it.
+pub struct DataBand {
+    points: Vec<DVec3>,
+    tree: ImmutableKdTree<f64, 3>,
+    /// Band radius per point.
+    band: Vec<f64>,
+    spacing: Vec<f64>,
+    /// kNN lists (`k_spacing` neighbours).
+    knn: Vec<Vec<u32>>,
+    noise: f64,
+}
+
+impl DataBand {
+    /// Measure `points` (at least 2, finite). `None` if there are fewer than 2 points.
+    pub fn new(points: &[DVec3], opts: &SupportOptions) -> Option<DataBand> {
+        let n = points.len();
+        if n < 2 || points.iter().any(|p| !p.is_finite()) {
+            return None;
+        }
+        let coords: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
+        let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords).ok()?;
+        let ks = opts.k_spacing.clamp(1, n - 1);
+        let kn = opts.k_noise.clamp(3, n - 1).max(ks);
+        let kq = NonZeroUsize::new(kn + 1)?;
+        let per: Vec<(Vec<u32>, f64, f64)> = points
+            .par_iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let res = tree
+                    .query(&p.to_array())
+                    .nearest_n::<SquaredEuclidean<f64>>(kq)
+                    .execute();
+                let nb: Vec<u32> = res
+                    .iter()
+                    .map(|r| r.item)
+                    .filter(|&j| j as usize != i)
+                    .take(kn)
+                    .collect();
+                let m = ks.min(nb.len()).max(1);
+                let spacing = nb[..m.min(nb.len())]
+                    .iter()
+                    .map(|&j| (points[j as usize] - *p).length())
+                    .sum::<f64>()
+                    / m as f64;
+                let noise = plane_residual(nb.iter().map(|&j| points[j as usize]).chain([*p]));
+                (nb[..ks.min(nb.len())].to_vec(), spacing, noise)
+            })
+            .collect();
+        let spacing: Vec<f64> = per.iter().map(|x| x.1).collect();
+        let noise = median(per.iter().map(|x| x.2).collect());
+        let knn = per.into_iter().map(|x| x.0).collect();
+        let band = spacing
+            .iter()
+            .map(|&s| (2.0 * s + 3.0 * noise).max(opts.min_band))
+            .collect();
+        Some(DataBand {
+            points: points.to_vec(),
+            tree,
+            band,
+            spacing,
+            knn,
+            noise,
+        })
+    }
+
+    /// Is `x` within the band of its nearest data point? Also the distance to it.
+    pub fn supports(&self, x: DVec3) -> (bool, f64) {
+        let r = self
+            .tree
+            .query(&x.to_array())
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute();
+        let d = r.distance.sqrt();
+        (d <= self.band[r.item as usize], d)
+    }
+
+    /// The estimated noise ν.
+    pub fn noise(&self) -> f64 {
+        self.noise
+    }
+
+    /// The median band radius.
+    pub fn median_band(&self) -> f64 {
+        median(self.band.clone())
+    }
+}
+
+/// RMS distance of `pts` to their least-squares plane (the root of the covariance's smallest
+/// eigenvalue over the count).
+fn plane_residual(pts: impl Iterator<Item = DVec3> + Clone) -> f64 {
+    let (mut c, mut n) = (DVec3::ZERO, 0.0f64);
+    for p in pts.clone() {
+        c += p;
+        n += 1.0;
+    }
+    if n < 3.0 {
+        return 0.0;
+    }
+    let c = c / n;
+    let mut m = DMat3::ZERO;
+    for p in pts {
+        let d = p - c;
+        m += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+    }
+    (smallest_eigenvalue(m / n).max(0.0)).sqrt()
+}
+
+/// Smallest eigenvalue of a symmetric 3×3 matrix (closed form, trigonometric).
+fn smallest_eigenvalue(m: DMat3) -> f64 {
+    let (a, b, c) = (m.x_axis.x, m.y_axis.y, m.z_axis.z);
+    let (d, e, f) = (m.y_axis.x, m.z_axis.y, m.z_axis.x);
+    let p1 = d * d + e * e + f * f;
+    let q = (a + b + c) / 3.0;
+    let p2 = (a - q).powi(2) + (b - q).powi(2) + (c - q).powi(2) + 2.0 * p1;
+    let p = (p2 / 6.0).sqrt();
+    if p == 0.0 || !p.is_finite() {
+        return q;
+    }
+    let bm = (m - DMat3::from_diagonal(DVec3::splat(q))) * (1.0 / p);
+    let r = (bm.determinant() / 2.0).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let mid = v.len() / 2;
+    *v.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// Centroid (weighted) and bounding-box diagonal of weighted points.
+fn centroid_extent(pts: impl Iterator<Item = (DVec3, f64)>) -> ([f64; 3], f64) {
+    let (mut c, mut w) = (DVec3::ZERO, 0.0);
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for (p, a) in pts {
+        c += p * a;
+        w += a;
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let c = if w > 0.0 { c / w } else { 0.5 * (lo + hi) };
+    (c.to_array(), (hi - lo).length())
+}
+
+/// The data-support check of `mesh` (valid, see [`TriMesh::validate`]) against `data`
+/// (points: a scan, or samples of an input mesh, see [`mesh_samples`]). `None` if the data
+/// has fewer than 2 finite points or the mesh no triangles.
+pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Option<DataSupport> {
+    if mesh.triangles.is_empty() {
+        return None;
+    }
+    let band = DataBand::new(data, opts)?;
+    let v = &mesh.vertices;
+    // Per triangle: area and supported share (barycentric samples, 2 subdivisions per edge,
+    // plus the centroid).
+    let per_tri: Vec<(f64, f64)> = mesh
+        .triangles
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| v[i as usize]);
+            let area = 0.5 * (b - a).cross(c - a).length();
+            let mut s = Vec::with_capacity(7);
+            triangle_samples(a, b, c, 2, &mut s);
+            s.push((a + b + c) / 3.0);
+            let ok = s.iter().filter(|&&x| band.supports(x).0).count();
+            (area, ok as f64 / s.len() as f64)
+        })
+        .collect();
+    let total_area: f64 = per_tri.iter().map(|x| x.0).sum();
+    let supported_area: f64 = per_tri.iter().map(|x| x.0 * x.1).sum();
+    // Mesh components (vertex-connected).
+    let comps = vertex_components(mesh);
+    let mut comp_of = vec![usize::MAX; v.len()];
+    for (k, c) in comps.iter().enumerate() {
+        for &i in c {
+            comp_of[i] = k;
+        }
+    }
+    let mut acc = vec![(0usize, usize::MAX, 0.0f64, 0.0f64); comps.len()];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let k = comp_of[tri[0] as usize];
+        let e = &mut acc[k];
+        e.0 += 1;
+        e.1 = e.1.min(t);
+        e.2 += per_tri[t].0;
+        e.3 += per_tri[t].0 * per_tri[t].1;
+    }
+    let components: Vec<ComponentSupport> = comps
+        .iter()
+        .zip(&acc)
+        .map(|(c, &(triangles, first, area, sup))| {
+            let (centroid, extent) = centroid_extent(c.iter().map(|&i| (v[i], 1.0)));
+            ComponentSupport {
+                first_triangle: first,
+                triangles,
+                area,
+                supported_share: if area > 0.0 { sup / area } else { 1.0 },
+                centroid,
+                extent,
+            }
+        })
+        .collect();
+    let unsupported_components = components
+        .iter()
+        .filter(|c| c.supported_share < opts.min_share)
+        .count();
+    // Data coverage.
+    let bvh = crate::intersect::triangle_bvh(mesh);
+    let dist = MeshDistance::new(mesh, &bvh);
+    let covered: Vec<bool> = (0..data.len())
+        .into_par_iter()
+        .map(|i| {
+            dist.nearest(data[i])
+                .is_some_and(|(_, d)| d <= band.band[i].max(2.0 * band.spacing[i]))
+        })
+        .collect();
+    let mut data_components = data_components(&band, &covered, opts.min_data_component);
+    data_components.sort_by_key(|d| std::cmp::Reverse(d.points));
+    let uncovered_data_components = data_components
+        .iter()
+        .filter(|d| d.covered_share < opts.min_share)
+        .count();
+    // Unsupported regions: triangles with less than half their samples supported, joined
+    // through shared vertices.
+    let bad: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| per_tri[t].1 < 0.5)
+        .collect();
+    let mut regions = unsupported_regions(mesh, &bad, &per_tri, &band);
+    regions.sort_by(|a, b| {
+        b.area
+            .total_cmp(&a.area)
+            .then(a.triangles.cmp(&b.triangles))
+    });
+    let ml = opts.max_listed;
+    Some(DataSupport {
+        data_points: data.len(),
+        median_spacing: median(band.spacing.clone()),
+        noise: band.noise,
+        median_band: band.median_band(),
+        supported_share: if total_area > 0.0 {
+            supported_area / total_area
+        } else {
+            1.0
+        },
+        components_total: components.len(),
+        components: components.into_iter().take(ml.max(1)).collect(),
+        data_components_total: data_components.len(),
+        data_components: data_components.into_iter().take(ml.max(1)).collect(),
+        unsupported_regions_total: regions.len(),
+        unsupported_regions: regions.into_iter().take(ml).collect(),
+        unsupported_components,
+        uncovered_data_components,
+        min_share: opts.min_share,
+    })
+}
+
+/// Components of the data's kNN graph with at least `min_points` points.
+fn data_components(band: &DataBand, covered: &[bool], min_points: usize) -> Vec<DataComponent> {
+    let n = band.points.len();
+    let mut dsu = Dsu::new(n);
+    for (i, nb) in band.knn.iter().enumerate() {
+        for &j in nb {
+            dsu.union(i as u32, j);
+        }
+    }
+    let mut index = vec![usize::MAX; n];
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for i in 0..n {
+        let r = dsu.find(i as u32) as usize;
+        if index[r] == usize::MAX {
+            index[r] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[index[r]].push(i);
+    }
+    groups
+        .into_iter()
+        .filter(|g| g.len() >= min_points.max(1))
+        .map(|g| {
+            let cov = g.iter().filter(|&&i| covered[i]).count();
+            let (centroid, extent) = centroid_extent(g.iter().map(|&i| (band.points[i], 1.0)));
+            DataComponent {
+                points: g.len(),
+                covered_share: cov as f64 / g.len() as f64,
+                centroid,
+                extent,
+            }
+        })
+        .collect()
+}
+
+/// Regions of touching triangles among `bad`.
+fn unsupported_regions(
+    mesh: &TriMesh,
+    bad: &[usize],
+    per_tri: &[(f64, f64)],
+    band: &DataBand,
+) -> Vec<UnsupportedRegion> {
+    if bad.is_empty() {
+        return Vec::new();
+    }
+    let nv = mesh.vertices.len();
+    let mut dsu = Dsu::new(nv);
+    for &t in bad {
+        let [a, b, c] = mesh.triangles[t];
+        dsu.union(a, b);
+        dsu.union(a, c);
+    }
+    let mut index = vec![usize::MAX; nv];
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for &t in bad {
+        let r = dsu.find(mesh.triangles[t][0]) as usize;
+        if index[r] == usize::MAX {
+            index[r] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[index[r]].push(t);
+    }
+    let v = &mesh.vertices;
+    groups
+        .into_iter()
+        .map(|g| {
+            let area: f64 = g.iter().map(|&t| per_tri[t].0).sum();
+            let (centroid, extent) = centroid_extent(g.iter().flat_map(|&t| {
+                let w = per_tri[t].0 / 3.0;
+                mesh.triangles[t].map(|i| (v[i as usize], w))
+            }));
+            UnsupportedRegion {
+                triangles: g.len(),
+                area,
+                centroid,
+                extent,
+                distance_to_data: band.supports(DVec3::from_array(centroid)).1,
+            }
+        })
+        .collect()
+}
+
+/// Deterministic samples of a mesh's triangles as the data of [`data_support`]: a barycentric
+/// grid on each triangle with `ceil(longest edge / h)` subdivisions (at most 64), `h` such that
+/// the whole mesh gets about `target` samples, plus the vertices.
+pub fn mesh_samples(mesh: &TriMesh, target: usize) -> Vec<DVec3> {
+    let v = &mesh.vertices;
+    let area: f64 = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| v[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    let h = (2.0 * area / target.max(1) as f64).sqrt();
+    let mut out: Vec<DVec3> = v.clone();
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| v[i as usize]);
+        let e = (b - a).length().max((c - b).length()).max((a - c).length());
+        let n = if h > 0.0 {
+            (e / h).ceil().clamp(1.0, 64.0) as usize
+        } else {
+            1
+        };
+        if n > 1 {
+            let mut s = Vec::new();
+            triangle_samples(a, b, c, n, &mut s);
+            // The corners are already in (the vertices).
+            out.extend(s.into_iter().filter(|p| *p != a && *p != b && *p != c));
+        }
+    }
+    out
+}
+
+/// Add the `data-support` check (and section) to `report`; SKIP if the check could not run.
+pub fn add_check(r: &mut crate::Report, mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) {
+    if r.input_error.is_some() {
+        return;
+    }
+    match data_support(mesh, data, opts) {
+        Some(ds) => {
+            let status = crate::pass_fail(ds.passed());
+            r.push("data-support", status, ds.detail());
+            r.data_support = Some(ds);
+        }
+        None => r.push(
+            "data-support",
+            crate::Status::Skipped,
+            format!("{} data points: too few to measure a band", data.len()),
+        ),
+    }
+}

@@ -1,0 +1,191 @@
+//! The data-support check: a planted bubble and an offset mesh FAIL, the source mesh PASSes
+//! against a simulated scan of itself, a hole in the scan is reported as an unsupported
+//! region, a data component the mesh misses FAILs.
+
+use glam::DVec3;
+use meshio::TriMesh;
+use verify::data_support::{data_support, mesh_samples};
+use verify::scan_sim::{ScanSpec, diagonal, simulate};
+use verify::{Status, SupportOptions};
+
+fn bunny() -> TriMesh {
+    let dir = env!("CARGO_MANIFEST_DIR");
+    meshio::read(format!("{dir}/../../fixtures/models/bunny.ply")).unwrap()
+}
+
+fn scan(m: &TriMesh, hole: f64) -> Vec<DVec3> {
+    let spec = ScanSpec {
+        points: 20_000,
+        noise: 0.002,
+        hole,
+        seed: 7,
+        ..Default::default()
+    };
+    simulate(m, &spec).points
+}
+
+/// An octahedron of circumradius `r` at `c`, outward.
+fn octahedron(c: DVec3, r: f64, base: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let v = [
+        DVec3::X,
+        -DVec3::X,
+        DVec3::Y,
+        -DVec3::Y,
+        DVec3::Z,
+        -DVec3::Z,
+    ]
+    .map(|d| c + r * d)
+    .to_vec();
+    let t = [
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ]
+    .map(|t: [u32; 3]| t.map(|i| i + base))
+    .to_vec();
+    (v, t)
+}
+
+fn vertex_normals(m: &TriMesh) -> Vec<DVec3> {
+    let mut n = vec![DVec3::ZERO; m.vertices.len()];
+    for t in &m.triangles {
+        let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+        let f = (b - a).cross(c - a);
+        for &i in t {
+            n[i as usize] += f;
+        }
+    }
+    n.into_iter().map(|v| v.normalize_or_zero()).collect()
+}
+
+#[test]
+fn the_source_mesh_passes_and_a_planted_bubble_fails() {
+    let m = bunny();
+    let d = diagonal(&m);
+    let pts = scan(&m, 0.0);
+    let good = data_support(&m, &pts, &SupportOptions::default()).unwrap();
+    assert!(good.passed(), "{}", good.detail());
+    assert!(good.supported_share > 0.99, "{}", good.detail());
+    // The estimated noise is the simulated one (per-coordinate sigma 0.2% of the diagonal).
+    assert!(
+        (good.noise / (0.002 * d) - 1.0).abs() < 0.25,
+        "{}",
+        good.noise
+    );
+    // A bubble 1.5% of the diagonal across, 2.2% of the diagonal above the top vertex.
+    let top = m
+        .vertices
+        .iter()
+        .copied()
+        .max_by(|a, b| a.z.total_cmp(&b.z))
+        .unwrap();
+    let (bv, bt) = octahedron(
+        top + DVec3::Z * (0.022 + 0.0075) * d,
+        0.0075 * d,
+        m.vertices.len() as u32,
+    );
+    let mut bubbled = m.clone();
+    bubbled.vertices.extend(bv);
+    bubbled.triangles.extend(bt);
+    let bad = data_support(&bubbled, &pts, &SupportOptions::default()).unwrap();
+    assert!(!bad.passed(), "{}", bad.detail());
+    assert_eq!(bad.unsupported_components, 1, "{}", bad.detail());
+    let worst = bad
+        .components
+        .iter()
+        .min_by(|a, b| a.supported_share.total_cmp(&b.supported_share))
+        .unwrap();
+    assert_eq!((worst.triangles, worst.supported_share), (8, 0.0));
+    assert!(bad.detail().contains("1 mesh components below 50% support"));
+}
+
+#[test]
+fn a_mesh_offset_by_3_percent_of_the_diagonal_fails() {
+    let m = bunny();
+    let d = diagonal(&m);
+    let pts = scan(&m, 0.0);
+    let n = vertex_normals(&m);
+    let mut off = m.clone();
+    for (v, n) in off.vertices.iter_mut().zip(&n) {
+        *v += *n * 0.03 * d;
+    }
+    let r = data_support(&off, &pts, &SupportOptions::default()).unwrap();
+    assert!(!r.passed(), "{}", r.detail());
+    assert!(r.supported_share < 0.2, "{}", r.detail());
+    assert_eq!(r.uncovered_data_components, 1, "{}", r.detail());
+    // 1% still passes (within the band: 2 x spacing + 3 x noise).
+    let mut near = m.clone();
+    for (v, n) in near.vertices.iter_mut().zip(&n) {
+        *v += *n * 0.004 * d;
+    }
+    let r = data_support(&near, &pts, &SupportOptions::default()).unwrap();
+    assert!(r.passed(), "{}", r.detail());
+}
+
+#[test]
+fn a_hole_in_the_scan_is_an_unsupported_region_and_missed_data_fails() {
+    let m = bunny();
+    let d = diagonal(&m);
+    let spec = ScanSpec {
+        points: 20_000,
+        noise: 0.002,
+        hole: 0.08,
+        seed: 7,
+        ..Default::default()
+    };
+    let s = simulate(&m, &spec);
+    let (c, radius) = s.hole.unwrap();
+    let r = data_support(&m, &s.points, &SupportOptions::default()).unwrap();
+    assert!(r.passed(), "{}", r.detail());
+    let hole = &r.unsupported_regions[0];
+    assert!(
+        (DVec3::from_array(hole.centroid) - c).length() < radius,
+        "{}",
+        r.detail()
+    );
+    assert!(
+        hole.extent > radius && hole.extent < 3.0 * radius,
+        "{}",
+        r.detail()
+    );
+    assert!(r.detail().contains("unsupported regions bridged"));
+    // Data far from the mesh (a second object) is not covered.
+    let mut more = s.points.clone();
+    more.extend(
+        scan(&m, 0.0)
+            .iter()
+            .take(2000)
+            .map(|p| *p + DVec3::X * 2.0 * d),
+    );
+    let r = data_support(&m, &more, &SupportOptions::default()).unwrap();
+    assert!(
+        !r.passed() && r.uncovered_data_components == 1,
+        "{}",
+        r.detail()
+    );
+}
+
+#[test]
+fn exact_mesh_data_and_the_report_check() {
+    let m = bunny();
+    let data = mesh_samples(&m, 20_000);
+    assert!(data.len() > 15_000 && data.len() < 60_000, "{}", data.len());
+    let mut report = verify::check(&m, &verify::Options::default());
+    verify::data_support::add_check(&mut report, &m, &data, &SupportOptions::default());
+    assert_eq!(
+        report.status("data-support"),
+        Some(Status::Pass),
+        "{}",
+        report.summary()
+    );
+    assert!(report.data_support.is_some());
+    // Too few points: SKIP, no panic.
+    let mut report = verify::check(&m, &verify::Options::default());
+    verify::data_support::add_check(&mut report, &m, &data[..1], &SupportOptions::default());
+    assert_eq!(report.status("data-support"), Some(Status::Skipped));
+}
