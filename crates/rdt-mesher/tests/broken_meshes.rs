@@ -35,7 +35,10 @@ fn closed_manifold(input: &Input, scale: f64, what: &str) -> usize {
     assert!(!out.mesh.triangles.is_empty(), "{what}: empty output");
     assert_eq!(t.boundary_edges_total, 0, "{what}: boundary edges");
     assert_eq!(t.non_manifold_edges_total, 0, "{what}: non-manifold edges");
-    assert_eq!(t.non_manifold_vertices_total, 0, "{what}: non-manifold vertices");
+    assert_eq!(
+        t.non_manifold_vertices_total, 0,
+        "{what}: non-manifold vertices"
+    );
     assert_eq!(t.inconsistent_edges_total, 0, "{what}: misoriented edges");
     let si = r.self_intersections.as_ref().expect("self-intersections");
     assert_eq!(si.pairs_total, 0, "{what}: self-intersections");
@@ -59,7 +62,7 @@ const CORPUS: [&str; 10] = [
 fn broken_meshes_become_closed_manifolds_exact() {
     for name in CORPUS {
         let input = open(name, false);
-        for scale in [1.5, 1.0] {
+        for scale in [2.0, 1.25] {
             closed_manifold(&input, scale, &format!("{name} exact x{scale}"));
         }
     }
@@ -69,7 +72,7 @@ fn broken_meshes_become_closed_manifolds_exact() {
 fn broken_meshes_become_closed_manifolds_smooth() {
     for name in CORPUS {
         let input = open(name, true);
-        for scale in [1.5, 1.0] {
+        for scale in [2.0, 1.25] {
             closed_manifold(&input, scale, &format!("{name} smooth x{scale}"));
         }
     }
@@ -77,7 +80,13 @@ fn broken_meshes_become_closed_manifolds_smooth() {
 
 #[test]
 fn defects_are_counted() {
-    let stats = |name: &str| open(name, false).stats.polyhedron.clone().expect("mesh stats");
+    let stats = |name: &str| {
+        open(name, false)
+            .stats
+            .polyhedron
+            .clone()
+            .expect("mesh stats")
+    };
     let s = stats("sphere_holes.off");
     assert!(s.boundary_edges > 0 && !s.is_clean());
     let s = stats("sphere_dup_flip.off");
@@ -94,7 +103,10 @@ fn defects_are_counted() {
     assert!(s.self_intersecting_pairs.unwrap() > 0);
     // A clean closed mesh has no defect and keeps the watertight oracle.
     let cube = Input::open(
-        &format!("{}/../../fixtures/meshes/cube.off", env!("CARGO_MANIFEST_DIR")),
+        &format!(
+            "{}/../../fixtures/meshes/cube.off",
+            env!("CARGO_MANIFEST_DIR")
+        ),
         &Default::default(),
     )
     .unwrap();
@@ -108,7 +120,7 @@ fn two_overlapping_spheres_are_their_union() {
     // Ray parity would make the overlap outside; the winding number makes it inside: one
     // closed component, genus 0.
     let input = open("two_spheres_overlap.off", false);
-    assert_eq!(closed_manifold(&input, 1.5, "union"), 1);
+    assert_eq!(closed_manifold(&input, 2.0, "union"), 1);
 }
 
 #[test]

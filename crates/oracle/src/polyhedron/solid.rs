@@ -72,24 +72,21 @@ impl PolyhedronSurface {
         for (i, w) in bounds.windows(2).enumerate() {
             let (lo, hi) = (w[0], w[1]);
             if hi <= lo {
-                if i > 0 {
-                    // A repeated hit parameter: nothing between; keep the pending sample.
-                }
-                continue;
+                continue; // a repeated hit parameter: nothing between
             }
             let n = (((hi - lo) * len / step).ceil() as usize).clamp(1, MAX_STRETCH_SAMPLES);
             for j in 0..n {
                 let s = lo + (hi - lo) * (j as f64 + 0.5) / n as f64;
                 let v = self.value(at(s));
-                if let Some((s0, v0)) = prev {
-                    if (v0 < 0.0) != (v < 0.0) {
-                        if j == 0 && i > 0 {
-                            // The sign changed across the hit at `lo`: the triangle is there.
-                            out.push(at(lo));
-                        } else {
-                            let e = Ends::new(at(s0), v0, at(s), v);
-                            out.push(bisect(|p| self.value(p), e, self.tolerance()));
-                        }
+                if let Some((s0, v0)) = prev
+                    && (v0 < 0.0) != (v < 0.0)
+                {
+                    if j == 0 && i > 0 {
+                        // The sign changed across the hit at `lo`: the triangle is there.
+                        out.push(at(lo));
+                    } else {
+                        let e = Ends::new(at(s0), v0, at(s), v);
+                        out.push(bisect(|p| self.value(p), e, self.tolerance()));
                     }
                 }
                 prev = Some((s, v));

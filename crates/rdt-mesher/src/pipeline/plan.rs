@@ -97,7 +97,7 @@ pub fn plan<'p, 's>(
         initialization: request.initialization,
         max_control_points: input.max_control_points,
         // Images: the voxel size (four crossing steps, see `ImageSurface::crossing_step`).
-        resolution: resolution(&input),
+        resolution: resolution(input),
         min_component: request.min_component,
         cancel: request.cancel.clone(),
     };
