@@ -80,6 +80,28 @@ pub struct PolyhedronStats {
     pub nonmanifold_edges: usize,
     /// Edges whose two faces traverse them in the same direction (inconsistent orientation).
     pub misoriented_edges: usize,
+    /// Vertices around which the faces form more than one fan (sheets meeting at a point).
+    pub nonmanifold_vertices: usize,
+    /// Faces dropped as duplicates of an earlier face (the same three vertices).
+    pub duplicate_faces: usize,
+    /// Faces reversed to agree with the orientation of their patch.
+    pub flipped_faces: usize,
+    /// Pairs of input triangles that intersect other than at shared vertices and edges, when
+    /// counted (by the caller: [`PolyhedronSurface::set_self_intersections`]).
+    pub self_intersecting_pairs: Option<usize>,
+}
+
+impl PolyhedronStats {
+    /// Whether the input is a closed, manifold, consistently oriented mesh without duplicate
+    /// faces (and without self-intersections, when they were counted).
+    pub fn is_clean(&self) -> bool {
+        self.boundary_edges == 0
+            && self.nonmanifold_edges == 0
+            && self.misoriented_edges == 0
+            && self.nonmanifold_vertices == 0
+            && self.duplicate_faces == 0
+            && self.self_intersecting_pairs.unwrap_or(0) == 0
+    }
 }
 
 /// A triangle mesh as a surface oracle. See the module documentation.
@@ -127,7 +149,7 @@ impl PolyhedronSurface {
         let nv = mesh.vertices.len();
         validate(mesh)?;
         let (canon, duplicate_vertices) = weld(&mesh.vertices);
-        let mut faces = Vec::with_capacity(mesh.triangles.len());
+        let mut faces: Vec<([u32; 3], u32)> = Vec::with_capacity(mesh.triangles.len());
         let mut degenerate = 0;
         let mut referenced = vec![false; nv];
         for (f, t) in mesh.triangles.iter().enumerate() {
@@ -147,10 +169,13 @@ impl PolyhedronSurface {
                 triangles: mesh.triangles.len(),
             });
         }
+        // Edge statistics of the input (sorted, deterministic), then of the cleaned faces.
+        let (_, boundary_edges, nonmanifold_edges, misoriented_edges) = edge_stats(&faces);
+        let nonmanifold_vertices = nonmanifold_vertex_count(nv, &faces);
+        let cleaned = super::clean::clean(&mut faces, &mesh.vertices);
         let (face_comp, ncomp) = face_components(nv, &faces);
-        // Edge statistics (sorted, deterministic).
-        let (edges, boundary_edges, nonmanifold_edges, misoriented_edges) = edge_stats(&faces);
-        let watertight = boundary_edges == 0 && nonmanifold_edges == 0 && misoriented_edges == 0;
+        let (edges, b, n, m) = edge_stats(&faces);
+        let watertight = b == 0 && n == 0 && m == 0;
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         let mut volume = 0.0;
         let tris: Vec<[DVec3; 3]> = faces
@@ -190,6 +215,10 @@ impl PolyhedronSurface {
             boundary_edges,
             nonmanifold_edges,
             misoriented_edges,
+            nonmanifold_vertices,
+            duplicate_faces: cleaned.duplicate_faces,
+            flipped_faces: cleaned.flipped_faces,
+            self_intersecting_pairs: None,
         };
         Ok(PolyhedronSurface {
             bvh,
@@ -272,6 +301,27 @@ impl PolyhedronSurface {
     /// Counts of what the input contained (duplicates, degenerate faces, components, ...).
     pub fn stats(&self) -> &PolyhedronStats {
         &self.stats
+    }
+
+    /// Record the number of self-intersecting pairs of input triangles (counted by the caller,
+    /// e.g. with `verify`'s exact test on [`PolyhedronSurface::welded_mesh`]). A closed mesh
+    /// that intersects itself is then no longer treated as watertight: ray parity and
+    /// pseudonormals would make the overlap of two shells outside (a non-manifold boundary
+    /// along the intersection curves), the winding number makes it inside (the solid
+    /// {w > 1/2}, the union).
+    pub fn set_self_intersections(&mut self, pairs: usize) {
+        self.stats.self_intersecting_pairs = Some(pairs);
+        if pairs > 0 {
+            self.pseudo = Vec::new();
+        }
+    }
+
+    /// The cleaned, welded, non-degenerate faces as a mesh (on the input's vertex array).
+    pub fn welded_mesh(&self) -> TriMesh {
+        TriMesh {
+            vertices: self.vertices.clone(),
+            triangles: self.faces.iter().map(|(t, _)| *t).collect(),
+        }
     }
 
     /// Axis-aligned bounding box `(min, max)` of the non-degenerate triangles.
@@ -454,6 +504,56 @@ fn face_components(nv: usize, faces: &[([u32; 3], u32)]) -> (Vec<u32>, u32) {
     (face_comp, ncomp)
 }
 
+/// Vertices around which the faces form more than one fan (faces linked through the edges
+/// at the vertex that have exactly two faces).
+fn nonmanifold_vertex_count(nv: usize, faces: &[([u32; 3], u32)]) -> usize {
+    // (vertex, face) incidences and, per vertex, the edges to its neighbours.
+    let mut inc: Vec<(u32, u32, u32, u32)> = Vec::with_capacity(3 * faces.len());
+    for (fi, (t, _)) in faces.iter().enumerate() {
+        for k in 0..3 {
+            inc.push((t[k], t[(k + 1) % 3], t[(k + 2) % 3], fi as u32));
+        }
+    }
+    inc.sort_unstable();
+    let mut count = 0;
+    let mut seen = vec![false; nv];
+    for run in inc.chunk_by(|x, y| x.0 == y.0) {
+        let v = run[0].0 as usize;
+        if seen[v] {
+            continue;
+        }
+        seen[v] = true;
+        // Union-find over the faces of the run through shared opposite-side vertices.
+        let mut parent: Vec<usize> = (0..run.len()).collect();
+        fn root(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        let mut ends: Vec<(u32, usize)> = run
+            .iter()
+            .enumerate()
+            .flat_map(|(i, e)| [(e.1, i), (e.2, i)])
+            .collect();
+        ends.sort_unstable();
+        for w in ends.chunk_by(|x, y| x.0 == y.0) {
+            if let [a, b] = w {
+                let (ra, rb) = (root(&mut parent, a.1), root(&mut parent, b.1));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+        let fans = (0..run.len())
+            .filter(|&i| root(&mut parent, i) == i)
+            .count();
+        if fans > 1 {
+            count += 1;
+        }
+    }
+    count
+}
+
 /// One entry per face edge, `(min, max, min→max along the face, face, local edge)`, sorted
 /// (deterministic), and the counts of boundary, non-manifold and misoriented edges.
 #[allow(clippy::type_complexity)]
@@ -616,19 +716,49 @@ impl Surface for PolyhedronSurface {
         bisect(|p| self.value(p), Ends::new(a, fa, b, fb), self.tolerance())
     }
 
+    /// Watertight meshes: every exact crossing with the triangles. Otherwise the crossings
+    /// with the boundary of the solid {w > 1/2} (see `solid.rs`).
     fn crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<DVec3>) {
+        if !self.is_watertight() {
+            return self.solid_crossings(a, b, out);
+        }
         let mut ts = Vec::new();
         self.crossing_params(a, b, &mut ts);
         out.extend(ts.into_iter().map(|t| a + (b - a) * t));
     }
 
     /// One point per connected component (centroid of its largest triangle), plus up to 8
-    /// centroids of random triangles per component (deterministic for a given `seed`).
+    /// centroids of random triangles per component (deterministic for a given `seed`). For a
+    /// mesh that is not watertight, only triangles on the boundary of the solid {w > 1/2}
+    /// count (see `solid.rs`).
     fn seed_points(&self, seed: u64) -> Vec<DVec3> {
+        if self.is_watertight() {
+            self.seeds_among(seed, &vec![true; self.bvh.len()])
+        } else {
+            self.solid_seeds(seed)
+        }
+    }
+
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        self.nearest_normal(p)
+    }
+
+    fn project(&self, p: DVec3) -> Option<DVec3> {
+        Some(self.closest_point(p).0)
+    }
+}
+
+impl PolyhedronSurface {
+    /// [`Surface::seed_points`] among the triangles (leaf order) with `keep` set; components
+    /// without one get none.
+    pub(super) fn seeds_among(&self, seed: u64, keep: &[bool]) -> Vec<DVec3> {
         let ncomp = self.stats.components;
         let mut best: Vec<(f64, usize)> = vec![(-1.0, 0); ncomp];
         let mut members: Vec<Vec<usize>> = vec![Vec::new(); ncomp];
         for (k, t) in self.bvh.tris().iter().enumerate() {
+            if !keep[k] {
+                continue;
+            }
             let c = self.component[k] as usize;
             let area = (t[1] - t[0]).cross(t[2] - t[0]).length();
             if area > best[c].0 {
@@ -643,21 +773,16 @@ impl Surface for PolyhedronSurface {
         let mut rng = SplitMix64(seed ^ 0x9017_5EED);
         let mut out = Vec::new();
         for c in 0..ncomp {
-            out.push(centroid(best[c].1));
             let m = &members[c];
+            if m.is_empty() {
+                continue;
+            }
+            out.push(centroid(best[c].1));
             for _ in 0..m.len().min(8) {
                 let k = m[(rng.next_u64() % m.len() as u64) as usize];
                 out.push(centroid(k));
             }
         }
         out
-    }
-
-    fn gradient(&self, p: DVec3) -> DVec3 {
-        self.nearest_normal(p)
-    }
-
-    fn project(&self, p: DVec3) -> Option<DVec3> {
-        Some(self.closest_point(p).0)
     }
 }

@@ -29,8 +29,10 @@
 #[cfg(doc)]
 use crate::Surface;
 
+mod clean;
 mod exact;
 mod smooth;
+mod solid;
 
 pub use exact::{
     PolyhedronError, PolyhedronStats, PolyhedronSurface, distance_to_sharp_edges,

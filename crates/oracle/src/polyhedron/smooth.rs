@@ -78,7 +78,26 @@ impl SmoothPolyhedron {
         samples: usize,
         params: &PointSetParams,
     ) -> Result<Self, PointSetError> {
-        let (pts, nrm) = exact.area_samples(samples.max(MIN_POINTS));
+        let (mut pts, mut nrm) = exact.area_samples(samples.max(MIN_POINTS));
+        if !exact.is_watertight() {
+            // Only the samples on the boundary of the solid {w > 1/2}, each with the normal
+            // pointing out of it (see `solid.rs`): an interior membrane, the inner sheets of
+            // overlapping shells and the orientation of flipped faces then leave no trace.
+            use rayon::prelude::*;
+            let out: Vec<Option<DVec3>> = pts
+                .par_iter()
+                .zip(&nrm)
+                .map(|(&p, &n)| exact.outward_at(p, n))
+                .collect();
+            let kept: (Vec<DVec3>, Vec<DVec3>) = pts
+                .iter()
+                .zip(&out)
+                .filter_map(|(&p, o)| o.map(|n| (p, n)))
+                .unzip();
+            if kept.0.len() >= MIN_POINTS {
+                (pts, nrm) = kept;
+            }
+        }
         let imls = PointSetSurface::new(&pts, Some(&nrm), params)?;
         Ok(SmoothPolyhedron { exact, imls })
     }
@@ -138,10 +157,12 @@ impl Surface for SmoothPolyhedron {
         self.imls.bounding_sphere()
     }
     /// The IMLS value within the largest kernel radius `R` of the input triangles. Farther,
-    /// for watertight inputs, the exact polyhedron's value (signed distance, or its sign by
-    /// ray parity), which has the same sign there and is cheaper than the IMLS far field.
+    /// the exact polyhedron's value (signed distance, or its sign by ray parity, for
+    /// watertight inputs; `1/2 − w` otherwise, so that the solid is {w > 1/2} away from the
+    /// samples, over holes for instance), which has the same sign there and is cheaper than
+    /// the IMLS far field.
     fn value(&self, p: DVec3) -> f64 {
-        if self.exact.is_watertight() && p.is_finite() {
+        if p.is_finite() {
             if let Some(v) = self
                 .imls
                 .bounding_sphere()

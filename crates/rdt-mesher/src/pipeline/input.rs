@@ -575,8 +575,14 @@ impl Input<'static> {
         name: String,
         smooth: bool,
     ) -> Result<Input<'static>, PipelineError> {
-        let poly = oracle::polyhedron::PolyhedronSurface::new(mesh)
+        let mut poly = oracle::polyhedron::PolyhedronSurface::new(mesh)
             .map_err(|e| PipelineError::backend(format!("mesh {spec}"), e))?;
+        // Self-intersections of the cleaned input, by verify's exact test: a closed mesh that
+        // crosses itself is meshed as the solid of its winding number, not by ray parity.
+        let welded = poly.welded_mesh();
+        let bvh = verify::intersect::triangle_bvh(&welded);
+        let pairs = verify::intersect::self_intersections(&welded, &bvh, 0).pairs_total;
+        poly.set_self_intersections(pairs);
         let size = poly.suggested_size();
         let sharp_edges = poly.sharp_edges(SHARP_DEG);
         let pstats = poly.stats().clone();
@@ -643,7 +649,14 @@ fn polyhedron_summary(s: &oracle::polyhedron::PolyhedronStats) -> String {
     for (n, what) in [
         (s.boundary_edges, "boundary edges (holes)"),
         (s.nonmanifold_edges, "non-manifold edges"),
+        (s.nonmanifold_vertices, "non-manifold vertices"),
         (s.misoriented_edges, "misoriented edges"),
+        (s.flipped_faces, "faces reoriented"),
+        (s.duplicate_faces, "duplicate faces (dropped)"),
+        (
+            s.self_intersecting_pairs.unwrap_or(0),
+            "self-intersecting pairs",
+        ),
         (s.duplicate_vertices, "duplicate vertices (welded)"),
         (s.degenerate_triangles, "degenerate triangles (ignored)"),
         (s.unreferenced_vertices, "unreferenced vertices"),
@@ -657,6 +670,9 @@ fn polyhedron_summary(s: &oracle::polyhedron::PolyhedronStats) -> String {
     }
     if s.misoriented_edges == 0 {
         parts.push("consistently oriented".into());
+    }
+    if !s.is_clean() {
+        parts.push("meshing the solid {winding number > 1/2}".into());
     }
     parts.join(", ")
 }

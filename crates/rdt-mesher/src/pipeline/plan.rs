@@ -100,8 +100,7 @@ pub fn plan<'p, 's>(
         initialization: request.initialization,
         max_control_points: input.max_control_points,
         // Images: the voxel size (four crossing steps, see `ImageSurface::crossing_step`).
-        resolution: (input.kind == super::InputKind::Image)
-            .then(|| 4.0 * input.surface().crossing_step()),
+        resolution: resolution(input),
         min_component: request.min_component,
         cancel: request.cancel.clone(),
     };
@@ -464,5 +463,26 @@ fn verify_options(
             })
             .collect(),
         ..Default::default()
+    }
+}
+
+/// The input's resolvable scale ([`MeshOptions::resolution`]): images, the voxel size (four
+/// crossing steps, see `ImageSurface::crossing_step`); a broken mesh (open, non-manifold,
+/// misoriented, self-intersecting: its solid {w > 1/2} may pinch where sheets meet), its
+/// default size, so that what the manifold patch leaves is repaired by the stated rules of
+/// `levels::repair`; `None` otherwise (the paper's patch alone).
+fn resolution(input: &Input) -> Option<f64> {
+    match input.kind {
+        super::InputKind::Image => Some(4.0 * input.surface().crossing_step()),
+        super::InputKind::Polyhedron
+            if input
+                .stats
+                .polyhedron
+                .as_ref()
+                .is_some_and(|p| !p.is_clean()) =>
+        {
+            input.default_size
+        }
+        _ => None,
     }
 }
