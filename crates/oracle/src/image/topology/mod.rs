@@ -144,6 +144,11 @@ mod tests {
     /// A block of 6^3 voxels at 2 (inside at iso 1) in a background of 0, with the voxels
     /// `ones` set to 1 (the iso value: outside by the convention, a puncture).
     fn block_with_ties(ones: &[[usize; 3]]) -> ImageSurface {
+        block_with(ones, &[])
+    }
+
+    /// [`block_with_ties`], and the voxels `zeros` set to 0 (truly outside).
+    fn block_with(ones: &[[usize; 3]], zeros: &[[usize; 3]]) -> ImageSurface {
         let n = 10;
         let mut v = vec![0f32; n * n * n];
         for k in 2..8 {
@@ -155,6 +160,9 @@ mod tests {
         }
         for &[i, j, k] in ones {
             v[i + n * (j + n * k)] = 1.0;
+        }
+        for &[i, j, k] in zeros {
+            v[i + n * (j + n * k)] = 0.0;
         }
         let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
         let opts = ImageOptions {
@@ -194,25 +202,7 @@ mod tests {
         let t = block_with_ties(&cube).topology().clone();
         assert_eq!((t.vanishing_components, t.surface_components), (0, 2));
         // A tie beside a voxel truly outside (0) is part of a real cavity.
-        let s = {
-            let n = 10;
-            let mut v = vec![0f32; n * n * n];
-            for k in 2..8 {
-                for j in 2..8 {
-                    for i in 2..8 {
-                        v[i + n * (j + n * k)] = 2.0;
-                    }
-                }
-            }
-            v[4 + n * (4 + n * 4)] = 1.0;
-            v[5 + n * (4 + n * 4)] = 0.0;
-            let vol = Volume::new([n; 3], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
-            let opts = ImageOptions {
-                iso: Some(1.0),
-                ..Default::default()
-            };
-            ImageSurface::new(vol, &opts).unwrap()
-        };
+        let s = block_with(&[[4, 4, 4]], &[[5, 4, 4]]);
         let t = s.topology();
         assert_eq!((t.vanishing_components, t.surface_components), (0, 2));
     }
