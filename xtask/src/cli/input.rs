@@ -164,6 +164,19 @@ pub fn image_labels(spec: &str, o: &SurfaceOptions) -> Result<Vec<i64>> {
 /// input as given on the command line.
 pub fn cli_error(e: PipelineError, spec: &str) -> anyhow::Error {
     match e {
+        PipelineError::Mesh {
+            source: rdt_mesher::MeshError::NoSeeds { center, radius },
+            ..
+        } => anyhow::anyhow!(
+            "{spec}: the mesh is empty (no point of the surface inside the bounding sphere, \
+             center ({:.4}, {:.4}, {:.4}), radius {radius:.4}); nothing written. An open or \
+             flat input mesh may bound no solid (winding number > 1/2 nowhere): close it, or \
+             mesh its vertices with --as points; for other inputs check --iso / --label or \
+             --bounding-sphere",
+            center.x,
+            center.y,
+            center.z
+        ),
         PipelineError::UnknownName { name, names } => anyhow::anyhow!(
             "implicit:\"{name}\" is not a catalog name ({}); an expression needs --bounding-sphere cx,cy,cz,r",
             names.join(", ")
