@@ -21,12 +21,11 @@
 //! Invariants: deterministic (parallel maps collected in order, sequential reductions); the
 //! check FAILs iff some mesh component is unsupported or some data component is uncovered.
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use meshio::TriMesh;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::num::NonZeroUsize;
 
 use crate::distance::{MeshDistance, triangle_samples};
 use crate::topology::{Dsu, vertex_components};
@@ -218,29 +217,21 @@ impl DataBand {
         let coords: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
         let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords).ok()?;
         let ks = opts.k_spacing.clamp(1, n - 1);
-        let kn = opts.k_noise.clamp(3, n - 1).max(ks);
-        let kq = NonZeroUsize::new(kn + 1)?;
+        let kn = opts.k_noise.max(3).min(n - 1).max(ks);
+        let lists = oracle::pointset::knn_lists(points, &tree, kn);
         let per: Vec<(Vec<u32>, f64, f64)> = points
             .par_iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let res = tree
-                    .query(&p.to_array())
-                    .nearest_n::<SquaredEuclidean<f64>>(kq)
-                    .execute();
-                let nb: Vec<u32> = res
-                    .iter()
-                    .map(|r| r.item)
-                    .filter(|&j| j as usize != i)
-                    .take(kn)
-                    .collect();
+            .zip(lists)
+            .map(|(p, nb)| {
                 let m = ks.min(nb.len()).max(1);
                 let spacing = nb[..m.min(nb.len())]
                     .iter()
                     .map(|&j| (points[j as usize] - *p).length())
                     .sum::<f64>()
                     / m as f64;
-                let noise = plane_residual(nb.iter().map(|&j| points[j as usize]).chain([*p]));
+                let noise = oracle::pointset::plane_residual(
+                    nb.iter().map(|&j| points[j as usize]).chain([*p]),
+                );
                 (nb[..ks.min(nb.len())].to_vec(), spacing, noise)
             })
             .collect();
@@ -281,43 +272,6 @@ impl DataBand {
     pub fn median_band(&self) -> f64 {
         median(self.band.clone())
     }
-}
-
-/// RMS distance of `pts` to their least-squares plane (the root of the covariance's smallest
-/// eigenvalue over the count).
-fn plane_residual(pts: impl Iterator<Item = DVec3> + Clone) -> f64 {
-    let (mut c, mut n) = (DVec3::ZERO, 0.0f64);
-    for p in pts.clone() {
-        c += p;
-        n += 1.0;
-    }
-    if n < 3.0 {
-        return 0.0;
-    }
-    let c = c / n;
-    let mut m = DMat3::ZERO;
-    for p in pts {
-        let d = p - c;
-        m += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
-    }
-    (smallest_eigenvalue(m / n).max(0.0)).sqrt()
-}
-
-/// Smallest eigenvalue of a symmetric 3×3 matrix (closed form, trigonometric).
-fn smallest_eigenvalue(m: DMat3) -> f64 {
-    let (a, b, c) = (m.x_axis.x, m.y_axis.y, m.z_axis.z);
-    let (d, e, f) = (m.y_axis.x, m.z_axis.y, m.z_axis.x);
-    let p1 = d * d + e * e + f * f;
-    let q = (a + b + c) / 3.0;
-    let p2 = (a - q).powi(2) + (b - q).powi(2) + (c - q).powi(2) + 2.0 * p1;
-    let p = (p2 / 6.0).sqrt();
-    if p == 0.0 || !p.is_finite() {
-        return q;
-    }
-    let bm = (m - DMat3::from_diagonal(DVec3::splat(q))) * (1.0 / p);
-    let r = (bm.determinant() / 2.0).clamp(-1.0, 1.0);
-    let phi = r.acos() / 3.0;
-    q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos()
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -188,4 +188,10 @@ fn exact_mesh_data_and_the_report_check() {
     let mut report = verify::check(&m, &verify::Options::default());
     verify::data_support::add_check(&mut report, &m, &data[..1], &SupportOptions::default());
     assert_eq!(report.status("data-support"), Some(Status::Skipped));
+    // Two and three points (fewer than the noise neighbourhood): measured, no panic.
+    for k in [2, 3] {
+        let mut report = verify::check(&m, &verify::Options::default());
+        verify::data_support::add_check(&mut report, &m, &data[..k], &SupportOptions::default());
+        assert!(report.status("data-support").is_some(), "{k} points");
+    }
 }

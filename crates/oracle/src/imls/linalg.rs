@@ -65,6 +65,17 @@ pub(crate) fn covariance(pts: impl Iterator<Item = DVec3> + Clone) -> (DMat3, DV
     (m, c)
 }
 
+/// RMS distance of `pts` to their best-fitting plane (the square root of the smallest
+/// eigenvalue of their covariance over their number); 0 for fewer than three points.
+pub fn plane_residual(pts: impl Iterator<Item = DVec3> + Clone) -> f64 {
+    let n = pts.clone().count();
+    if n < 3 {
+        return 0.0;
+    }
+    let (m, _) = covariance(pts);
+    sym_eigen(m * (1.0 / n as f64)).0[0].max(0.0).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -35,7 +35,7 @@ mod far;
 mod grid;
 mod kernel;
 mod lfs;
-mod linalg;
+pub(crate) mod linalg;
 mod normals;
 mod surface;
 
@@ -452,8 +452,8 @@ fn validate(
 }
 
 /// The `k` nearest neighbours of each point (without the point itself, robust to duplicates:
-/// index `i` is dropped).
-fn knn_lists(points: &[DVec3], tree: &ImmutableKdTree<f64, 3>, k: usize) -> Vec<Vec<u32>> {
+/// index `i` is dropped), nearest first; in parallel, the same lists on any thread count.
+pub fn knn_lists(points: &[DVec3], tree: &ImmutableKdTree<f64, 3>, k: usize) -> Vec<Vec<u32>> {
     let kq = NonZeroUsize::new(k + 1).expect("k + 1 > 0");
     // kNN lists (without the point itself, robust to duplicates: drop index i).
     points

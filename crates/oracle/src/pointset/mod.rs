@@ -9,7 +9,10 @@
 #[allow(missing_docs)]
 mod xyz;
 
-pub use crate::imls::{MIN_POINTS, PointSetError, PointSetParams, PointSetStats, PointSetSurface};
+pub use crate::imls::linalg::plane_residual;
+pub use crate::imls::{
+    MIN_POINTS, PointSetError, PointSetParams, PointSetStats, PointSetSurface, knn_lists,
+};
 pub use xyz::{PointCloud, XyzError, read_xyz, read_xyz_from};
 
 impl PointSetSurface {
