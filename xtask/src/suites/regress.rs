@@ -460,12 +460,6 @@ pub fn run(a: &RegressArgs) -> Result<()> {
         );
     }
     let jobs = jobs(a);
-    if jobs.is_empty() {
-        bail!(
-            "no case matches --filter {}",
-            a.filter.as_deref().unwrap_or("(none)")
-        );
-    }
     let bar = if a.quiet {
         ProgressBar::hidden()
     } else {
@@ -513,6 +507,13 @@ pub fn run(a: &RegressArgs) -> Result<()> {
     let images = super::regress_images::run(&root, a.quick, a.filter.as_deref())?;
     super::regress_images::print_lines(&images, "FAIL", |r| &r.failures);
     let image_fails = images.iter().filter(|r| !r.failures.is_empty()).count();
+    if jobs.is_empty() && images.is_empty() {
+        bail!(
+            "no case matches --filter {} (catalog cases are named like torus-2k, image cases \
+             like mni-crop@171.2)",
+            a.filter.as_deref().unwrap_or("(none)")
+        );
+    }
     if let Some(p) = &a.json {
         let j =
             serde_json::json!({ "rows": rows, "oracle_disagreements": cross, "images": images });
