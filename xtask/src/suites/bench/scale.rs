@@ -161,7 +161,7 @@ pub fn bench_scale(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
         if let Some(cg) = c.cgal {
             let row = cg.row("scale", &c.label, "vertices", "vertices");
             eprintln!(
-                "scale {} (cgal): {} vertices, median {:.3} s, peak {:.0} MiB",
+                "scale {} (cgal): {} vertices, median {:.3} s, peak {:.0} MiB (getrusage of the child: a forked child starts with the parent's high-water mark, so this is at least ours)",
                 c.label,
                 row.size,
                 row.median_s,
