@@ -6,6 +6,7 @@ mod common;
 mod delaunay;
 mod image;
 mod mesh;
+mod scale;
 
 use anyhow::{Result, bail};
 pub use common::BenchArgs;
@@ -33,9 +34,13 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         image::bench_image(a, &mut rows)?;
         any = true;
     }
+    if a.name == "scale" {
+        scale::bench_scale(a, &mut rows)?;
+        any = true;
+    }
     if !any {
         bail!(
-            "unknown bench group '{}': use delaunay, mesh, image or all",
+            "unknown bench group '{}': use delaunay, mesh, image, scale or all (scale is not in all)",
             a.name
         );
     }
