@@ -77,6 +77,9 @@ def test_ctrl_c_raises_keyboard_interrupt():
         import os, signal, sys, time
         import numpy as np
         import rdt_mesher
+        # A parent that ignores SIGINT (a background job of a non-interactive shell, as CI
+        # runs) passes SIG_IGN on, and Python then installs no handler: install it here.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         n = 128
         i, j, k = np.meshgrid(*(np.linspace(-2.5, 2.5, n),) * 3, indexing="ij")
         vol = (i**4 - 5*i**2 + j**4 - 5*j**2 + k**4 - 5*k**2 + 11.8).astype(np.float32)

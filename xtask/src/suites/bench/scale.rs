@@ -47,8 +47,9 @@ struct Case {
     cgal: Option<CgalBaseline>,
 }
 
-pub fn bench_scale(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
-    let torus = oracle::catalog::surface("torus")?;
+/// The cases of the scale table: the torus sizes, then (without `--quick`) the image sizes,
+/// each with its CGAL baseline where `--vs-cgal` asks for one and CGAL finishes in minutes.
+fn scale_cases(a: &BenchArgs) -> Vec<Case> {
     let mut cases = Vec::new();
     let torus_cases: &[(f64, bool)] = if a.quick { &TORUS[..1] } else { &TORUS };
     for &(r, with_cgal) in torus_cases {
@@ -91,6 +92,12 @@ pub fn bench_scale(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
             });
         }
     }
+    cases
+}
+
+pub fn bench_scale(a: &BenchArgs, rows: &mut Vec<Row>) -> Result<()> {
+    let torus = oracle::catalog::surface("torus")?;
+    let cases = scale_cases(a);
     let vol = (!a.quick).then(|| {
         std::sync::Arc::new(synthetic::sample_implicit(
             synthetic::tanglecube,
