@@ -11,6 +11,7 @@
 //!   number, box overlaps) and the box/point [`bvh::Bvh`], both built by one median split.
 //! - [`rng`]: [`SplitMix64`], the generator behind every seeded choice in the workspace.
 //! - [`farthest`]: greedy farthest-point selection with lowest-index ties.
+//! - [`morton`]: Z-order keys, to run many spatial queries in a cache-friendly order.
 //! - [`SurfaceBall`]: a surface Delaunay ball B(c, r) of a restricted facet.
 //!
 //! Layering: `geom` depends on `glam` and `robust` only (and `serde` behind the `serde`
@@ -32,6 +33,7 @@ mod ball;
 pub mod bvh;
 pub mod closest;
 pub mod farthest;
+pub mod morton;
 pub mod predicates;
 pub mod rng;
 

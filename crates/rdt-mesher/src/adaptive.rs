@@ -38,6 +38,7 @@
 //! (a second estimate, on the final sample, not this module's field); the tests check it
 //! against the ellipsoid's closed-form d_M.
 
+use crate::mesher::RoundEnd;
 use crate::sizing::{EPS_PRIME_FACTOR, LAMBDA_FACTOR, MedialAxisEstimate};
 use crate::{Criteria, MeshError, MeshOptions, MeshResult, Progress, Sizing};
 use glam::DVec3;
@@ -108,31 +109,40 @@ impl Field {
     fn at(&self, p: DVec3) -> f64 {
         match &self.medial {
             None => self.floor,
-            Some(m) => (self.eps_prime * m.distance(p)).max(self.floor),
+            Some(m) => self.at_distance(m.distance(p)),
         }
+    }
+
+    /// The field where the estimated distance to the medial axis is `d`.
+    fn at_distance(&self, d: f64) -> f64 {
+        (self.eps_prime * d).max(self.floor)
     }
 }
 
 /// A sizing field reading the current [`Field`] (the mesher asks twice at the same point:
 /// the last value on each thread is memoized, keyed by the round).
-fn shared_field(state: Arc<RwLock<Field>>) -> Sizing {
+fn shared_field(state: Arc<RwLock<Field>>, eps_prime: f64) -> Sizing {
     use std::cell::Cell;
     thread_local! {
         static LAST: Cell<(u64, [u64; 3], f64)> = const { Cell::new((0, [0; 3], 0.0)) };
     }
-    Sizing::Field(Arc::new(move |p: DVec3| {
-        let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
-        let f = state.read().expect("the field is never poisoned");
-        LAST.with(|last| {
-            let (i, k, v) = last.get();
-            if i == f.id && k == key {
-                return v;
-            }
-            let v = f.at(p);
-            last.set((f.id, key, v));
-            v
-        })
-    }))
+    // Every round's field max(f_k, eps' d_k) is eps'-Lipschitz (see the module docs).
+    Sizing::Lipschitz(
+        Arc::new(move |p: DVec3| {
+            let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+            let f = state.read().expect("the field is never poisoned");
+            LAST.with(|last| {
+                let (i, k, v) = last.get();
+                if i == f.id && k == key {
+                    return v;
+                }
+                let v = f.at(p);
+                last.set((f.id, key, v));
+                v
+            })
+        }),
+        eps_prime,
+    )
 }
 
 /// Round ids, unique in the process (the memo of [`shared_field`] is per thread).
@@ -140,6 +150,44 @@ fn next_id() -> u64 {
     use std::sync::atomic::{AtomicU64, Ordering};
     static IDS: AtomicU64 = AtomicU64::new(1);
     IDS.fetch_add(1, Ordering::Relaxed)
+}
+
+/// The estimate of a round from the sample ([`crate::mesher::RoundEnd`]): the poles of its
+/// Delaunay triangulation (the mesher's when given, else built), thinned at the scale of the
+/// last floor; and at each sample point, d_k and the last field `prev` there (the mesher's
+/// values `sizes` when it has them).
+fn estimate(
+    prev: &Field,
+    sample: &[DVec3],
+    tri: Option<&delaunay3::Triangulation>,
+    sizes: &[f64],
+    keep: oracle::BoundingSphere,
+) -> Result<(Arc<MedialAxisEstimate>, Vec<(f64, f64)>), MeshError> {
+    let own;
+    let tri = match tri {
+        Some(t) => t,
+        None => {
+            let mut t = delaunay3::Triangulation::new();
+            t.insert_bulk(sample)?;
+            own = t;
+            &own
+        }
+    };
+    let medial = Arc::new(MedialAxisEstimate::poles_of(
+        tri,
+        LAMBDA_FACTOR * prev.floor,
+        keep,
+    ));
+    let eval = medial
+        .distances(sample)
+        .into_par_iter()
+        .enumerate()
+        .map(|(i, d)| {
+            let old = sizes.get(i).copied().filter(|s| !s.is_nan());
+            (d, old.unwrap_or_else(|| prev.at(sample[i])))
+        })
+        .collect();
+    Ok((medial, eval))
 }
 
 /// Adaptive eps-sampling of `surface` (see the module docs): `eps` in (0, 1); `base` gives
@@ -189,7 +237,7 @@ pub fn adaptive(
     }));
     let mut opts = base.clone();
     opts.criteria = Criteria {
-        size: Some(shared_field(state.clone())),
+        size: Some(shared_field(state.clone(), eps_prime)),
         ..base.criteria.clone()
     };
     let mut rounds: Vec<Round> = Vec::new();
@@ -198,34 +246,16 @@ pub fn adaptive(
     let mut converged = false;
     let mut latest = f64::INFINITY;
     let mut last_round = false;
-    let result = crate::mesher::mesh_in_rounds(surface, &opts, progress, &mut |sample, tri| {
+    let result = crate::mesher::mesh_in_rounds(surface, &opts, progress, &mut |end| {
+        let RoundEnd { sample, tri, sizes } = end;
         if last_round {
             converged = true;
-            return Ok(false);
+            return Ok(None);
         }
         let k = rounds.len() + 1;
         let prev = state.read().expect("the field is never poisoned");
         let prev_floor = prev.floor;
-        // The sample's Delaunay triangulation: the mesher's, when it has no scaffold point.
-        let own;
-        let tri = match tri {
-            Some(t) => t,
-            None => {
-                let mut t = delaunay3::Triangulation::new();
-                t.insert_bulk(sample)?;
-                own = t;
-                &own
-            }
-        };
-        let medial = Arc::new(MedialAxisEstimate::poles_of(
-            tri,
-            LAMBDA_FACTOR * prev_floor,
-            keep,
-        ));
-        let eval: Vec<(f64, f64)> = sample
-            .par_iter()
-            .map(|&p| (medial.distance(p), prev.at(p)))
-            .collect();
+        let (medial, eval) = estimate(&prev, sample, tri, sizes, keep)?;
         drop(prev);
         let m = eval.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
         latest = m;
@@ -255,22 +285,25 @@ pub fn adaptive(
         rounds.push(round);
         if stable {
             converged = true;
-            return Ok(false);
+            return Ok(None);
         }
         // Few points to add: refine to this estimate and stop (no estimate after it).
         last_round = !capped && k >= 2 && predicted < (1.0 + STABLE_GROWTH) * sample.len() as f64;
         if k >= MAX_ROUNDS {
-            return Ok(false);
+            return Ok(None);
         }
         last_capped = capped;
         last_size = sample.len();
-        *state.write().expect("the field is never poisoned") = Field {
+        let field = Field {
             id: next_id(),
             medial: Some(medial),
             eps_prime,
             floor,
         };
-        Ok(true)
+        // The new field at the sample, from the distances just computed (`Field::at`).
+        let next: Vec<f64> = eval.iter().map(|&(d, _)| field.at_distance(d)).collect();
+        *state.write().expect("the field is never poisoned") = field;
+        Ok(Some(next))
     })?;
     let f = state.read().expect("the field is never poisoned");
     Ok(Adaptive {

@@ -15,6 +15,12 @@ pub enum Sizing {
     Constant(f64),
     /// Any positive function of the point, e.g. `eps * d_M(x)` made 1-Lipschitz (section 6.5).
     Field(Arc<dyn Fn(DVec3) -> f64 + Send + Sync>),
+    /// A positive function with a known Lipschitz constant `L >= 0`: |sigma(x) - sigma(y)| <=
+    /// L |x - y| (the fields of section 6.5 have L = eps' < 1). The mesher then decides most
+    /// size tests from sigma at the facet's vertices (sigma(c) >= sigma(v) - L |c - v|)
+    /// without evaluating sigma at the ball's center; every decision, and so the mesh, is the
+    /// one [`Sizing::Field`] with the same function gives (see `crate::restricted::vertex_sizes`).
+    Lipschitz(Arc<dyn Fn(DVec3) -> f64 + Send + Sync>, f64),
 }
 
 impl Sizing {
@@ -23,8 +29,23 @@ impl Sizing {
     pub fn at(&self, c: DVec3) -> f64 {
         match self {
             Sizing::Constant(s) => *s,
-            Sizing::Field(f) => f(c),
+            Sizing::Field(f) | Sizing::Lipschitz(f, _) => f(c),
         }
+    }
+
+    /// The Lipschitz constant, when the field states one.
+    #[inline]
+    pub fn lipschitz(&self) -> Option<f64> {
+        match self {
+            Sizing::Lipschitz(_, l) => Some(*l),
+            _ => None,
+        }
+    }
+
+    /// Whether sigma varies (a function rather than a constant).
+    #[inline]
+    pub fn is_field(&self) -> bool {
+        !matches!(self, Sizing::Constant(_))
     }
 }
 
@@ -33,6 +54,7 @@ impl fmt::Debug for Sizing {
         match self {
             Sizing::Constant(s) => write!(f, "Constant({s})"),
             Sizing::Field(_) => write!(f, "Field(..)"),
+            Sizing::Lipschitz(_, l) => write!(f, "Lipschitz(.., {l})"),
         }
     }
 }
@@ -108,6 +130,11 @@ impl Criteria {
         {
             return Err(MeshError::InvalidSize(*s));
         }
+        if let Some(Sizing::Lipschitz(_, l)) = &self.size
+            && !(*l >= 0.0 && l.is_finite())
+        {
+            return Err(MeshError::InvalidLipschitz(*l));
+        }
         if !(self.min_angle_deg >= 0.0 && self.min_angle_deg < 35.0) {
             return Err(MeshError::InvalidAngle(self.min_angle_deg));
         }
@@ -129,7 +156,8 @@ impl Criteria {
     /// (a constant was checked by [`Criteria::validate`]).
     pub(crate) fn sigma_checked(&self, c: DVec3) -> Result<Option<f64>, MeshError> {
         let sigma = self.sigma_at(c);
-        if let (Some(Sizing::Field(_)), Some(s)) = (&self.size, sigma)
+        if let (Some(field), Some(s)) = (&self.size, sigma)
+            && field.is_field()
             && !(s > 0.0 && s.is_finite())
         {
             return Err(MeshError::InvalidSizeField { value: s, at: c });

@@ -24,6 +24,11 @@ pub enum MeshError {
         "invalid angle bound {0} degrees: use a value in [0, 35) (30 has a termination proof; 0 disables it)"
     )]
     InvalidAngle(f64),
+    /// A Lipschitz constant of a size field that is not a finite number >= 0.
+    #[error(
+        "invalid Lipschitz constant {0} of the size field: Sizing::Lipschitz needs a finite constant >= 0 (or use Sizing::Field)"
+    )]
+    InvalidLipschitz(f64),
     /// A distance bound that is not a positive finite number.
     #[error("invalid distance bound {0}: it must be positive and finite")]
     InvalidDistance(f64),

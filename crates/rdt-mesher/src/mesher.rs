@@ -33,20 +33,29 @@ pub fn mesh_with_progress(
     })
 }
 
-/// The callback of [`mesh_in_rounds`] between two rounds: the sample, Del(E) when it has no
-/// scaffold point; whether to go on.
-pub(crate) type Between<'b> = dyn FnMut(&[glam::DVec3], Option<&delaunay3::Triangulation>) -> Result<bool, MeshError>
-    + Send
-    + 'b;
+/// What [`mesh_in_rounds`] shows its callback between two rounds.
+pub(crate) struct RoundEnd<'r> {
+    /// The sample: the vertices of Del(E), scaffold points left out, in vertex order.
+    pub sample: &'r [glam::DVec3],
+    /// Del(E) when it has no scaffold point (then the Delaunay triangulation of the sample).
+    pub tri: Option<&'r delaunay3::Triangulation>,
+    /// sigma at each sample point under the size function of the round that ended, when it
+    /// is a [`crate::Sizing::Lipschitz`] field (else empty).
+    pub sizes: &'r [f64],
+}
+
+/// The callback of [`mesh_in_rounds`] between two rounds: `None` to stop, or go on with the
+/// size function it has changed, and that function's values at the sample points when it
+/// computed them (empty, or NaN at a point, when not: the mesher evaluates them).
+pub(crate) type Between<'b> =
+    dyn FnMut(RoundEnd<'_>) -> Result<Option<Vec<f64>>, MeshError> + Send + 'b;
 
 /// [`mesh_with_progress`] in rounds (not in the paper; the adaptive mode of
-/// `crate::adaptive`): after each complete refinement, `between` sees the sample (the
-/// vertices of Del(E), scaffold points left out, in vertex order), and Del(E) itself when it
-/// has no scaffold point (then it is the Delaunay triangulation of the sample), and returns
-/// whether to go on;
-/// it may change the size function that `opts.criteria` reads (a field whose values change
-/// only inside `between`). Then every restricted facet is re-judged and the refinement
-/// continues on the same Del(E). A budget stop ends the rounds.
+/// `crate::adaptive`): after each complete refinement, `between` sees the sample, Del(E)
+/// when it has no scaffold point, and sigma at the sample ([`RoundEnd`]), and says whether
+/// to go on; it may change the size function that `opts.criteria` reads (a field whose
+/// values change only inside `between`). Then every restricted facet is re-judged and the
+/// refinement continues on the same Del(E). A budget stop ends the rounds.
 pub(crate) fn mesh_in_rounds(
     surface: &dyn Surface,
     opts: &MeshOptions,
@@ -58,16 +67,22 @@ pub(crate) fn mesh_in_rounds(
         let mut r = Mesher::new(surface, opts);
         r.run(progress)?;
         while r.stats.stopped_by.is_none() {
-            let sample: Vec<glam::DVec3> = (0..r.tri.num_vertices())
+            let ids: Vec<delaunay3::VertexId> = (0..r.tri.num_vertices())
                 .map(delaunay3::VertexId::from_index)
                 .filter(|&v| !r.scaffold.contains(v))
-                .map(|v| r.tri.point(v))
                 .collect();
+            let sample: Vec<glam::DVec3> = ids.iter().map(|&v| r.tri.point(v)).collect();
+            let sizes = r.vertex_sizes_at(&ids);
             let tri = (r.scaffold.count() == 0).then_some(&*r.tri);
-            if !between(&sample, tri)? {
+            let end = RoundEnd {
+                sample: &sample,
+                tri,
+                sizes: &sizes,
+            };
+            let Some(next) = between(end)? else {
                 break;
-            }
-            r.requeue_all()?;
+            };
+            r.requeue_all(&ids, &next)?;
             r.refine_loop(progress)?;
         }
         let mut out = r.finish()?;

@@ -10,8 +10,9 @@ use delaunay3::VertexId;
 use glam::DVec3;
 use meshio::TriMesh;
 
-/// A facet's measures: smallest angle, r / sigma, distance ratio, bad.
-type Measure = (f64, Option<f64>, Option<f64>, bool);
+/// A facet's measures: smallest angle, r / sigma (and whether it is exact, or an upper bound
+/// from `crate::restricted::vertex_sizes`), distance ratio, bad.
+type Measure = (f64, Option<(f64, bool)>, Option<f64>, bool);
 
 /// The extreme measures over the output facets.
 struct Extremes {
@@ -43,6 +44,7 @@ impl Mesher<'_> {
                 radius: rf.radius,
             })
             .collect();
+        self.fill_vertex_sizes(facets.iter().flat_map(|(k, _)| *k));
         let ext = self.extremes(&facets);
         self.fill_stats(&mesh, &ext, scaffold_dropped);
         let sample = (0..self.tri.num_vertices())
@@ -88,9 +90,18 @@ impl Mesher<'_> {
     /// (order-independent).
     fn extremes(&self, facets: &[([VertexId; 3], RFacet)]) -> Extremes {
         let (tri, criteria) = (&self.tri, &self.opts.criteria);
+        // r / sigma: an upper bound r / lb where the vertices give one, else exact; the
+        // bounded facets whose bound exceeds the largest exact value are then evaluated
+        // exactly, so the maximum is exact.
+        let r_over_sigma = |rf: &RFacet| -> Option<(f64, bool)> {
+            match self.sigma_bounds(rf.oriented, rf.center) {
+                Some((lb, _)) => Some((rf.radius / lb, false)),
+                None => criteria.sigma_at(rf.center).map(|s| (rf.radius / s, true)),
+            }
+        };
         let measure = |(_, rf): &([VertexId; 3], RFacet)| -> Measure {
             let pts = rf.oriented.map(|v| tri.point(v));
-            let rs = criteria.sigma_at(rf.center).map(|s| rf.radius / s);
+            let rs = r_over_sigma(rf);
             let dist = criteria.distance_ratio(pts, rf.center);
             (min_angle_deg(pts), rs, dist, rf.bad > 1.0)
         };
@@ -105,11 +116,29 @@ impl Mesher<'_> {
             max_dist: None,
             all_good: true,
         };
-        for &(angle, rs, dist, bad) in &measures {
+        let mut bounded = Vec::new();
+        for (i, &(angle, rs, dist, bad)) in measures.iter().enumerate() {
             ext.min_angle = ext.min_angle.min(angle);
-            ext.max_rs = max_opt(ext.max_rs, rs);
+            match rs {
+                Some((v, true)) => ext.max_rs = max_opt(ext.max_rs, Some(v)),
+                Some((v, false)) => bounded.push((i, v)),
+                None => {}
+            }
             ext.max_dist = max_opt(ext.max_dist, dist);
             ext.all_good &= !bad;
+        }
+        let above = |v: f64| ext.max_rs.is_none_or(|m| v > m);
+        let exact: Vec<usize> = bounded
+            .into_iter()
+            .filter(|&(_, v)| above(v))
+            .map(|(i, _)| i)
+            .collect();
+        let values = self.policy.field(exact.len()).map(&exact, |&i| {
+            let rf = &facets[i].1;
+            criteria.sigma_at(rf.center).map(|s| rf.radius / s)
+        });
+        for v in values {
+            ext.max_rs = max_opt(ext.max_rs, v);
         }
         ext
     }

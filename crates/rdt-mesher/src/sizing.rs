@@ -197,6 +197,29 @@ impl MedialAxisEstimate {
         (r.distance.sqrt() - self.thinning_error).max(0.0)
     }
 
+    /// [`MedialAxisEstimate::distance`] at each of `pts`, in parallel, the queries run in
+    /// Z-order (cache-friendly; the values do not depend on the order).
+    pub fn distances(&self, pts: &[DVec3]) -> Vec<f64> {
+        use rayon::prelude::*;
+        let b = geom::bvh::Aabb::from_points(pts);
+        let half = 0.5 * (b.max - b.min).max_element();
+        let mut order: Vec<(u64, u32)> = pts
+            .par_iter()
+            .enumerate()
+            .map(|(i, &p)| (geom::morton::morton_key(p, b.center(), half), i as u32))
+            .collect();
+        order.par_sort_unstable();
+        let got: Vec<f64> = order
+            .par_iter()
+            .map(|&(_, i)| self.distance(pts[i as usize]))
+            .collect();
+        let mut out = vec![0.0; pts.len()];
+        for (&(_, i), d) in order.iter().zip(got) {
+            out[i as usize] = d;
+        }
+        out
+    }
+
     /// min over `pts` of [`MedialAxisEstimate::distance`] (+inf for no points): the estimate
     /// of d_M^inf from a sample of S.
     pub fn min_distance(&self, pts: &[DVec3]) -> f64 {
@@ -383,11 +406,11 @@ pub fn second_pass(
     };
     let mut o2 = base.clone();
     o2.criteria = Criteria {
-        size: Some(Sizing::Field(adaptive_field(
-            medial.clone(),
+        // eps'-Lipschitz (see `adaptive_field`).
+        size: Some(Sizing::Lipschitz(
+            adaptive_field(medial.clone(), eps_prime, floor),
             eps_prime,
-            floor,
-        ))),
+        )),
         ..base.criteria.clone()
     };
     o2.control_points = Some(crate::topology::component_representatives(

@@ -10,7 +10,7 @@
 use crate::levels::scaffold::Scaffold;
 use crate::options::MeshOptions;
 use crate::queue::Queue;
-use crate::restricted::Restricted;
+use crate::restricted::{Restricted, VertexSizes};
 use crate::schedule::Policy;
 use crate::stats::{Stats, StopReason};
 use crate::voronoi::Voronoi;
@@ -67,6 +67,8 @@ pub(crate) struct Mesher<'a> {
     pub restricted: Restricted,
     /// Bad facets, worst first.
     pub queue: Queue,
+    /// sigma at the vertices, for a Lipschitz size field (`crate::restricted::vertex_sizes`).
+    pub vertex_sizes: VertexSizes,
     /// Where the parallel sections run.
     pub policy: Policy,
     /// Which vertices of Del(E) are scaffold points.
@@ -109,6 +111,7 @@ impl<'a> Mesher<'a> {
             voronoi: Voronoi::default(),
             restricted: Restricted::default(),
             queue: Queue::default(),
+            vertex_sizes: VertexSizes::default(),
             policy: Policy::new(),
             scaffold: Scaffold::default(),
             manifold: ManifoldProgress {

@@ -375,3 +375,51 @@ fn two_pass_chair_with_too_large_dm_inf_is_certified() {
     let worst = rep.certificate.as_ref().unwrap().eps_achieved;
     assert!(worst > 0.8 * EPS_PRIME_FACTOR * eps, "achieved eps {worst}");
 }
+
+/// A size field declared Lipschitz (`Sizing::Lipschitz`): the mesher decides most size tests
+/// from sigma at the vertices. Every output ball must still satisfy r <= sigma(c) with sigma
+/// evaluated exactly at its center, and the count must match the same field given as a plain
+/// `Sizing::Field` (same classification of every facet; only the order of refinement of bad
+/// facets may differ). A negative or NaN constant is refused.
+#[test]
+fn lipschitz_field_gives_the_exact_size_criterion() {
+    let s = catalog::surface("torus").unwrap();
+    // 0.05-Lipschitz, from 0.01 at the outer equator's point (1.3, 0, 0) to 0.14.
+    let f = |p: DVec3| 0.01 + 0.05 * (p - DVec3::new(1.3, 0.0, 0.0)).length();
+    let run = |size: rdt_mesher::Sizing| {
+        let o = MeshOptions {
+            criteria: Criteria {
+                size: Some(size),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        mesh(&s, &o).unwrap()
+    };
+    let exact = run(rdt_mesher::Sizing::Field(Arc::new(f)));
+    let bounded = run(rdt_mesher::Sizing::Lipschitz(Arc::new(f), 0.05));
+    for r in [&exact, &bounded] {
+        assert!(r.stats.criteria_met);
+        let worst = r
+            .balls
+            .iter()
+            .map(|b| b.radius / f(b.center))
+            .fold(0.0, f64::max);
+        assert!(worst <= 1.0, "max r / sigma = {worst}");
+        assert_eq!(
+            r.stats.max_r_over_sigma,
+            Some(worst),
+            "the reported max is exact"
+        );
+    }
+    let (a, b) = (exact.stats.vertices as f64, bounded.stats.vertices as f64);
+    eprintln!("Field: {a} vertices; Lipschitz: {b} vertices");
+    assert!((a - b).abs() <= 0.03 * a, "{a} vs {b} vertices");
+    for l in [-0.1, f64::NAN, f64::INFINITY] {
+        let c = Criteria {
+            size: Some(rdt_mesher::Sizing::Lipschitz(Arc::new(f), l)),
+            ..Default::default()
+        };
+        assert!(matches!(c.validate(), Err(MeshError::InvalidLipschitz(_))));
+    }
+}

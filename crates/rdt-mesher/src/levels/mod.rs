@@ -43,6 +43,7 @@ impl Mesher<'_> {
         self.restricted.clear();
         self.created_stamp.clear();
         self.queue.clear();
+        self.vertex_sizes.clear();
         self.manifold.last = None;
         self.ensure_vertex_slots();
         self.full_scan()

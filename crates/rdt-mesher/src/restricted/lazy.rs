@@ -102,7 +102,11 @@ impl Mesher<'_> {
         if !center.is_finite() {
             return Err(OracleError::NaN(center.x, center.y, center.z).into());
         }
-        let (radius, bad) = self.ball_badness(verts, (lb, cc), center)?;
+        // Bad whatever sigma(center) is: the size test's bounds (`vertex_sizes`) spare a
+        // costly field's evaluation where they suffice.
+        self.fill_vertex_sizes(verts.into_iter());
+        let sigma = self.sigma_for_test(verts, (lb, cc), center);
+        let (radius, bad) = self.ball_badness_with(verts, (lb, cc), center, sigma)?;
         let slot = self
             .restricted
             .get_mut(idx, rf.version)

@@ -6,6 +6,8 @@
 //! - `test`: the facet test: clip the dual (`crate::voronoi`), ask the oracle, register.
 //! - `lazy`: a facet known bad without its ball gets it only when the queue pops it.
 //! - `update`: after an insertion, what changed and only that.
+//! - `vertex_sizes`: the size test decided from sigma at the vertices when a Lipschitz
+//!   bound suffices.
 //! - `validate`: the incremental complex against a recomputation (for tests).
 //!
 //! # Invariants (kept by `update`)
@@ -23,5 +25,7 @@ mod test;
 mod update;
 #[cfg(test)]
 mod validate;
+mod vertex_sizes;
 
 pub(crate) use complex::{RFacet, Restricted, sorted3};
+pub(crate) use vertex_sizes::VertexSizes;

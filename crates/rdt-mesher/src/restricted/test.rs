@@ -202,16 +202,32 @@ impl Mesher<'_> {
         self.policy.observe(Calls::Crossings, dt, eager);
         // A size field (not a constant) is evaluated here, in parallel when it pays: it is a
         // pure function of the ball center, so the values are those `register_facet` would
-        // compute.
-        let field = matches!(self.opts.criteria.size, Some(crate::Sizing::Field(_)));
+        // compute (or a lower bound that decides the same, see `vertex_sizes`).
+        let field = self
+            .opts
+            .criteria
+            .size
+            .as_ref()
+            .is_some_and(|s| s.is_field());
         let sigmas: Vec<Option<f64>> = if field {
+            // sigma at the vertices first: most tests are then decided by the Lipschitz bound
+            // (`vertex_sizes`), with the same outcome.
+            self.fill_vertex_sizes(
+                pending
+                    .iter()
+                    .zip(&hits)
+                    .filter(|(pf, hit)| !pf.lazy && hit.is_some())
+                    .flat_map(|(pf, _)| pf.verts),
+            );
             let this = &*self;
             let jobs: Vec<(&PendingFacet, Option<(DVec3, bool)>)> =
                 pending.iter().zip(hits.iter().copied()).collect();
             self.policy
                 .field(jobs.len())
                 .map(&jobs, |&(pf, hit)| match hit {
-                    Some((c, _)) if !pf.lazy && c.is_finite() => this.opts.criteria.sigma_at(c),
+                    Some((c, _)) if !pf.lazy && c.is_finite() => {
+                        this.sigma_for_test(pf.verts, (pf.lb, pf.cc), c)
+                    }
                     _ => None,
                 })
         } else {
