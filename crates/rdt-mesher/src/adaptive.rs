@@ -152,6 +152,9 @@ fn next_id() -> u64 {
     IDS.fetch_add(1, Ordering::Relaxed)
 }
 
+/// d_k and the last field at a sample point.
+type DistanceAndOld = (f64, f64);
+
 /// The estimate of a round from the sample ([`crate::mesher::RoundEnd`]): the poles of its
 /// Delaunay triangulation (the mesher's when given, else built), thinned at the scale of the
 /// last floor; and at each sample point, d_k and the last field `prev` there (the mesher's
@@ -162,7 +165,7 @@ fn estimate(
     tri: Option<&delaunay3::Triangulation>,
     sizes: &[f64],
     keep: oracle::BoundingSphere,
-) -> Result<(Arc<MedialAxisEstimate>, Vec<(f64, f64)>), MeshError> {
+) -> Result<(Arc<MedialAxisEstimate>, Vec<DistanceAndOld>), MeshError> {
     let own;
     let tri = match tri {
         Some(t) => t,
