@@ -102,6 +102,17 @@ impl Default for Tds {
 }
 
 impl Tds {
+    /// Bytes allocated on the heap: (cells, free list, vertex -> cell, edge map).
+    pub(crate) fn heap_bytes(&self) -> [usize; 4] {
+        use std::mem::size_of;
+        [
+            self.cells.capacity() * size_of::<Cell>(),
+            self.free.capacity() * size_of::<CellId>(),
+            self.vertex_cell.capacity() * size_of::<CellId>(),
+            self.edges.heap_bytes(),
+        ]
+    }
+
     #[inline]
     pub(crate) fn cell(&self, c: CellId) -> &Cell {
         &self.cells[c.index()]

@@ -28,6 +28,12 @@ impl Mesher<'_> {
     pub(crate) fn finish(mut self) -> Result<MeshResult, MeshError> {
         // Lazy facets are left only by a budget stop: they are in the mesh, with their balls.
         self.resolve_all_lazy()?;
+        self.stats.memory = self.memory();
+        // What the output does not read is freed before it is built (the peak of a run is
+        // here: the structures and the output at once).
+        self.voronoi = Default::default();
+        self.queue = Default::default();
+        self.created_stamp = Vec::new();
         let mut facets = self.restricted.sorted();
         // A run stopped by a budget may still have facets at scaffold points: not part of
         // the mesh of S (the stop is reported; the criteria are unmet anyway).

@@ -47,6 +47,11 @@ pub(crate) struct Queue {
 }
 
 impl Queue {
+    /// Heap bytes allocated.
+    pub fn heap_bytes(&self) -> usize {
+        self.heap.capacity() * std::mem::size_of::<QEntry>()
+    }
+
     /// Entries, fresh or stale.
     pub fn len(&self) -> usize {
         self.heap.len()

@@ -252,6 +252,9 @@ pub struct Stats {
     /// Topological decisions taken on the output (images, `--min-component`): kind, where,
     /// size (see `MeshOptions::resolution`).
     pub topology_decisions: Vec<crate::TopologyDecision>,
+    /// Heap bytes of the mesher's structures at the end of the refinement
+    /// (`crate::memory`).
+    pub memory: Vec<crate::MemoryUse>,
 }
 
 impl Stats {

@@ -65,6 +65,18 @@ pub(crate) struct Restricted {
 }
 
 impl Restricted {
+    /// Heap bytes allocated: (the facets with their balls, the per-cell-facet and per-vertex
+    /// indexes).
+    pub fn heap_bytes(&self) -> (usize, usize) {
+        use std::mem::size_of;
+        (
+            self.slots.capacity() * size_of::<Slot>() + self.free.capacity() * 4,
+            self.of_facet.capacity() * 4
+                + self.facet_mask.capacity()
+                + self.vertex_facets.capacity() * 4,
+        )
+    }
+
     /// Registered facets.
     pub fn len(&self) -> usize {
         self.len

@@ -32,6 +32,11 @@ pub(crate) struct VertexSizes {
 }
 
 impl VertexSizes {
+    /// Heap bytes allocated.
+    pub fn heap_bytes(&self) -> usize {
+        self.values.capacity() * 8
+    }
+
     /// Forget every value (the field or the vertex ids changed).
     pub fn clear(&mut self) {
         self.values.clear();
