@@ -96,13 +96,6 @@ pub(crate) struct EdgeMap {
 }
 
 impl EdgeMap {
-    /// Bytes allocated on the heap.
-    pub(crate) fn heap_bytes(&self) -> usize {
-        self.keys.capacity() * 8
-            + self.vals.capacity() * std::mem::size_of::<(CellId, u8)>()
-            + self.gen_.capacity() * 4
-    }
-
     pub(crate) fn reset(&mut self, expected: usize) {
         let want = (expected * 2).next_power_of_two().max(64);
         if want > self.keys.len() {

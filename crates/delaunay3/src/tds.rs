@@ -109,7 +109,7 @@ impl Tds {
             self.cells.capacity() * size_of::<Cell>(),
             self.free.capacity() * size_of::<CellId>(),
             self.vertex_cell.capacity() * size_of::<CellId>(),
-            self.edges.heap_bytes(),
+            self.edges.memory_bytes(),
         ]
     }
 
@@ -233,14 +233,5 @@ impl Tds {
             self.cells[c.index()].v = [DEAD; 4];
             self.free.push(c);
         }
-    }
-
-    /// Bytes held by the vectors (capacities).
-    pub(crate) fn memory_bytes(&self) -> usize {
-        use std::mem::size_of;
-        self.vertex_cell.capacity() * 4
-            + self.cells.capacity() * size_of::<Cell>()
-            + self.free.capacity() * 4
-            + self.edges.memory_bytes()
     }
 }

@@ -331,12 +331,7 @@ impl Triangulation {
     /// Bytes held by the triangulation's vectors (capacities), excluding the small hash map
     /// used before the triangulation is 3D.
     pub fn memory_bytes(&self) -> usize {
-        use std::mem::size_of;
-        self.points.capacity() * size_of::<DVec3>()
-            + self.tds.memory_bytes()
-            + self.cavity.capacity() * 4
-            + self.stack.capacity() * 4
-            + self.boundary.capacity() * size_of::<Boundary>()
+        self.memory().iter().map(|m| m.1).sum()
     }
 
     /// The start of a walk: `hint` if it is a live cell, else the last created cell, else
