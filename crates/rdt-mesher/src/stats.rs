@@ -197,6 +197,11 @@ pub struct Stats {
     pub ray_insertions: usize,
     /// Insertions forced by the manifold patch.
     pub manifold_insertions: usize,
+    /// Rounds of neck reseeding (images: scan components split in Del_S(E), see
+    /// `crate::levels::necks`).
+    pub neck_rounds: usize,
+    /// Points inserted by the neck reseeding.
+    pub neck_insertions: usize,
     /// Manifold checks performed.
     pub manifold_passes: usize,
     /// Oracle value evaluations made by the mesher (circumcenters).

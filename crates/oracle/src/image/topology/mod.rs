@@ -35,6 +35,7 @@
 
 mod dsu;
 mod labels;
+mod necks;
 mod pairs;
 #[cfg(test)]
 mod reference;
@@ -43,6 +44,7 @@ mod seeds;
 mod tets;
 mod vanishing;
 
+pub use necks::Join;
 #[cfg(test)]
 pub(crate) use reference::compute_reference;
 pub(crate) use scan::compute;
