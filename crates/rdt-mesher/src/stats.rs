@@ -202,6 +202,9 @@ pub struct Stats {
     pub neck_rounds: usize,
     /// Points inserted by the neck reseeding.
     pub neck_insertions: usize,
+    /// Restricted facets queued (forced) by the neck reseeding because their vertices lie on
+    /// different scan components (a bridge between two components).
+    pub bridge_facets: usize,
     /// Manifold checks performed.
     pub manifold_passes: usize,
     /// Oracle value evaluations made by the mesher (circumcenters).

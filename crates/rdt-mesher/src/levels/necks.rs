@@ -7,10 +7,15 @@
 //! (the first crossings of rays perpendicular to it, from points of the inside region on it:
 //! the neck's wall, at the neck's own scale); the refinement of section 6.1 then resumes and
 //! meshes the neck with the usual criteria (the rings' facets are small and skinny, their
-//! surface Delaunay ball centres lie on the neck). At most [`NECK_ROUNDS`] rounds; a
-//! component still split after them stays split (reported by the scan accounting).
+//! surface Delaunay ball centres lie on the neck). The converse, a *bridge*: a restricted
+//! facet whose vertices lie on different scan components (two components closer than the
+//! sample spacing, e.g. a one-voxel speck beside a larger surface) is queued as the manifold
+//! patch queues its facets (forced, down to the same floor), so that the refinement separates
+//! them. At most [`NECK_ROUNDS`] rounds; a component still split or joined after them stays
+//! so (reported by the scan accounting).
 
 use crate::error::MeshError;
+use crate::queue::QEntry;
 use crate::state::Mesher;
 use crate::topology::VertexUnion;
 use glam::DVec3;
@@ -32,7 +37,7 @@ type Split = Vec<Vec<DVec3>>;
 
 impl Mesher<'_> {
     /// One round of neck reseeding (see the module docs) when the surface is an image and a
-    /// resolution is set; returns whether a point was inserted.
+    /// resolution is set; returns whether a point was inserted or a bridge facet queued.
     pub(crate) fn reseed_necks(&mut self) -> Result<bool, MeshError> {
         let (Some(_), Some(img)) = (self.opts.resolution, self.s.as_image()) else {
             return Ok(false);
@@ -43,7 +48,8 @@ impl Mesher<'_> {
         self.resolve_all_lazy()?;
         let t = Instant::now();
         let splits = self.split_components(img);
-        if splits.is_empty() {
+        let bridges = self.push_bridges(img);
+        if splits.is_empty() && bridges == 0 {
             self.t_oracle += t.elapsed();
             return Ok(false);
         }
@@ -53,7 +59,7 @@ impl Mesher<'_> {
             pts.extend(ring_points(img, *label, pieces));
         }
         self.t_oracle += t.elapsed();
-        let mut any = false;
+        let mut any = bridges > 0;
         for p in pts {
             if self.budget_exceeded() {
                 break;
@@ -64,6 +70,34 @@ impl Mesher<'_> {
             }
         }
         Ok(any)
+    }
+
+    /// Queue (forced, as the manifold patch does) the restricted facets whose vertices lie on
+    /// different scan components, down to the manifold floor: a bridge between two
+    /// components closer than the sample spacing. Returns how many were queued.
+    fn push_bridges(&mut self, img: &ImageSurface) -> usize {
+        let mut label: Vec<Option<Option<usize>>> = vec![None; self.tri.num_vertices()];
+        let mut keys = Vec::new();
+        for (idx, k, rf) in self.restricted.iter() {
+            let l = k.map(|v| {
+                *label[v.index()].get_or_insert_with(|| img.component_of(self.tri.point(v)))
+            });
+            let mixed = l.iter().all(Option::is_some) && (l[0] != l[1] || l[1] != l[2]);
+            if mixed && rf.radius >= self.manifold_floor(rf.center) {
+                keys.push((idx, *rf));
+            }
+        }
+        let n = keys.len();
+        for (idx, rf) in keys {
+            self.queue.push(QEntry {
+                bad: 1.0 + rf.radius,
+                idx,
+                version: rf.version,
+                forced: true,
+            });
+        }
+        self.stats.bridge_facets += n;
+        n
     }
 
     /// The scan components on which Del_S(E) has several pieces (each piece goes to the
