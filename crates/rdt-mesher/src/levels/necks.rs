@@ -47,8 +47,9 @@ impl Mesher<'_> {
         }
         self.resolve_all_lazy()?;
         let t = Instant::now();
-        let splits = self.split_components(img);
-        let bridges = self.push_bridges(img);
+        let labels = self.vertex_labels(img);
+        let splits = self.split_components(&labels);
+        let bridges = self.push_bridges(&labels);
         if splits.is_empty() && bridges == 0 {
             self.t_oracle += t.elapsed();
             return Ok(false);
@@ -75,13 +76,10 @@ impl Mesher<'_> {
     /// Queue (forced, as the manifold patch does) the restricted facets whose vertices lie on
     /// different scan components, down to the manifold floor: a bridge between two
     /// components closer than the sample spacing. Returns how many were queued.
-    fn push_bridges(&mut self, img: &ImageSurface) -> usize {
-        let mut label: Vec<Option<Option<usize>>> = vec![None; self.tri.num_vertices()];
+    fn push_bridges(&mut self, labels: &[Option<usize>]) -> usize {
         let mut keys = Vec::new();
         for (idx, k, rf) in self.restricted.iter() {
-            let l = k.map(|v| {
-                *label[v.index()].get_or_insert_with(|| img.component_of(self.tri.point(v)))
-            });
+            let l = k.map(|v| labels[v.index()]);
             let mixed = l.iter().all(Option::is_some) && (l[0] != l[1] || l[1] != l[2]);
             if mixed && rf.radius >= self.manifold_floor(rf.center) {
                 keys.push((idx, *rf));
@@ -100,9 +98,30 @@ impl Mesher<'_> {
         n
     }
 
+    /// The scan component of every vertex of a restricted facet (`None` for the others and
+    /// where the scan gives none), computed in parallel (each independently: the result does
+    /// not depend on the thread count).
+    fn vertex_labels(&self, img: &ImageSurface) -> Vec<Option<usize>> {
+        use rayon::prelude::*;
+        let n = self.tri.num_vertices();
+        let mut used = vec![false; n];
+        for (_, k, _) in self.restricted.iter() {
+            k.iter().for_each(|v| used[v.index()] = true);
+        }
+        let tri = &self.tri;
+        (0..n)
+            .into_par_iter()
+            .map(|v| {
+                used[v]
+                    .then(|| img.component_of(tri.point(delaunay3::VertexId::from_index(v))))
+                    .flatten()
+            })
+            .collect()
+    }
+
     /// The scan components on which Del_S(E) has several pieces (each piece goes to the
     /// component most of its vertices are labelled with), in component order.
-    fn split_components(&self, img: &ImageSurface) -> Vec<(usize, Split)> {
+    fn split_components(&self, labels: &[Option<usize>]) -> Vec<(usize, Split)> {
         let n = self.tri.num_vertices();
         let mut union = VertexUnion::new(n);
         let mut used = vec![false; n];
@@ -117,7 +136,7 @@ impl Mesher<'_> {
             let p = self.tri.point(delaunay3::VertexId::from_index(v));
             let e = pieces.entry(union.find(v as u32)).or_default();
             e.0.push(p);
-            if let Some(l) = img.component_of(p) {
+            if let Some(l) = labels[v] {
                 *e.1.entry(l).or_default() += 1;
             }
         }
