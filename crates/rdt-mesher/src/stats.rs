@@ -205,6 +205,8 @@ pub struct Stats {
     /// Restricted facets queued (forced) by the neck reseeding because their vertices lie on
     /// different scan components (a bridge between two components).
     pub bridge_facets: usize,
+    /// Rounds in which bridge facets were queued.
+    pub bridge_rounds: usize,
     /// Manifold checks performed.
     pub manifold_passes: usize,
     /// Oracle value evaluations made by the mesher (circumcenters).

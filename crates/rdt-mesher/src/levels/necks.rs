@@ -25,7 +25,7 @@ use oracle::image::{ImageSurface, Join};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-/// Rounds of neck reseeding per run.
+/// Rounds of neck reseeding per run (and as many rounds of bridges).
 pub(crate) const NECK_ROUNDS: u32 = 3;
 
 /// Rays per ring.
@@ -42,19 +42,35 @@ impl Mesher<'_> {
         let (Some(_), Some(img)) = (self.opts.resolution, self.s.as_image()) else {
             return Ok(false);
         };
-        if self.stats.neck_rounds >= NECK_ROUNDS as usize || self.budget_exceeded() {
+        let rounds = NECK_ROUNDS as usize;
+        if (self.stats.neck_rounds >= rounds && self.stats.bridge_rounds >= rounds)
+            || self.budget_exceeded()
+        {
             return Ok(false);
         }
         self.resolve_all_lazy()?;
         let t = Instant::now();
         let labels = self.vertex_labels(img);
-        let splits = self.split_components(&labels);
-        let bridges = self.push_bridges(&labels);
+        let mut splits = self.split_components(&labels);
+        if self.stats.neck_rounds >= rounds {
+            splits.clear();
+        }
+        // Bridges once the pieces are joined (a neck's new facets may still carry mixed
+        // labels while it is being meshed).
+        let bridges = if splits.is_empty() && self.stats.bridge_rounds < rounds {
+            self.push_bridges(&labels)
+        } else {
+            0
+        };
         if splits.is_empty() && bridges == 0 {
             self.t_oracle += t.elapsed();
             return Ok(false);
         }
-        self.stats.neck_rounds += 1;
+        if splits.is_empty() {
+            self.stats.bridge_rounds += 1;
+        } else {
+            self.stats.neck_rounds += 1;
+        }
         let mut pts: Vec<DVec3> = Vec::new();
         for (label, pieces) in &splits {
             pts.extend(ring_points(img, *label, pieces));
