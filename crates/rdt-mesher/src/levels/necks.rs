@@ -2,8 +2,8 @@
 //! sample spacing meets no Voronoi edge, so Del_S(E) meshes the two sides as separate closed
 //! pieces and the manifold patch sees nothing wrong. The voxel scan knows better: each piece
 //! of Del_S(E) lies on one scan component, and a component with several pieces has a join of
-//! the scan (two inside nodes joined by a grid edge, or by a face's saddle) between nodes
-//! nearest to different pieces. Around each such join a ring of points of S is inserted
+//! the scan (two inside nodes joined by a grid edge, or by a face's saddle; for the wall of a
+//! cavity, two nodes of the cavity too) between nodes nearest to different pieces. Around each such join a ring of points of S is inserted
 //! (the first crossings of rays perpendicular to it, from points of the inside region on it:
 //! the neck's wall, at the neck's own scale); the refinement of section 6.1 then resumes and
 //! meshes the neck with the usual criteria (the rings' facets are small and skinny, their
@@ -206,7 +206,7 @@ fn ring_points(img: &ImageSurface, label: usize, pieces: &Split) -> Vec<DVec3> {
     for piece in &pieces[1..] {
         let lo = piece.iter().fold(DVec3::INFINITY, |a, &p| a.min(p)) - DVec3::splat(margin);
         let hi = piece.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p)) + DVec3::splat(margin);
-        joins.extend(img.inside_joins(label, lo, hi));
+        joins.extend(img.neck_joins(label, lo, hi));
     }
     joins.sort_by(|x, y| {
         (x.a.to_array(), x.b.to_array())

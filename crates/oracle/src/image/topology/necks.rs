@@ -8,15 +8,15 @@ use super::labels::Labels;
 use crate::image::ImageSurface;
 use glam::DVec3;
 
-/// A join of the voxel scan between two nodes of one inside region (world space).
+/// A join of the voxel scan between two nodes of one region (world space).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Join {
     /// One node.
     pub a: DVec3,
     /// The other node.
     pub b: DVec3,
-    /// A point of the inside region between them: the midpoint of a grid edge, or the saddle
-    /// of the face whose diagonal `a`-`b` is.
+    /// A point of the region between them: the midpoint of a grid edge, or the saddle of the
+    /// face whose diagonal `a`-`b` is.
     pub via: DVec3,
     /// Whether `a`-`b` is the diagonal of a face (else a grid edge).
     pub diagonal: bool,
@@ -28,17 +28,41 @@ impl ImageSurface {
     /// the nodes of the voxel box covering it), in node order. Empty when the scan kept no
     /// labels or the index is out of range.
     pub fn inside_joins(&self, component: usize, lo: DVec3, hi: DVec3) -> Vec<Join> {
+        self.joins(component, true, lo, hi)
+    }
+
+    /// [`ImageSurface::inside_joins`], then the joins of the component's outside region when
+    /// it is bounded (a cavity, whose wall the component is: a neck of the wall can be a
+    /// tunnel of the outside), not the unbounded one.
+    pub fn neck_joins(&self, component: usize, lo: DVec3, hi: DVec3) -> Vec<Join> {
+        let mut out = self.joins(component, true, lo, hi);
+        let topo = self.topology();
+        let bounded = topo.labels.as_deref().is_some_and(|l| {
+            l.pairs
+                .get(component)
+                .is_some_and(|&(_, o)| o != l.exterior)
+        });
+        if bounded {
+            out.extend(self.joins(component, false, lo, hi));
+        }
+        out
+    }
+
+    /// The joins of the component's inside (`inside`) or outside region in the box.
+    fn joins(&self, component: usize, inside: bool, lo: DVec3, hi: DVec3) -> Vec<Join> {
         let topo = self.topology();
         let Some(labels) = topo.labels.as_deref() else {
             return Vec::new();
         };
-        let Some(&(root, _)) = labels.pairs.get(component) else {
+        let Some(&(ins, outs)) = labels.pairs.get(component) else {
             return Vec::new();
         };
+        let root = if inside { ins } else { outs };
         let (vlo, vhi) = voxel_box(self, lo, hi);
         let to_world = self.inv.inverse();
         let dims = labels.dims.map(|d| d as i64);
-        let inside = |p: [i64; 3]| labels.region(p) == (root, true);
+        let side = inside;
+        let inside = |p: [i64; 3]| labels.region(p) == (root, side);
         let mut out = Vec::new();
         for k in vlo[2]..=vhi[2] {
             for j in vlo[1]..=vhi[1] {
@@ -63,11 +87,14 @@ impl ImageSurface {
                     for (u, v) in [(0, 1), (0, 2), (1, 2)] {
                         for (du, dv) in [(1i64, 1i64), (1, -1)] {
                             let q = offset(p, u, du, v, dv);
-                            let side = [offset(p, u, du, v, 0), offset(p, u, 0, v, dv)];
-                            if !in_grid(q, dims) || !inside(q) || side.iter().any(|&s| inside(s)) {
+                            let side_nodes = [offset(p, u, du, v, 0), offset(p, u, 0, v, dv)];
+                            if !in_grid(q, dims)
+                                || !inside(q)
+                                || side_nodes.iter().any(|&s| inside(s))
+                            {
                                 continue;
                             }
-                            if let Some(s) = saddle(self, labels, p, q, side) {
+                            if let Some(s) = saddle(self, labels, p, q, side_nodes, side) {
                                 out.push(Join {
                                     a: to_world.transform_point3(node(p)),
                                     b: to_world.transform_point3(node(q)),
@@ -132,15 +159,16 @@ fn in_grid(p: [i64; 3], dims: [i64; 3]) -> bool {
     (0..3).all(|i| p[i] >= 0 && p[i] < dims[i])
 }
 
-/// The saddle (voxel coordinates) of the face with diagonal `p`-`q` (both inside) and the
-/// other corners `side` (outside), when the asymptotic decider joins `p` and `q` (the saddle
-/// value is inside, as in the scan).
+/// The saddle (voxel coordinates) of the face with diagonal `p`-`q` (both on the side
+/// `inside`) and the other corners `side` (on the other side), when the asymptotic decider
+/// joins `p` and `q` (the saddle value is on their side, as in the scan).
 fn saddle(
     s: &ImageSurface,
     labels: &Labels,
     p: [i64; 3],
     q: [i64; 3],
     side: [[i64; 3]; 2],
+    inside: bool,
 ) -> Option<DVec3> {
     let nx = labels.dims[0] as i64;
     let ny = labels.dims[1] as i64;
@@ -154,7 +182,7 @@ fn saddle(
     } else {
         0.0
     };
-    if value >= 0.0 || den == 0.0 {
+    if (value < 0.0) != inside || den == 0.0 {
         return None;
     }
     // Stationary point: u along side[0] - p, v along side[1] - p.
@@ -171,8 +199,13 @@ mod tests {
 
     /// 5^3 voxels of -1 (outside at iso 0) with the given nodes set to `v`.
     fn grid(nodes: &[([usize; 3], f32)]) -> ImageSurface {
+        grid_of(-1.0, nodes)
+    }
+
+    /// 5^3 voxels of `bg` with the given nodes set to `v`, at iso 0.
+    fn grid_of(bg: f32, nodes: &[([usize; 3], f32)]) -> ImageSurface {
         let n = 5;
-        let mut d = vec![-1f32; n * n * n];
+        let mut d = vec![bg; n * n * n];
         for &([i, j, k], v) in nodes {
             d[i + n * (j + n * k)] = v;
         }
@@ -207,5 +240,27 @@ mod tests {
         assert!(s.inside_joins(c, DVec3::ZERO, DVec3::splat(4.0)).is_empty());
         // Out of range: nothing.
         assert!(s.inside_joins(99, DVec3::ZERO, DVec3::ONE).is_empty());
+    }
+
+    #[test]
+    fn a_cavity_has_the_joins_of_its_outside_region_too() {
+        // Inside everywhere (1) but two 6-neighbours (-1): a cavity of two nodes, whose wall
+        // is the component of the outside region that is not the unbounded one.
+        let s = grid_of(1.0, &[([1, 2, 2], -1.0), ([2, 2, 2], -1.0)]);
+        let t = s.topology();
+        let cavity = t
+            .component_seeds
+            .iter()
+            .filter_map(|p| s.component_of(*p))
+            .find(|&c| {
+                let j = s.neck_joins(c, DVec3::ZERO, DVec3::splat(4.0));
+                j.len() > s.inside_joins(c, DVec3::ZERO, DVec3::splat(4.0)).len()
+            })
+            .expect("the cavity's wall has an outside join");
+        let all = s.neck_joins(cavity, DVec3::ZERO, DVec3::splat(4.0));
+        assert!(
+            all.iter()
+                .any(|j| !j.diagonal && j.via == DVec3::new(1.5, 2.0, 2.0))
+        );
     }
 }
