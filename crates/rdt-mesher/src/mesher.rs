@@ -134,6 +134,10 @@ impl Mesher<'_> {
             if self.shoot_control_rays()? {
                 continue;
             }
+            // Images: necks thinner than the sample (ours, `crate::levels::necks`).
+            if self.reseed_necks()? {
+                continue;
+            }
             // Section 6.6.1: the manifold patch.
             if self.opts.manifold && self.push_nonmanifold()? > 0 {
                 continue;

@@ -197,6 +197,16 @@ pub struct Stats {
     pub ray_insertions: usize,
     /// Insertions forced by the manifold patch.
     pub manifold_insertions: usize,
+    /// Rounds of neck reseeding (images: scan components split in Del_S(E), see
+    /// `crate::levels::necks`).
+    pub neck_rounds: usize,
+    /// Points inserted by the neck reseeding.
+    pub neck_insertions: usize,
+    /// Restricted facets queued (forced) by the neck reseeding because their vertices lie on
+    /// different scan components (a bridge between two components).
+    pub bridge_facets: usize,
+    /// Rounds in which bridge facets were queued.
+    pub bridge_rounds: usize,
     /// Manifold checks performed.
     pub manifold_passes: usize,
     /// Oracle value evaluations made by the mesher (circumcenters).

@@ -1,5 +1,6 @@
 //! What runs after the queue of section 6.1 empties, level by level (as CGAL's surface mesher
-//! layers its refinement): the manifold patch of section 6.6.1 (`manifold`), and the final
+//! layers its refinement): on images, the neck reseeding (`necks`, ours), the manifold patch
+//! of section 6.6.1 (`manifold`), and the final
 //! check of the scaffold (`scaffold`, ours), which may rebuild Del(E) without it; on sampled
 //! surfaces (images), the topological repair of what the patch leaves (`repair`, ours, with
 //! `links` and `holes`).
@@ -7,6 +8,7 @@
 mod holes;
 mod links;
 pub(crate) mod manifold;
+pub(crate) mod necks;
 pub(crate) mod repair;
 pub(crate) mod scaffold;
 

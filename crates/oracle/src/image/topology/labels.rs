@@ -24,7 +24,7 @@ pub(crate) struct Labels {
 
 impl Labels {
     /// Region and side of node (i, j, k); the padding outside the grid is the exterior.
-    fn region(&self, [i, j, k]: [i64; 3]) -> (u32, bool) {
+    pub(crate) fn region(&self, [i, j, k]: [i64; 3]) -> (u32, bool) {
         let [nx, ny, nz] = self.dims.map(|d| d as i64);
         if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
             return (self.exterior, false);

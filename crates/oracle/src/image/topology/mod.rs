@@ -30,11 +30,15 @@
 //! grid edges, and of rays from its deepest node) whose circumcentre lies in that region:
 //! the tetrahedron's four facets are restricted from the first insertion. On the nilearn
 //! fixture at iso 3 (10 components, 7 of them 1 to 13 voxels), the mesher missed 1 to 4
-//! components with a single seed each (seeds 0-7), none with the tetrahedra. The scan of node signs runs in parallel (rayon); union-find and the collection are
+//! components with a single seed each (seeds 0-7), none with the tetrahedra.
+//!
+//! **Joins** (`necks`): the grid edges and saddle diagonals of one inside region, where a
+//! mesh that splits a component has missed a neck (the mesher rings them with points of S). The scan of node signs runs in parallel (rayon); union-find and the collection are
 //! sequential in index order, so the result does not depend on the thread count.
 
 mod dsu;
 mod labels;
+mod necks;
 mod pairs;
 #[cfg(test)]
 mod reference;
@@ -43,6 +47,7 @@ mod seeds;
 mod tets;
 mod vanishing;
 
+pub use necks::Join;
 #[cfg(test)]
 pub(crate) use reference::compute_reference;
 pub(crate) use scan::compute;

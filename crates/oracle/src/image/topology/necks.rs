@@ -1,0 +1,266 @@
+//! Joins of the voxel scan (ours, P1 of section 6.6.2): where two grid nodes of one inside
+//! region are connected (6-neighbours, or the diagonal of a face joined through its bilinear
+//! saddle), the trilinear inside region passes from one to the other. A join between nodes
+//! that a mesh puts on different pieces of one surface component is a neck the mesh missed;
+//! the mesher samples S around it (`rdt_mesher`'s neck reseeding).
+
+use super::labels::Labels;
+use crate::image::ImageSurface;
+use glam::DVec3;
+
+/// A join of the voxel scan between two nodes of one region (world space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Join {
+    /// One node.
+    pub a: DVec3,
+    /// The other node.
+    pub b: DVec3,
+    /// A point of the region between them: the midpoint of a grid edge, or the saddle of the
+    /// face whose diagonal `a`-`b` is.
+    pub via: DVec3,
+    /// Whether `a`-`b` is the diagonal of a face (else a grid edge).
+    pub diagonal: bool,
+}
+
+impl ImageSurface {
+    /// The joins of the inside region of the scan component `component` (index into
+    /// [`super::Topology::component_seeds`]) between nodes in the box `[lo, hi]` (world space;
+    /// the nodes of the voxel box covering it), in node order. Empty when the scan kept no
+    /// labels or the index is out of range.
+    pub fn inside_joins(&self, component: usize, lo: DVec3, hi: DVec3) -> Vec<Join> {
+        self.joins(component, true, lo, hi)
+    }
+
+    /// [`ImageSurface::inside_joins`], then the joins of the component's outside region when
+    /// it is bounded (a cavity, whose wall the component is: a neck of the wall can be a
+    /// tunnel of the outside), not the unbounded one.
+    pub fn neck_joins(&self, component: usize, lo: DVec3, hi: DVec3) -> Vec<Join> {
+        let mut out = self.joins(component, true, lo, hi);
+        let topo = self.topology();
+        let bounded = topo.labels.as_deref().is_some_and(|l| {
+            l.pairs
+                .get(component)
+                .is_some_and(|&(_, o)| o != l.exterior)
+        });
+        if bounded {
+            out.extend(self.joins(component, false, lo, hi));
+        }
+        out
+    }
+
+    /// The joins of the component's inside (`inside`) or outside region in the box.
+    fn joins(&self, component: usize, inside: bool, lo: DVec3, hi: DVec3) -> Vec<Join> {
+        let topo = self.topology();
+        let Some(labels) = topo.labels.as_deref() else {
+            return Vec::new();
+        };
+        let Some(&(ins, outs)) = labels.pairs.get(component) else {
+            return Vec::new();
+        };
+        let root = if inside { ins } else { outs };
+        let (vlo, vhi) = voxel_box(self, lo, hi);
+        let to_world = self.inv.inverse();
+        let dims = labels.dims.map(|d| d as i64);
+        let side = inside;
+        let inside = |p: [i64; 3]| labels.region(p) == (root, side);
+        let mut out = Vec::new();
+        for k in vlo[2]..=vhi[2] {
+            for j in vlo[1]..=vhi[1] {
+                for i in vlo[0]..=vhi[0] {
+                    let p = [i, j, k];
+                    if !inside(p) {
+                        continue;
+                    }
+                    for axis in 0..3 {
+                        let mut q = p;
+                        q[axis] += 1;
+                        if inside(q) {
+                            let (a, b) = (node(p), node(q));
+                            out.push(Join {
+                                a: to_world.transform_point3(a),
+                                b: to_world.transform_point3(b),
+                                via: to_world.transform_point3(0.5 * (a + b)),
+                                diagonal: false,
+                            });
+                        }
+                    }
+                    for (u, v) in [(0, 1), (0, 2), (1, 2)] {
+                        for (du, dv) in [(1i64, 1i64), (1, -1)] {
+                            let q = offset(p, u, du, v, dv);
+                            let side_nodes = [offset(p, u, du, v, 0), offset(p, u, 0, v, dv)];
+                            if !in_grid(q, dims)
+                                || !inside(q)
+                                || side_nodes.iter().any(|&s| inside(s))
+                            {
+                                continue;
+                            }
+                            if let Some(s) = saddle(self, labels, p, q, side_nodes, side) {
+                                out.push(Join {
+                                    a: to_world.transform_point3(node(p)),
+                                    b: to_world.transform_point3(node(q)),
+                                    via: to_world.transform_point3(s),
+                                    diagonal: true,
+                                });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The node range (clamped to the grid) of the voxel box covering the world box `[lo, hi]`.
+fn voxel_box(s: &ImageSurface, lo: DVec3, hi: DVec3) -> ([i64; 3], [i64; 3]) {
+    let mut vlo = DVec3::INFINITY;
+    let mut vhi = DVec3::NEG_INFINITY;
+    for c in 0..8 {
+        let w = DVec3::new(
+            if c & 1 == 0 { lo.x } else { hi.x },
+            if c & 2 == 0 { lo.y } else { hi.y },
+            if c & 4 == 0 { lo.z } else { hi.z },
+        );
+        let v = s.inv.transform_point3(w);
+        vlo = vlo.min(v);
+        vhi = vhi.max(v);
+    }
+    let n = s.n;
+    let clamp = |x: f64, d: isize| x.clamp(0.0, (d - 1).max(0) as f64) as i64;
+    if !(vlo.is_finite() && vhi.is_finite()) {
+        return ([0; 3], [-1; 3]);
+    }
+    (
+        [
+            clamp(vlo.x.floor(), n[0]),
+            clamp(vlo.y.floor(), n[1]),
+            clamp(vlo.z.floor(), n[2]),
+        ],
+        [
+            clamp(vhi.x.ceil(), n[0]),
+            clamp(vhi.y.ceil(), n[1]),
+            clamp(vhi.z.ceil(), n[2]),
+        ],
+    )
+}
+
+fn node(p: [i64; 3]) -> DVec3 {
+    DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+}
+
+fn offset(p: [i64; 3], u: usize, du: i64, v: usize, dv: i64) -> [i64; 3] {
+    let mut q = p;
+    q[u] += du;
+    q[v] += dv;
+    q
+}
+
+fn in_grid(p: [i64; 3], dims: [i64; 3]) -> bool {
+    (0..3).all(|i| p[i] >= 0 && p[i] < dims[i])
+}
+
+/// The saddle (voxel coordinates) of the face with diagonal `p`-`q` (both on the side
+/// `inside`) and the other corners `side` (on the other side), when the asymptotic decider
+/// joins `p` and `q` (the saddle value is on their side, as in the scan).
+fn saddle(
+    s: &ImageSurface,
+    labels: &Labels,
+    p: [i64; 3],
+    q: [i64; 3],
+    side: [[i64; 3]; 2],
+    inside: bool,
+) -> Option<DVec3> {
+    let nx = labels.dims[0] as i64;
+    let ny = labels.dims[1] as i64;
+    let idx = |p: [i64; 3]| (p[0] + nx * (p[1] + ny * p[2])) as usize;
+    // Bilinear f on the face: f00 at p, f11 at q, f10 at side[0], f01 at side[1].
+    let (f00, f11) = (s.node_value(idx(p)), s.node_value(idx(q)));
+    let (f10, f01) = (s.node_value(idx(side[0])), s.node_value(idx(side[1])));
+    let den = f00 + f11 - f10 - f01;
+    let value = if den != 0.0 {
+        (f00 * f11 - f10 * f01) / den
+    } else {
+        0.0
+    };
+    if (value < 0.0) != inside || den == 0.0 {
+        return None;
+    }
+    // Stationary point: u along side[0] - p, v along side[1] - p.
+    let u = (f00 - f01) / den;
+    let v = (f00 - f10) / den;
+    let (a, e0, e1) = (node(p), node(side[0]) - node(p), node(side[1]) - node(p));
+    Some(a + e0 * u.clamp(0.0, 1.0) + e1 * v.clamp(0.0, 1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::image::{ImageOptions, ImageSurface, Volume, Voxels};
+    use glam::{DAffine3, DVec3};
+
+    /// 5^3 voxels of -1 (outside at iso 0) with the given nodes set to `v`.
+    fn grid(nodes: &[([usize; 3], f32)]) -> ImageSurface {
+        grid_of(-1.0, nodes)
+    }
+
+    /// 5^3 voxels of `bg` with the given nodes set to `v`, at iso 0.
+    fn grid_of(bg: f32, nodes: &[([usize; 3], f32)]) -> ImageSurface {
+        let n = 5;
+        let mut d = vec![bg; n * n * n];
+        for &([i, j, k], v) in nodes {
+            d[i + n * (j + n * k)] = v;
+        }
+        let vol = Volume::new([n; 3], Voxels::F32(d), DAffine3::IDENTITY).unwrap();
+        let opts = ImageOptions {
+            iso: Some(0.0),
+            ..Default::default()
+        };
+        ImageSurface::new(vol, &opts).unwrap()
+    }
+
+    #[test]
+    fn grid_edges_and_saddle_diagonals_are_joins() {
+        // Two 6-neighbours: one join along the edge, its midpoint between.
+        let s = grid(&[([1, 2, 2], 1.0), ([2, 2, 2], 1.0)]);
+        assert_eq!(s.component_count(), 1);
+        let c = s.component_of(s.topology().component_seeds[0]).unwrap();
+        let j = s.inside_joins(c, DVec3::ZERO, DVec3::splat(4.0));
+        assert_eq!(j.len(), 1);
+        assert!(!j[0].diagonal && j[0].via == DVec3::new(1.5, 2.0, 2.0));
+        // A face diagonal whose saddle is inside (values 3, 3 against -1, -1: saddle 1 > 0).
+        let s = grid(&[([1, 1, 2], 3.0), ([2, 2, 2], 3.0)]);
+        assert_eq!(s.component_count(), 1);
+        let c = s.component_of(s.topology().component_seeds[0]).unwrap();
+        let j = s.inside_joins(c, DVec3::ZERO, DVec3::splat(4.0));
+        assert_eq!(j.len(), 1);
+        assert!(j[0].diagonal && j[0].via.distance(DVec3::new(1.5, 1.5, 2.0)) < 1e-12);
+        // Not joined through the saddle (values 0.5: saddle -0.25): two components, no join.
+        let s = grid(&[([1, 1, 2], 0.5), ([2, 2, 2], 0.5)]);
+        assert_eq!(s.component_count(), 2);
+        let c = s.component_of(s.topology().component_seeds[0]).unwrap();
+        assert!(s.inside_joins(c, DVec3::ZERO, DVec3::splat(4.0)).is_empty());
+        // Out of range: nothing.
+        assert!(s.inside_joins(99, DVec3::ZERO, DVec3::ONE).is_empty());
+    }
+
+    #[test]
+    fn a_cavity_has_the_joins_of_its_outside_region_too() {
+        // Inside everywhere (1) but two 6-neighbours (-1): a cavity of two nodes, whose wall
+        // is the component of the outside region that is not the unbounded one.
+        let s = grid_of(1.0, &[([1, 2, 2], -1.0), ([2, 2, 2], -1.0)]);
+        let t = s.topology();
+        let cavity = t
+            .component_seeds
+            .iter()
+            .filter_map(|p| s.component_of(*p))
+            .find(|&c| {
+                let j = s.neck_joins(c, DVec3::ZERO, DVec3::splat(4.0));
+                j.len() > s.inside_joins(c, DVec3::ZERO, DVec3::splat(4.0)).len()
+            })
+            .expect("the cavity's wall has an outside join");
+        let all = s.neck_joins(cavity, DVec3::ZERO, DVec3::splat(4.0));
+        assert!(
+            all.iter()
+                .any(|j| !j.diagonal && j.via == DVec3::new(1.5, 2.0, 2.0))
+        );
+    }
+}

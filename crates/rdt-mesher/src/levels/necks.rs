@@ -1,0 +1,266 @@
+//! Neck reseeding (ours), on images: a neck of the trilinear level set thinner than the
+//! sample spacing meets no Voronoi edge, so Del_S(E) meshes the two sides as separate closed
+//! pieces and the manifold patch sees nothing wrong. The voxel scan knows better: each piece
+//! of Del_S(E) lies on one scan component, and a component with several pieces has a join of
+//! the scan (two inside nodes joined by a grid edge, or by a face's saddle; for the wall of a
+//! cavity, two nodes of the cavity too) between nodes nearest to different pieces. Around each such join a ring of points of S is inserted
+//! (the first crossings of rays perpendicular to it, from points of the inside region on it:
+//! the neck's wall, at the neck's own scale); the refinement of section 6.1 then resumes and
+//! meshes the neck with the usual criteria (the rings' facets are small and skinny, their
+//! surface Delaunay ball centres lie on the neck). The converse, a *bridge*: a restricted
+//! facet whose vertices lie on different scan components (two components closer than the
+//! sample spacing, e.g. a one-voxel speck beside a larger surface) is queued as the manifold
+//! patch queues its facets (forced, down to the same floor), so that the refinement separates
+//! them. At most [`NECK_ROUNDS`] rounds; a component still split or joined after them stays
+//! so (reported by the scan accounting).
+
+use crate::error::MeshError;
+use crate::queue::QEntry;
+use crate::state::Mesher;
+use crate::topology::VertexUnion;
+use glam::DVec3;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use oracle::Surface;
+use oracle::image::{ImageSurface, Join};
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Rounds of neck reseeding per run (and as many rounds of bridges).
+pub(crate) const NECK_ROUNDS: u32 = 3;
+
+/// Rays per ring.
+const RING_RAYS: usize = 8;
+
+/// The pieces of Del_S(E) that lie on one scan component: per piece, its vertices' points,
+/// largest piece first.
+type Split = Vec<Vec<DVec3>>;
+
+impl Mesher<'_> {
+    /// One round of neck reseeding (see the module docs) when the surface is an image and a
+    /// resolution is set; returns whether a point was inserted or a bridge facet queued.
+    pub(crate) fn reseed_necks(&mut self) -> Result<bool, MeshError> {
+        let (Some(_), Some(img)) = (self.opts.resolution, self.s.as_image()) else {
+            return Ok(false);
+        };
+        let rounds = NECK_ROUNDS as usize;
+        if (self.stats.neck_rounds >= rounds && self.stats.bridge_rounds >= rounds)
+            || self.budget_exceeded()
+        {
+            return Ok(false);
+        }
+        self.resolve_all_lazy()?;
+        let t = Instant::now();
+        let labels = self.vertex_labels(img);
+        let mut splits = self.split_components(&labels);
+        if self.stats.neck_rounds >= rounds {
+            splits.clear();
+        }
+        // Bridges once the pieces are joined (a neck's new facets may still carry mixed
+        // labels while it is being meshed).
+        let bridges = if splits.is_empty() && self.stats.bridge_rounds < rounds {
+            self.push_bridges(&labels)
+        } else {
+            0
+        };
+        if splits.is_empty() && bridges == 0 {
+            self.t_oracle += t.elapsed();
+            return Ok(false);
+        }
+        if splits.is_empty() {
+            self.stats.bridge_rounds += 1;
+        } else {
+            self.stats.neck_rounds += 1;
+        }
+        let mut pts: Vec<DVec3> = Vec::new();
+        for (label, pieces) in &splits {
+            pts.extend(ring_points(img, *label, pieces));
+        }
+        self.t_oracle += t.elapsed();
+        let mut any = bridges > 0;
+        for p in pts {
+            if self.budget_exceeded() {
+                break;
+            }
+            if self.insert(p, None)? {
+                self.stats.neck_insertions += 1;
+                any = true;
+            }
+        }
+        Ok(any)
+    }
+
+    /// Queue (forced, as the manifold patch does) the restricted facets whose vertices lie on
+    /// different scan components, down to the manifold floor: a bridge between two
+    /// components closer than the sample spacing. Returns how many were queued.
+    fn push_bridges(&mut self, labels: &[Option<usize>]) -> usize {
+        let mut keys = Vec::new();
+        for (idx, k, rf) in self.restricted.iter() {
+            let l = k.map(|v| labels[v.index()]);
+            let mixed = l.iter().all(Option::is_some) && (l[0] != l[1] || l[1] != l[2]);
+            if mixed && rf.radius >= self.manifold_floor(rf.center) {
+                keys.push((idx, *rf));
+            }
+        }
+        let n = keys.len();
+        for (idx, rf) in keys {
+            self.queue.push(QEntry {
+                bad: 1.0 + rf.radius,
+                idx,
+                version: rf.version,
+                forced: true,
+            });
+        }
+        self.stats.bridge_facets += n;
+        n
+    }
+
+    /// The scan component of every vertex of a restricted facet (`None` for the others and
+    /// where the scan gives none), computed in parallel (each independently: the result does
+    /// not depend on the thread count).
+    fn vertex_labels(&self, img: &ImageSurface) -> Vec<Option<usize>> {
+        use rayon::prelude::*;
+        let n = self.tri.num_vertices();
+        let mut used = vec![false; n];
+        for (_, k, _) in self.restricted.iter() {
+            k.iter().for_each(|v| used[v.index()] = true);
+        }
+        let tri = &self.tri;
+        (0..n)
+            .into_par_iter()
+            .map(|v| {
+                used[v]
+                    .then(|| img.component_of(tri.point(delaunay3::VertexId::from_index(v))))
+                    .flatten()
+            })
+            .collect()
+    }
+
+    /// The scan components on which Del_S(E) has several pieces (each piece goes to the
+    /// component most of its vertices are labelled with), in component order.
+    fn split_components(&self, labels: &[Option<usize>]) -> Vec<(usize, Split)> {
+        let n = self.tri.num_vertices();
+        let mut union = VertexUnion::new(n);
+        let mut used = vec![false; n];
+        for (_, k, _) in self.restricted.iter() {
+            let t = k.map(delaunay3::VertexId::to_u32);
+            union.join_triangle(t);
+            t.iter().for_each(|&v| used[v as usize] = true);
+        }
+        // Per piece (root): its vertices and the votes for each label.
+        let mut pieces: BTreeMap<u32, (Vec<DVec3>, BTreeMap<usize, usize>)> = BTreeMap::new();
+        for v in (0..n).filter(|&v| used[v]) {
+            let p = self.tri.point(delaunay3::VertexId::from_index(v));
+            let e = pieces.entry(union.find(v as u32)).or_default();
+            e.0.push(p);
+            if let Some(l) = labels[v] {
+                *e.1.entry(l).or_default() += 1;
+            }
+        }
+        let mut by_label: BTreeMap<usize, Split> = BTreeMap::new();
+        for (_, (pts, votes)) in pieces {
+            let best = votes
+                .iter()
+                .max_by_key(|(l, c)| (**c, std::cmp::Reverse(**l)));
+            if let Some((&l, _)) = best {
+                by_label.entry(l).or_default().push(pts);
+            }
+        }
+        by_label
+            .into_iter()
+            .filter(|(_, p)| p.len() > 1)
+            .map(|(l, mut p)| {
+                // Largest first; ties by the first point (deterministic).
+                p.sort_by(|a, b| {
+                    b.len()
+                        .cmp(&a.len())
+                        .then(a[0].to_array().partial_cmp(&b[0].to_array()).unwrap())
+                });
+                (l, p)
+            })
+            .collect()
+    }
+}
+
+/// The rings around the joins of component `label` near its pieces but the largest whose
+/// nodes are nearest to different pieces.
+fn ring_points(img: &ImageSurface, label: usize, pieces: &Split) -> Vec<DVec3> {
+    let mut coords: Vec<[f64; 3]> = Vec::new();
+    let mut owner: Vec<usize> = Vec::new();
+    for (i, p) in pieces.iter().enumerate() {
+        coords.extend(p.iter().map(|q| q.to_array()));
+        owner.extend(std::iter::repeat_n(i, p.len()));
+    }
+    let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
+        return Vec::new();
+    };
+    // The piece of the vertex nearest `p`, and the distance to it.
+    let piece_of = |p: DVec3| {
+        let r = tree
+            .query(&p.to_array())
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute();
+        (owner[r.item as usize], r.distance.sqrt())
+    };
+    let margin = 1.5 * img.volume().spacing().max_element();
+    let mut joins: Vec<Join> = Vec::new();
+    for piece in &pieces[1..] {
+        let lo = piece.iter().fold(DVec3::INFINITY, |a, &p| a.min(p)) - DVec3::splat(margin);
+        let hi = piece.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p)) + DVec3::splat(margin);
+        joins.extend(img.neck_joins(label, lo, hi));
+    }
+    joins.sort_by(|x, y| {
+        (x.a.to_array(), x.b.to_array())
+            .partial_cmp(&(y.a.to_array(), y.b.to_array()))
+            .unwrap()
+    });
+    joins.dedup();
+    // Per pair of pieces, the join whose nodes are nearest to them (ties: node order).
+    let mut best: BTreeMap<(usize, usize), (f64, usize)> = BTreeMap::new();
+    for (i, j) in joins.iter().enumerate() {
+        let ((pa, da), (pb, db)) = (piece_of(j.a), piece_of(j.b));
+        if pa == pb {
+            continue;
+        }
+        let e = best
+            .entry((pa.min(pb), pa.max(pb)))
+            .or_insert((f64::INFINITY, i));
+        if da + db < e.0 {
+            *e = (da + db, i);
+        }
+    }
+    let mut out = Vec::new();
+    for (_, i) in best.values() {
+        ring(img, &joins[*i], &mut out);
+    }
+    out
+}
+
+/// The first crossings of S of [`RING_RAYS`] rays perpendicular to the join, from points of
+/// the inside region on it (a grid edge's quarter points, or a face's saddle), as long as the
+/// join.
+fn ring(img: &ImageSurface, j: &Join, out: &mut Vec<DVec3>) {
+    let axis = j.b - j.a;
+    let len = axis.length();
+    let Some(u) = axis.try_normalize() else {
+        return;
+    };
+    let e1 = u.any_orthonormal_vector();
+    let e2 = u.cross(e1);
+    let centres: Vec<DVec3> = if j.diagonal {
+        vec![j.via]
+    } else {
+        [0.25, 0.5, 0.75].map(|t| j.a + axis * t).to_vec()
+    };
+    let mut buf = Vec::new();
+    for c in centres {
+        for m in 0..RING_RAYS {
+            let ang = m as f64 * std::f64::consts::TAU / RING_RAYS as f64;
+            let d = e1 * ang.cos() + e2 * ang.sin();
+            buf.clear();
+            img.crossings(c, c + d * len, &mut buf);
+            if let Some(&x) = buf.first() {
+                out.push(x);
+            }
+        }
+    }
+}
