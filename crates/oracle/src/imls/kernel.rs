@@ -139,13 +139,54 @@ impl PointSetSurface {
 
     /// The kernel sums at `x`, with their gradients if `GRAD` (otherwise left at zero). The
     /// sums are computed by the same operations either way (bit-identical).
+    ///
+    /// With [`PointSetParams::robust`](super::PointSetParams::robust) passes (ours, after
+    /// Öztireli et al.'s robust IMLS, 2009): the plain sums give `f` and `∇f`; each further
+    /// pass weights point `i` by `α_i = exp(−|n_i − ∇f/|∇f||² / σ_n²)`, so points whose normal
+    /// disagrees with the surface's at `x` (the other face of a sharp edge, the other side of
+    /// a thin part) count less. The returned sums keep the plain weight (`den`, `nsum`,
+    /// `band2`: how much data is near) and carry the reweighted value and gradient (`num =
+    /// f den`, `dnum = ∇f den`, `dden = 0`). The gradient is the reweighted quotient's with
+    /// the `α_i` held fixed (not the exact derivative): the oracles only use it for Newton
+    /// steps inside a bracket.
     #[inline]
     pub(super) fn sums_impl<const GRAD: bool>(&self, x: DVec3) -> Sums {
+        if self.robust == 0 {
+            return self.pass::<GRAD>(x, None);
+        }
+        let s = self.pass::<true>(x, None);
+        if s.den <= 0.0 {
+            return s;
+        }
+        let mut f = s.num / s.den;
+        let mut g = (s.dnum - f * s.dden) / s.den;
+        for _ in 0..self.robust {
+            let r = self.pass::<true>(x, Some(g.normalize_or_zero()));
+            // α_i ≥ exp(−4 / σ_n²) > 0, so r.den > 0 where s.den > 0 (unless it underflows).
+            if r.den.is_nan() || r.den <= 0.0 {
+                break;
+            }
+            f = r.num / r.den;
+            g = (r.dnum - f * r.dden) / r.den;
+        }
+        Sums {
+            num: f * s.den,
+            dnum: if GRAD { g * s.den } else { DVec3::ZERO },
+            dden: DVec3::ZERO,
+            ..s
+        }
+    }
+
+    /// One pass of kernel sums at `x`; with `normal = Some(g)`, each point's weight is
+    /// multiplied by `exp(−|n_i − g|² / σ_n²)` (see [`Self::sums_impl`]).
+    #[inline]
+    fn pass<const GRAD: bool>(&self, x: DVec3, normal: Option<DVec3>) -> Sums {
         let mut s = Sums {
             band2: if self.banded { f64::INFINITY } else { 0.0 },
             ..Default::default()
         };
         let banded = self.banded;
+        let inv_sn2 = 1.0 / (self.robust_sigma_n * self.robust_sigma_n);
         self.grid.for_each_near(x, |it| {
             let d = x - it.p;
             let d2 = d.length_squared();
@@ -155,14 +196,18 @@ impl PointSetSurface {
                 }
                 let u = 1.0 - d2 / it.r2;
                 let u2 = u * u;
-                let w = u2 * u2;
+                let alpha = match normal {
+                    Some(g) => (-(it.n - g).length_squared() * inv_sn2).exp(),
+                    None => 1.0,
+                };
+                let w = alpha * u2 * u2;
                 let nd = it.n.dot(d);
                 s.num += w * nd;
                 s.den += w;
                 s.nsum += w * it.n;
                 if GRAD {
                     // ∇φ = 4u³ ∇u, ∇u = −2 (x − p) / R².
-                    let gw = d * (-8.0 * u2 * u / it.r2);
+                    let gw = d * (-8.0 * alpha * u2 * u / it.r2);
                     s.dnum += gw * nd + w * it.n;
                     s.dden += gw;
                 }
