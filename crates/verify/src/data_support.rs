@@ -14,6 +14,15 @@
 //!   nearest neighbours; pieces under [`SupportOptions::min_data_component`] points are
 //!   ignored) is covered when at least `min_share` of its points lie within their band of the
 //!   mesh.
+//! - With oriented data normals (a point set's, given or estimated and oriented): a mesh
+//!   component must also *face the way the data does*. Its *agreement* is the area-weighted
+//!   mean of `n_t · n_i` over its triangles `t` (unit facet normal, outward) and `i` the data
+//!   point nearest the triangle's centroid; a component below
+//!   [`SupportOptions::min_agreement`] is not supported. Why this catches sheets inside the
+//!   band: a closed surface's normals integrate to zero (`∮ n dA = 0`), so a closed bubble
+//!   over which the data's normal is about constant (a bubble within the noise of a scan, or
+//!   a pocket between two sheets) has agreement near 0, whatever its shape, while a
+//!   component that follows the data has agreement near 1.
 //! - The unsupported triangles (share below one half) that touch one another form the
 //!   *unsupported regions*: where the mesh bridges a hole in the data. They are reported
 //!   (area, size, location) but fail nothing by themselves.
@@ -47,6 +56,9 @@ pub struct SupportOptions {
     pub min_data_component: usize,
     /// Lists keep at most this many entries (default 20).
     pub max_listed: usize,
+    /// Least orientation agreement of a mesh component with oriented data normals (default
+    /// 0.5; see the module documentation).
+    pub min_agreement: f64,
 }
 
 impl Default for SupportOptions {
@@ -58,6 +70,7 @@ impl Default for SupportOptions {
             min_band: 0.0,
             min_data_component: 10,
             max_listed: 20,
+            min_agreement: 0.5,
         }
     }
 }
@@ -75,6 +88,16 @@ pub struct ComponentSupport {
     pub centroid: [f64; 3],
     /// Bounding-box diagonal.
     pub extent: f64,
+    /// Orientation agreement with the data normals (area-weighted mean of `n_t · n_i`),
+    /// when the data has normals.
+    pub agreement: Option<f64>,
+}
+
+impl ComponentSupport {
+    /// Supported: enough area in the band, and (with data normals) facing the data's way.
+    pub fn supported(&self, min_share: f64, min_agreement: f64) -> bool {
+        self.supported_share >= min_share && self.agreement.is_none_or(|a| a >= min_agreement)
+    }
 }
 
 /// A data component and how much of it the mesh covers.
@@ -118,10 +141,13 @@ pub struct DataSupport {
     /// Unsupported regions, largest area first.
     pub unsupported_regions: Vec<UnsupportedRegion>,
     pub unsupported_regions_total: usize,
-    /// Mesh components below `min_share`, and data components not covered.
+    /// Mesh components below `min_share` (or, with data normals, below `min_agreement`),
+    /// and data components not covered.
     pub unsupported_components: usize,
     pub uncovered_data_components: usize,
     pub min_share: f64,
+    /// The least orientation agreement asked (when the data has normals).
+    pub min_agreement: Option<f64>,
 }
 
 impl DataSupport {
@@ -155,11 +181,33 @@ impl DataSupport {
                 fmt_p(c.centroid)
             );
         }
+        if let Some(c) = self
+            .components
+            .iter()
+            .filter(|c| c.agreement.is_some())
+            .min_by(|a, b| {
+                a.agreement
+                    .unwrap_or(1.0)
+                    .total_cmp(&b.agreement.unwrap_or(1.0))
+            })
+        {
+            s += &format!(
+                "; least orientation agreement with the data normals {:.2} ({} triangles, {:.3e} across, at {})",
+                c.agreement.unwrap_or(1.0),
+                c.triangles,
+                c.extent,
+                fmt_p(c.centroid)
+            );
+        }
         if self.unsupported_components > 0 {
             s += &format!(
-                "; {} mesh components below {:.0}% support",
+                "; {} mesh components below {:.0}% support{}",
                 self.unsupported_components,
-                100.0 * self.min_share
+                100.0 * self.min_share,
+                match self.min_agreement {
+                    Some(a) => format!(" or {a:.2} orientation agreement"),
+                    None => String::new(),
+                }
             );
         }
         s += &format!("; {} data components", self.data_components_total);
@@ -252,6 +300,15 @@ impl DataBand {
         })
     }
 
+    /// The data point nearest to `x`.
+    pub fn nearest(&self, x: DVec3) -> usize {
+        self.tree
+            .query(&x.to_array())
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute()
+            .item as usize
+    }
+
     /// Is `x` within the band of its nearest data point? Also the distance to it.
     pub fn supports(&self, x: DVec3) -> (bool, f64) {
         let r = self
@@ -296,17 +353,16 @@ fn centroid_extent(pts: impl Iterator<Item = (DVec3, f64)>) -> ([f64; 3], f64) {
     (c.to_array(), (hi - lo).length())
 }
 
-/// The data-support check of `mesh` (valid, see [`TriMesh::validate`]) against `data`
-/// (points: a scan, or samples of an input mesh, see [`mesh_samples`]). `None` if the data
-/// has fewer than 2 finite points or the mesh no triangles.
-pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Option<DataSupport> {
-    if mesh.triangles.is_empty() {
-        return None;
-    }
-    let band = DataBand::new(data, opts)?;
+/// Per triangle of `mesh`: its area and supported share (barycentric samples, 2
+/// subdivisions per edge, plus the centroid); with data normals, also its area times its
+/// agreement (`n_t · n_i`, `i` the data point nearest its centroid).
+#[allow(clippy::type_complexity)]
+fn per_triangle(
+    mesh: &TriMesh,
+    band: &DataBand,
+    normals: Option<&[DVec3]>,
+) -> (Vec<(f64, f64)>, Option<Vec<f64>>) {
     let v = &mesh.vertices;
-    // Per triangle: area and supported share (barycentric samples, 2 subdivisions per edge,
-    // plus the centroid).
     let per_tri: Vec<(f64, f64)> = mesh
         .triangles
         .par_iter()
@@ -320,6 +376,42 @@ pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Op
             (area, ok as f64 / s.len() as f64)
         })
         .collect();
+    let agree: Option<Vec<f64>> = normals.map(|ns| {
+        mesh.triangles
+            .par_iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| v[i as usize]);
+                let cr = 0.5 * (b - a).cross(c - a);
+                cr.dot(ns[band.nearest((a + b + c) / 3.0)])
+            })
+            .collect()
+    });
+    (per_tri, agree)
+}
+
+/// The data-support check of `mesh` (valid, see [`TriMesh::validate`]) against `data`
+/// (points: a scan, or samples of an input mesh, see [`mesh_samples`]). `None` if the data
+/// has fewer than 2 finite points or the mesh no triangles.
+pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Option<DataSupport> {
+    data_support_oriented(mesh, data, None, opts)
+}
+
+/// [`data_support`] with the data's oriented (outward) unit normals, one per point, if known:
+/// each mesh component must then also agree in orientation with the data (see the module
+/// documentation). Normals of the wrong count are ignored.
+pub fn data_support_oriented(
+    mesh: &TriMesh,
+    data: &[DVec3],
+    normals: Option<&[DVec3]>,
+    opts: &SupportOptions,
+) -> Option<DataSupport> {
+    if mesh.triangles.is_empty() {
+        return None;
+    }
+    let band = DataBand::new(data, opts)?;
+    let normals = normals.filter(|n| n.len() == data.len());
+    let v = &mesh.vertices;
+    let (per_tri, agree) = per_triangle(mesh, &band, normals);
     let total_area: f64 = per_tri.iter().map(|x| x.0).sum();
     let supported_area: f64 = per_tri.iter().map(|x| x.0 * x.1).sum();
     // Mesh components (vertex-connected).
@@ -330,7 +422,7 @@ pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Op
             comp_of[i] = k;
         }
     }
-    let mut acc = vec![(0usize, usize::MAX, 0.0f64, 0.0f64); comps.len()];
+    let mut acc = vec![(0usize, usize::MAX, 0.0f64, 0.0f64, 0.0f64); comps.len()];
     for (t, tri) in mesh.triangles.iter().enumerate() {
         let k = comp_of[tri[0] as usize];
         let e = &mut acc[k];
@@ -338,11 +430,12 @@ pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Op
         e.1 = e.1.min(t);
         e.2 += per_tri[t].0;
         e.3 += per_tri[t].0 * per_tri[t].1;
+        e.4 += agree.as_ref().map_or(0.0, |a| a[t]);
     }
     let components: Vec<ComponentSupport> = comps
         .iter()
         .zip(&acc)
-        .map(|(c, &(triangles, first, area, sup))| {
+        .map(|(c, &(triangles, first, area, sup, ag))| {
             let (centroid, extent) = centroid_extent(c.iter().map(|&i| (v[i], 1.0)));
             ComponentSupport {
                 first_triangle: first,
@@ -351,12 +444,15 @@ pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Op
                 supported_share: if area > 0.0 { sup / area } else { 1.0 },
                 centroid,
                 extent,
+                agreement: agree
+                    .is_some()
+                    .then_some(if area > 0.0 { ag / area } else { 1.0 }),
             }
         })
         .collect();
     let unsupported_components = components
         .iter()
-        .filter(|c| c.supported_share < opts.min_share)
+        .filter(|c| !c.supported(opts.min_share, opts.min_agreement))
         .count();
     // Data coverage.
     let bvh = crate::intersect::triangle_bvh(mesh);
@@ -405,6 +501,7 @@ pub fn data_support(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Op
         unsupported_components,
         uncovered_data_components,
         min_share: opts.min_share,
+        min_agreement: agree.is_some().then_some(opts.min_agreement),
     })
 }
 
@@ -525,10 +622,21 @@ pub fn mesh_samples(mesh: &TriMesh, target: usize) -> Vec<DVec3> {
 
 /// Add the `data-support` check (and section) to `report`; SKIP if the check could not run.
 pub fn add_check(r: &mut crate::Report, mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) {
+    add_check_oriented(r, mesh, data, None, opts);
+}
+
+/// [`add_check`] with the data's oriented normals (see [`data_support_oriented`]).
+pub fn add_check_oriented(
+    r: &mut crate::Report,
+    mesh: &TriMesh,
+    data: &[DVec3],
+    normals: Option<&[DVec3]>,
+    opts: &SupportOptions,
+) {
     if r.input_error.is_some() {
         return;
     }
-    match data_support(mesh, data, opts) {
+    match data_support_oriented(mesh, data, normals, opts) {
         Some(ds) => {
             let status = crate::pass_fail(ds.passed());
             r.push("data-support", status, ds.detail());

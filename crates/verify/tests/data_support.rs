@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use meshio::TriMesh;
-use verify::data_support::{data_support, mesh_samples};
+use verify::data_support::{data_support, data_support_oriented, mesh_samples};
 use verify::scan_sim::{ScanSpec, diagonal, simulate};
 use verify::{Status, SupportOptions};
 
@@ -194,4 +194,50 @@ fn exact_mesh_data_and_the_report_check() {
         verify::data_support::add_check(&mut report, &m, &data[..k], &SupportOptions::default());
         assert!(report.status("data-support").is_some(), "{k} points");
     }
+}
+
+/// A bubble inside the band (a flat octahedron lying on the surface, within the noise) is
+/// supported by the band alone; with the scan's oriented normals its orientation agreement
+/// is near 0 (a closed surface's normals integrate to zero) and it FAILs, while the source
+/// mesh agrees (near 1) and PASSes.
+#[test]
+fn a_bubble_within_the_band_fails_on_orientation() {
+    let m = bunny();
+    let d = diagonal(&m);
+    let spec = ScanSpec {
+        points: 20_000,
+        noise: 0.002,
+        seed: 7,
+        ..Default::default()
+    };
+    let s = simulate(&m, &spec);
+    let normals = s.normals.clone().expect("the scan's exact normals");
+    let opts = SupportOptions::default();
+    let good = data_support_oriented(&m, &s.points, Some(&normals), &opts).unwrap();
+    assert!(good.passed(), "{}", good.detail());
+    let a = good.components[0].agreement.unwrap();
+    assert!(a > 0.9, "{}", good.detail());
+    // A bubble 1% of the diagonal across, centred on the top vertex (on the surface).
+    let top = m
+        .vertices
+        .iter()
+        .copied()
+        .max_by(|a, b| a.z.total_cmp(&b.z))
+        .unwrap();
+    let (bv, bt) = octahedron(top, 0.005 * d, m.vertices.len() as u32);
+    let mut bubbled = m.clone();
+    bubbled.vertices.extend(bv);
+    bubbled.triangles.extend(bt);
+    let plain = data_support(&bubbled, &s.points, &opts).unwrap();
+    assert!(plain.passed(), "the band alone: {}", plain.detail());
+    let r = data_support_oriented(&bubbled, &s.points, Some(&normals), &opts).unwrap();
+    assert!(!r.passed(), "{}", r.detail());
+    assert_eq!(r.unsupported_components, 1, "{}", r.detail());
+    let bubble = r.components.iter().find(|c| c.triangles == 8).unwrap();
+    assert!(bubble.agreement.unwrap().abs() < 0.3, "{}", r.detail());
+    assert!(
+        r.detail().contains("orientation agreement"),
+        "{}",
+        r.detail()
+    );
 }

@@ -488,10 +488,24 @@ fn print_single(spec: &str, out: &Outcome, out_path: &Path) {
     if let Some(line) = out.verify_line() {
         outln!("{line}");
     }
+    print_data_failures(out);
     if let Some(s) = &st.stopped_by {
         outln!("stopped by {s}; unmet: {}", unmet(st));
     } else if !st.unmet.is_empty() {
         outln!("unmet: {}", unmet(st));
+    }
+}
+
+/// The details of a failed `input-topology` or `data-support` check (why the output's
+/// topology is not the input's; which component the data does not support).
+fn print_data_failures(out: &Outcome) {
+    let Some(r) = &out.report else { return };
+    for name in ["input-topology", "data-support"] {
+        if let Some(c) = r.check(name)
+            && c.status == verify::Status::Fail
+        {
+            outln!("  FAIL {name}: {}", c.detail);
+        }
     }
 }
 
@@ -553,6 +567,7 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
             outln!("verify: FAIL: {}", c.failures().join(", "));
         }
     }
+    print_data_failures(out);
     if let Verdict::Fail(failures) = &out.verdict {
         for f in failures {
             if let Failure::Stopped(stage) = f {

@@ -76,6 +76,8 @@ pub struct Row {
     pub from_source: (f64, Option<[f64; 3]>),
     pub verify: String,
     pub data_support: String,
+    /// The `data-support` check's detail.
+    pub data_support_detail: String,
     /// Missing patch: reported as an unsupported region at the hole.
     pub hole_flagged: Option<bool>,
     pub seconds: f64,
@@ -231,6 +233,9 @@ fn run_row(model: &'static str, genus: i64, spec: &ScanSpec, size: f64) -> Resul
         data_support: report
             .check("data-support")
             .map_or("-".into(), |c| c.status.to_string()),
+        data_support_detail: report
+            .check("data-support")
+            .map_or(String::new(), |c| c.detail.clone()),
         hole_flagged,
         seconds,
         pass,

@@ -104,7 +104,7 @@ impl Grid {
 
     /// Visit every item within `r` of `x` (and possibly a few more: callers test `r2`).
     #[inline]
-    pub fn for_each_near(&self, x: DVec3, r: f64, mut f: impl FnMut(&Item)) {
+    pub fn for_each_near<'a>(&'a self, x: DVec3, r: f64, mut f: impl FnMut(&'a Item)) {
         let a = x - DVec3::splat(r);
         let b = x + DVec3::splat(r);
         let hi = self.lo
@@ -179,7 +179,7 @@ impl Levels {
 
     /// Visit every item whose support may contain `x` (callers test `r2`).
     #[inline]
-    pub fn for_each_near(&self, x: DVec3, mut f: impl FnMut(&Item)) {
+    pub fn for_each_near<'a>(&'a self, x: DVec3, mut f: impl FnMut(&'a Item)) {
         for (g, r) in &self.levels {
             g.for_each_near(x, *r, &mut f);
         }

@@ -6,6 +6,7 @@
 //! with or without their gradients).
 
 use super::PointSetSurface;
+use super::grid::Item;
 use crate::Surface;
 use glam::DVec3;
 use kiddo::SquaredEuclidean;
@@ -26,6 +27,17 @@ pub(super) struct Sums {
     /// distance in band radii; `∞` if none, 0 without the support band).
     pub band2: f64,
 }
+
+/// Points kept from the first pass of the robust sums (beyond, the grid is visited again).
+const KEEP: usize = 256;
+
+/// A placeholder for the unused entries of the kept points.
+static NO_ITEM: Item = Item {
+    p: DVec3::ZERO,
+    n: DVec3::ZERO,
+    r2: 0.0,
+    b2inv: 0.0,
+};
 
 /// Beyond this many band radii from every point, the value is the far field alone (blended
 /// from 1 band radius).
@@ -139,36 +151,126 @@ impl PointSetSurface {
 
     /// The kernel sums at `x`, with their gradients if `GRAD` (otherwise left at zero). The
     /// sums are computed by the same operations either way (bit-identical).
+    ///
+    /// With [`PointSetParams::robust`](super::PointSetParams::robust) passes (ours, after
+    /// Öztireli et al.'s robust IMLS, 2009): the plain sums give `f` and `∇f`; each further
+    /// pass weights point `i` by `α_i = exp(−|n_i − ∇f/|∇f||² / σ_n²)`, so points whose normal
+    /// disagrees with the surface's at `x` (the other face of a sharp edge, the other side of
+    /// a thin part) count less. The returned sums keep the plain weight (`den`, `nsum`,
+    /// `band2`: how much data is near) and carry the reweighted value and gradient (`num =
+    /// f den`, `dnum = ∇f den`, `dden = 0`). The gradient is the reweighted quotient's with
+    /// the `α_i` held fixed (not the exact derivative): the oracles only use it for Newton
+    /// steps inside a bracket.
     #[inline]
     pub(super) fn sums_impl<const GRAD: bool>(&self, x: DVec3) -> Sums {
+        if self.robust == 0 {
+            return self.pass::<GRAD>(x, None, None).0;
+        }
+        let mut buf: [&Item; KEEP] = [&NO_ITEM; KEEP];
+        let (s, kept) = self.pass::<true>(x, None, Some(&mut buf));
+        if s.den <= 0.0 {
+            return s;
+        }
+        let mut f = s.num / s.den;
+        let mut g = (s.dnum - f * s.dden) / s.den;
+        for _ in 0..self.robust {
+            let normal = Some(g.normalize_or_zero());
+            // The same points in the same order as the grid would give (bit-identical sums).
+            let r = if kept <= KEEP {
+                let mut r = Sums {
+                    band2: if self.banded { f64::INFINITY } else { 0.0 },
+                    ..Default::default()
+                };
+                for it in &buf[..kept] {
+                    self.add::<true>(&mut r, x, it, normal);
+                }
+                r
+            } else {
+                self.pass::<true>(x, normal, None).0
+            };
+            // α_i ≥ exp(−4 / σ_n²) > 0, so r.den > 0 where s.den > 0 (unless it underflows).
+            if r.den.is_nan() || r.den <= 0.0 {
+                break;
+            }
+            f = r.num / r.den;
+            g = (r.dnum - f * r.dden) / r.den;
+        }
+        Sums {
+            num: f * s.den,
+            dnum: if GRAD { g * s.den } else { DVec3::ZERO },
+            dden: DVec3::ZERO,
+            ..s
+        }
+    }
+
+    /// One pass of kernel sums at `x`; with `normal = Some(g)`, each point's weight is
+    /// multiplied by `exp(−|n_i − g|² / σ_n²)` (see [`Self::sums_impl`]). With `keep`, the
+    /// points within their support are also kept, in the order visited (up to the buffer's
+    /// length; the count is returned, beyond the length when it overflowed), so that a
+    /// further pass visits exactly them, in the same order, without the grid.
+    #[inline]
+    fn pass<'a, const GRAD: bool>(
+        &'a self,
+        x: DVec3,
+        normal: Option<DVec3>,
+        mut keep: Option<&mut [&'a Item; KEEP]>,
+    ) -> (Sums, usize) {
         let mut s = Sums {
             band2: if self.banded { f64::INFINITY } else { 0.0 },
             ..Default::default()
         };
-        let banded = self.banded;
+        let mut kept = 0;
         self.grid.for_each_near(x, |it| {
-            let d = x - it.p;
-            let d2 = d.length_squared();
-            if d2 < it.r2 {
-                if banded {
-                    s.band2 = s.band2.min(d2 * it.b2inv);
+            if self.add::<GRAD>(&mut s, x, it, normal) {
+                if let Some(buf) = keep.as_deref_mut()
+                    && kept < KEEP
+                {
+                    buf[kept] = it;
                 }
-                let u = 1.0 - d2 / it.r2;
-                let u2 = u * u;
-                let w = u2 * u2;
-                let nd = it.n.dot(d);
-                s.num += w * nd;
-                s.den += w;
-                s.nsum += w * it.n;
-                if GRAD {
-                    // ∇φ = 4u³ ∇u, ∇u = −2 (x − p) / R².
-                    let gw = d * (-8.0 * u2 * u / it.r2);
-                    s.dnum += gw * nd + w * it.n;
-                    s.dden += gw;
-                }
+                kept += 1;
             }
         });
-        s
+        (s, kept)
+    }
+
+    /// Add point `it` to the sums at `x` if `x` is within its support (and say whether).
+    #[inline(always)]
+    fn add<const GRAD: bool>(
+        &self,
+        s: &mut Sums,
+        x: DVec3,
+        it: &Item,
+        normal: Option<DVec3>,
+    ) -> bool {
+        let d = x - it.p;
+        let d2 = d.length_squared();
+        if d2 >= it.r2 {
+            return false;
+        }
+        if self.banded {
+            s.band2 = s.band2.min(d2 * it.b2inv);
+        }
+        let u = 1.0 - d2 / it.r2;
+        let u2 = u * u;
+        let alpha = match normal {
+            Some(g) => {
+                let inv_sn2 = 1.0 / (self.robust_sigma_n * self.robust_sigma_n);
+                (-(it.n - g).length_squared() * inv_sn2).exp()
+            }
+            None => 1.0,
+        };
+        let w = alpha * u2 * u2;
+        let nd = it.n.dot(d);
+        s.num += w * nd;
+        s.den += w;
+        s.nsum += w * it.n;
+        if GRAD {
+            // ∇φ = 4u³ ∇u, ∇u = −2 (x − p) / R².
+            let gw = d * (-8.0 * alpha * u2 * u / it.r2);
+            s.dnum += gw * nd + w * it.n;
+            s.dden += gw;
+        }
+        true
     }
 
     /// The value and its gradient at `x`; the gradient is NaN where the value is not the

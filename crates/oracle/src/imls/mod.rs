@@ -127,7 +127,25 @@ pub struct PointSetParams {
     /// value is the far field (its sign from the flood-filled regions or the winding number),
     /// blended in between. Removes zero-sets the data does not support.
     pub support_band: bool,
+    /// Kernel support radius at least this multiple of the estimated noise ν (0: off), so
+    /// that the kernel averages the noise over enough points wherever the spacing is small
+    /// against the noise. Needs the noise estimate (computed when this or `support_band` is
+    /// on).
+    pub noise_bandwidth: f64,
+    /// Estimated normals and the noise estimate use at least the neighbours within about
+    /// this multiple of ν (more than `k_normals` when the noise is large against the
+    /// spacing; at most [`MAX_K_NOISE`]); 0: off.
+    pub noise_neighbourhood: f64,
+    /// Robust reweighting passes (ours, after Öztireli et al. 2009, robust IMLS): 0 is plain
+    /// IMLS; each pass down-weights the points whose normals disagree with the surface's
+    /// gradient, so sharp edges and thin parts are less smoothed.
+    pub robust: usize,
+    /// The normal-agreement scale σ_n of the robust passes (on unit normals).
+    pub robust_sigma_n: f64,
 }
+
+/// Largest neighbour count of [`PointSetParams::noise_neighbourhood`].
+pub const MAX_K_NOISE: usize = 96;
 
 impl Default for PointSetParams {
     fn default() -> Self {
@@ -137,18 +155,29 @@ impl Default for PointSetParams {
             bandwidth: 3.0,
             max_spacing_ratio: 1.5,
             support_band: false,
+            noise_bandwidth: 0.0,
+            noise_neighbourhood: 0.0,
+            robust: 0,
+            robust_sigma_n: 0.5,
         }
     }
 }
 
 impl PointSetParams {
-    /// The settings for scans (what `mesh` uses on point sets): the defaults with the support
-    /// band on. (A wider `max_spacing_ratio`, 2.5 or 3.5, was measured on the 10:1 scans:
-    /// larger supports on the sparse side smooth thin parts more, Hausdorff 1.19% instead of
-    /// 1.07% of the diagonal on fertility; `bandwidth` 2.2 was worse too.)
+    /// The settings for scans (what `mesh` uses on point sets): the support band on; kernel
+    /// radii at least 6 ν and normals from the neighbours within about 8 ν (noise-adaptive);
+    /// one robust pass with σ_n = 0.8. Measured on the scan table (`cargo xtask scans`,
+    /// issue 16): the robust pass took fandisk at 0.1% noise from 0.84% to 0.52% of the
+    /// diagonal (two passes or σ_n 0.5 / 0.35 were worse: noisy normals then break the
+    /// surface), the noise-adaptive radius took fertility at 0.5% noise from 1.26% to
+    /// 0.70%. A wider `max_spacing_ratio` (2.5, 3.5) or `bandwidth` 2.5 measured worse.
     pub fn scan() -> Self {
         PointSetParams {
             support_band: true,
+            noise_bandwidth: 6.0,
+            noise_neighbourhood: 8.0,
+            robust: 1,
+            robust_sigma_n: 0.8,
             ..Default::default()
         }
     }
@@ -206,6 +235,9 @@ pub struct PointSetSurface {
     grid: grid::Levels,
     /// The support band is on ([`PointSetParams::support_band`]).
     banded: bool,
+    /// [`PointSetParams::robust`] and [`PointSetParams::robust_sigma_n`].
+    robust: usize,
+    robust_sigma_n: f64,
     tree: ImmutableKdTree<f64, 3>,
     lo: DVec3,
     hi: DVec3,
@@ -247,28 +279,22 @@ impl PointSetSurface {
         let coords: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
         let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
             .expect("kd-tree construction from finite points");
-        // Neighbours needed: the spacing's, and the normals' (PCA) or, with given normals,
-        // only the orientation graph's (components).
-        let k_nrm = if normals.is_some() {
-            params.k_normals.min(K_GRAPH)
-        } else {
-            params.k_normals
-        };
-        let k = k_nrm.max(params.k_spacing).min(n - 1);
-        let knn = knn_lists(points, &tree, k);
-        let spacing = mean_spacing(points, &knn, params.k_spacing);
-        let med_spacing = median(&spacing);
-        if med_spacing.is_nan() || med_spacing <= 0.0 {
-            return Err(PointSetError::Coplanar { ratio: 0.0 });
-        }
+        let Near {
+            knn,
+            spacing,
+            med_spacing,
+            noise,
+            k_normals,
+        } = neighbourhoods(points, normals.is_some(), &tree, params)?;
         // Support radius: bandwidth × spacing, clamped to [0.5, 1.5] × the median (the query
         // radius is the largest support, so this bounds the cost; no empty support at
         // isolated points).
         let radius: Vec<f64> = spacing
             .iter()
             .map(|&s| {
-                params.bandwidth
-                    * s.clamp(0.5 * med_spacing, params.max_spacing_ratio * med_spacing)
+                (params.bandwidth
+                    * s.clamp(0.5 * med_spacing, params.max_spacing_ratio * med_spacing))
+                .max(params.noise_bandwidth * noise)
             })
             .collect();
         let max_radius = radius.iter().copied().fold(0.0, f64::max);
@@ -278,19 +304,14 @@ impl PointSetSurface {
                 let roots = components_roots(points, &knn, params.k_normals.min(K_GRAPH));
                 (ns.iter().map(|v| v.normalize()).collect(), roots)
             }
-            None => estimate_normals(points, &knn, params.k_normals),
+            None => estimate_normals(points, &knn, k_normals),
         };
         let (gwn, gwn_coarse) = winding_trees(points, &normals, &spacing, med_spacing);
-        let noise = if params.support_band {
-            plane_noise(points, &knn)
-        } else {
-            0.0
-        };
         let band: Option<Vec<f64>> = params
             .support_band
             .then(|| spacing.iter().map(|&s| 2.0 * s + 3.0 * noise).collect());
         // Default clamp: one grid, as before; wider clamps: a second grid for the large radii.
-        let split = params.bandwidth * (1.5 * med_spacing);
+        let split = (params.bandwidth * (1.5 * med_spacing)).max(params.noise_bandwidth * noise);
         let grid = grid::Levels::new(points, &normals, &radius, band.as_deref(), split);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for p in points {
@@ -318,6 +339,8 @@ impl PointSetSurface {
             max_radius,
             grid,
             banded: params.support_band,
+            robust: params.robust,
+            robust_sigma_n: params.robust_sigma_n,
             tree,
             lo,
             hi,
@@ -377,6 +400,75 @@ impl PointSetSurface {
     pub fn suggested_size(&self) -> f64 {
         (self.hi - self.lo).length() / 50.0
     }
+}
+
+/// What [`neighbourhoods`] measured.
+struct Near {
+    knn: Vec<Vec<u32>>,
+    spacing: Vec<f64>,
+    med_spacing: f64,
+    noise: f64,
+    /// Neighbours for the estimated normals.
+    k_normals: usize,
+}
+
+/// The kNN lists, the local spacing and its median, the estimated noise ν (when the
+/// parameters need it; 0 otherwise) and the neighbour count of the normals: `k_normals`, or
+/// more when the noise is large against the spacing
+/// ([`PointSetParams::noise_neighbourhood`]; the lists are then that long and ν is measured
+/// again on them).
+fn neighbourhoods(
+    points: &[DVec3],
+    given_normals: bool,
+    tree: &ImmutableKdTree<f64, 3>,
+    params: &PointSetParams,
+) -> Result<Near, PointSetError> {
+    let n = points.len();
+    // Neighbours needed: the spacing's, and the normals' (PCA) or, with given normals,
+    // only the orientation graph's (components).
+    let wants_noise =
+        params.support_band || params.noise_bandwidth > 0.0 || params.noise_neighbourhood > 0.0;
+    let k_nrm = if given_normals && !wants_noise {
+        params.k_normals.min(K_GRAPH)
+    } else {
+        params.k_normals
+    };
+    let k = k_nrm.max(params.k_spacing).min(n - 1);
+    let mut knn = knn_lists(points, tree, k);
+    let spacing = mean_spacing(points, &knn, params.k_spacing);
+    let med_spacing = median(&spacing);
+    if med_spacing.is_nan() || med_spacing <= 0.0 {
+        return Err(PointSetError::Coplanar { ratio: 0.0 });
+    }
+    let mut noise = if wants_noise {
+        plane_noise(points, &knn)
+    } else {
+        0.0
+    };
+    // Large noise against the spacing: wider neighbourhoods for the normals and the noise
+    // (the kNN radius is about 0.5 sqrt(k) times the mean 8-NN distance on a surface).
+    let k_wide = if params.noise_neighbourhood > 0.0 {
+        let r = params.noise_neighbourhood * noise / (0.5 * med_spacing);
+        ((r * r).ceil() as usize)
+            .clamp(k, MAX_K_NOISE.max(k))
+            .min(n - 1)
+    } else {
+        k
+    };
+    let k_normals = if k_wide > k {
+        knn = knn_lists(points, tree, k_wide);
+        noise = plane_noise(points, &knn);
+        k_wide
+    } else {
+        params.k_normals
+    };
+    Ok(Near {
+        knn,
+        spacing,
+        med_spacing,
+        noise,
+        k_normals,
+    })
 }
 
 /// The checks of [`PointSetSurface::new`]: enough finite points of moderate size, valid

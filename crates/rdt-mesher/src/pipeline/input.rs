@@ -195,6 +195,12 @@ pub struct Input<'s> {
     /// Point sets and meshes: the data the output must be supported by (the points; samples
     /// of the input triangles), for `verify`'s `data-support` check.
     pub support_data: Option<Vec<DVec3>>,
+    /// Point sets: the oriented (outward) normals of `support_data` (given, or estimated and
+    /// oriented), for the orientation agreement of the `data-support` check.
+    pub support_normals: Option<Vec<DVec3>>,
+    /// A closed, oriented, manifold input mesh: its components and genera, which the output
+    /// must match (`verify`'s `input-topology` check) or say why not.
+    pub source_topology: Option<super::source_topology::SourceTopology>,
 }
 
 impl std::fmt::Debug for Input<'_> {
@@ -240,6 +246,8 @@ impl<'s> Input<'s> {
             area: None,
             voxel_spacing: None,
             support_data: None,
+            support_normals: None,
+            source_topology: None,
         }
     }
 
@@ -519,6 +527,7 @@ impl Input<'static> {
         let size = ps.suggested_size();
         let dm = ps.dm_inf_hint();
         let ps_stats = ps.stats().clone();
+        let normals = ps.normals().to_vec();
         let mut input = Input::with(
             Held::Owned(Box::new(ps)),
             name,
@@ -531,6 +540,7 @@ impl Input<'static> {
             normals_given: had_normals,
         });
         input.support_data = Some(cloud.points.clone());
+        input.support_normals = Some(normals);
         let st = ps_stats;
         input.notes.push(format!(
             "point set: {} points, normals {}; suggested size {size:.5}; surface trusted within the data's band (median {:.3e} = 2 x spacing {:.3e} + 3 x noise {:.3e}), far-field sign beyond",
@@ -583,6 +593,9 @@ impl Input<'static> {
         let bvh = verify::intersect::triangle_bvh(&welded);
         let pairs = verify::intersect::self_intersections(&welded, &bvh, 0).pairs_total;
         poly.set_self_intersections(pairs);
+        let source_topology = (pairs == 0)
+            .then(|| super::source_topology::SourceTopology::of(&welded))
+            .flatten();
         let size = poly.suggested_size();
         let sharp_edges = poly.sharp_edges(SHARP_DEG);
         let pstats = poly.stats().clone();
@@ -627,6 +640,7 @@ impl Input<'static> {
             mesh,
             MESH_SUPPORT_SAMPLES,
         ));
+        input.source_topology = source_topology;
         Ok(input)
     }
 }

@@ -34,6 +34,7 @@ mod outcome;
 mod plan;
 pub mod report;
 mod request;
+pub mod source_topology;
 
 pub use budget::{
     AUTO_MAX_VERTICES, AUTO_TARGET_VERTICES, Budget, Budgets, DEFAULT_MAX_MEMORY,

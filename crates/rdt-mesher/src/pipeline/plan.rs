@@ -414,13 +414,17 @@ impl Plan<'_, '_> {
 
 /// Point-set and mesh inputs: the `data-support` check of the output against the input's
 /// data (the band at least `sigma / 2` for a mesh's exact samples, whose output chords lie
-/// up to about that far from them at sharp edges).
+/// up to about that far from them at sharp edges); and a closed input mesh: the
+/// `input-topology` check (components and genera as the input's, or why not at `sigma`).
 pub fn data_support(
     report: &mut verify::Report,
     input: &Input,
     mesh: &meshio::TriMesh,
     sigma: f64,
 ) {
+    if let Some(src) = &input.source_topology {
+        super::source_topology::add_check(report, src, input.surface(), sigma);
+    }
     let Some(data) = &input.support_data else {
         return;
     };
@@ -433,7 +437,8 @@ pub fn data_support(
         min_band,
         ..Default::default()
     };
-    verify::data_support::add_check(report, mesh, data, &opts);
+    let normals = input.support_normals.as_deref();
+    verify::data_support::add_check_oriented(report, mesh, data, normals, &opts);
 }
 
 /// The verifier's options common to both modes: the mesh's surface balls, the certified
