@@ -52,9 +52,15 @@ impl Mesher<'_> {
             }
         }
         keys.retain(|(_, rf)| rf.radius >= self.manifold_floor(rf.center));
-        let n = keys.len();
-        // The queue's order is total (badness, then version): push order does not matter.
-        for (idx, rf) in keys {
+        Ok(self.push_forced(keys))
+    }
+
+    /// Queue `facets` as forced entries (refined whatever their badness, larger first);
+    /// returns how many. The queue's order is total (badness, then version): push order does
+    /// not matter.
+    pub(crate) fn push_forced(&mut self, facets: Vec<(u32, RFacet)>) -> usize {
+        let n = facets.len();
+        for (idx, rf) in facets {
             self.queue.push(QEntry {
                 bad: 1.0 + rf.radius,
                 idx,
@@ -62,7 +68,7 @@ impl Mesher<'_> {
                 forced: true,
             });
         }
-        Ok(n)
+        n
     }
 
     /// Facets smaller than this are not refined by the manifold patch: a tenth of sigma(c)

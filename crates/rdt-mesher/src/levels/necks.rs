@@ -15,7 +15,6 @@
 //! so (reported by the scan accounting).
 
 use crate::error::MeshError;
-use crate::queue::QEntry;
 use crate::state::Mesher;
 use crate::topology::VertexUnion;
 use glam::DVec3;
@@ -101,15 +100,7 @@ impl Mesher<'_> {
                 keys.push((idx, *rf));
             }
         }
-        let n = keys.len();
-        for (idx, rf) in keys {
-            self.queue.push(QEntry {
-                bad: 1.0 + rf.radius,
-                idx,
-                version: rf.version,
-                forced: true,
-            });
-        }
+        let n = self.push_forced(keys);
         self.stats.bridge_facets += n;
         n
     }
