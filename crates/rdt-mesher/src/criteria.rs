@@ -18,8 +18,10 @@ pub enum Sizing {
     /// A positive function with a known Lipschitz constant `L >= 0`: |sigma(x) - sigma(y)| <=
     /// L |x - y| (the fields of section 6.5 have L = eps' < 1). The mesher then decides most
     /// size tests from sigma at the facet's vertices (sigma(c) >= sigma(v) - L |c - v|)
-    /// without evaluating sigma at the ball's center; every decision, and so the mesh, is the
-    /// one [`Sizing::Field`] with the same function gives (see `crate::restricted::vertex_sizes`).
+    /// without evaluating sigma at the ball's center. Every facet is judged good or bad as
+    /// [`Sizing::Field`] with the same function judges it; a facet proven bad is queued with an
+    /// estimate of its badness, so the refinement order, and the mesh, can differ slightly
+    /// (see `crate::restricted::vertex_sizes`).
     Lipschitz(Arc<dyn Fn(DVec3) -> f64 + Send + Sync>, f64),
 }
 

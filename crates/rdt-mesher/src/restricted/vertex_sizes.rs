@@ -6,11 +6,15 @@
 //!
 //! sigma(c) >= lb = max_i (sigma(v_i) - L |c - v_i|).
 //!
-//! When lb > 0 and the facet's badness with lb in place of sigma(c) is <= 1, its exact badness
-//! (r / sigma(c) <= r / lb, the other criteria unchanged) is <= 1 too: the facet is good, and
-//! sigma(c) is not evaluated. A facet that may be bad gets the exact sigma(c), so the queue's
-//! order, and hence the mesh, is unchanged. A good facet stores the upper bound of its
-//! badness (only `bad > 1` is read for good facets).
+//! and likewise sigma(c) <= ub = min_i (sigma(v_i) + L |c - v_i|). When lb > 0 and the
+//! facet's badness with lb in place of sigma(c) is <= 1, its exact badness (r / sigma(c) <=
+//! r / lb, the other criteria unchanged) is <= 1 too: the facet is good, and sigma(c) is not
+//! evaluated; a good facet stores that upper bound of its badness (only `bad > 1` is read for
+//! good facets). When its badness with ub is > 1 it is bad whatever sigma(c) is, and it is
+//! queued with an estimate of its badness (see [`Mesher::sigma_for_test`]). Only the facets
+//! in between get the exact sigma(c). Every facet is classified as the exact test would
+//! classify it; the order in which bad facets are refined, and so the mesh, can differ
+//! slightly.
 //!
 //! sigma(v) is evaluated once per vertex and per field: [`VertexSizes`] is indexed by vertex
 //! id and cleared when the field changes (`requeue_all`) or the ids do (`drop_scaffold`).
@@ -77,15 +81,15 @@ impl Mesher<'_> {
         let mut missing: Vec<VertexId> = verts
             .filter(|v| !v.is_infinite() && values[v.index()].is_nan())
             .collect();
-        missing.sort_unstable();
-        missing.dedup();
-        // In Z-order: a field's nearest-point queries then hit the cache (same values).
-        let (center, half) = (self.ball.center, self.ball.radius);
-        missing.sort_by_cached_key(|&v| geom::morton::morton_key(self.tri.point(v), center, half));
         if missing.is_empty() {
             return;
         }
+        // In Z-order (then by id, for the duplicates): a field's nearest-point queries then
+        // hit the cache (same values).
+        let (center, half) = (self.ball.center, self.ball.radius);
         let tri = &self.tri;
+        missing.sort_by_cached_key(|&v| (geom::morton::morton_key(tri.point(v), center, half), v));
+        missing.dedup();
         let got = self
             .policy
             .field(missing.len())
