@@ -50,10 +50,11 @@ impl Mesher<'_> {
         self.resolve_all_lazy()?;
         let t = Instant::now();
         let labels = self.vertex_labels(img);
-        let mut splits = self.split_components(&labels);
-        if self.stats.neck_rounds >= rounds {
-            splits.clear();
-        }
+        let splits = if self.stats.neck_rounds < rounds {
+            self.split_components(&labels)
+        } else {
+            Default::default()
+        };
         // Bridges once the pieces are joined (a neck's new facets may still carry mixed
         // labels while it is being meshed).
         let bridges = if splits.is_empty() && self.stats.bridge_rounds < rounds {
