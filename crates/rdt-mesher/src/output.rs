@@ -34,25 +34,37 @@ impl Mesher<'_> {
         self.voronoi = Default::default();
         self.queue = Default::default();
         self.created_stamp = Vec::new();
-        let mut facets = self.restricted.sorted();
+        // The figures that read Del_S(E)'s indexes, before its facets are moved out of it.
+        let nonmanifold = match self.manifold.last.take() {
+            Some((n, r)) if n == self.tri.num_vertices() => r,
+            _ => self.nonmanifold_elements(),
+        };
+        let missing = self
+            .control
+            .vertices
+            .iter()
+            .filter(|&&v| self.restricted.facets_at(v) == 0)
+            .count();
+        // Moved, not copied (a copy of the facets was the run's peak), sorted by key.
+        let mut facets = self.restricted.take_sorted();
         // A run stopped by a budget may still have facets at scaffold points: not part of
         // the mesh of S (the stop is reported; the criteria are unmet anyway).
         let before = facets.len();
         if self.scaffold.count() > 0 {
-            facets.retain(|(k, _)| !k.iter().any(|&v| self.scaffold.contains(v)));
+            facets.retain(|rf| !rf.oriented.iter().any(|&v| self.scaffold.contains(v)));
         }
         let scaffold_dropped = before - facets.len();
         let mesh = self.mesh_of(&facets);
         let balls: Vec<SurfaceBall> = facets
             .iter()
-            .map(|(_, rf)| SurfaceBall {
+            .map(|rf| SurfaceBall {
                 center: rf.center,
                 radius: rf.radius,
             })
             .collect();
-        self.fill_vertex_sizes(facets.iter().flat_map(|(k, _)| *k));
+        self.fill_vertex_sizes(facets.iter().flat_map(|rf| rf.oriented));
         let ext = self.extremes(&facets);
-        self.fill_stats(&mesh, &ext, scaffold_dropped);
+        self.fill_stats(&mesh, &ext, scaffold_dropped, nonmanifold, missing);
         let sample = (0..self.tri.num_vertices())
             .map(VertexId::from_index)
             .filter(|&v| !self.scaffold.contains(v))
@@ -67,10 +79,10 @@ impl Mesher<'_> {
     }
 
     /// The facets as a mesh on their vertices, in id order.
-    fn mesh_of(&self, facets: &[([VertexId; 3], RFacet)]) -> TriMesh {
+    fn mesh_of(&self, facets: &[RFacet]) -> TriMesh {
         let mut remap = vec![u32::MAX; self.tri.num_vertices()];
-        for (k, _) in facets {
-            for &v in k {
+        for rf in facets {
+            for &v in &rf.oriented {
                 remap[v.index()] = 0;
             }
         }
@@ -84,7 +96,7 @@ impl Mesher<'_> {
         let vertices: Vec<DVec3> = used.iter().map(|&v| self.tri.point(v)).collect();
         let triangles: Vec<[u32; 3]> = facets
             .iter()
-            .map(|(_, rf)| rf.oriented.map(|v| remap[v.index()]))
+            .map(|rf| rf.oriented.map(|v| remap[v.index()]))
             .collect();
         TriMesh {
             vertices,
@@ -94,7 +106,7 @@ impl Mesher<'_> {
 
     /// Per-facet measures (in parallel when the tuner says it pays), then min / max
     /// (order-independent).
-    fn extremes(&self, facets: &[([VertexId; 3], RFacet)]) -> Extremes {
+    fn extremes(&self, facets: &[RFacet]) -> Extremes {
         let (tri, criteria) = (&self.tri, &self.opts.criteria);
         // r / sigma: an upper bound r / lb where the vertices give one, else exact; the
         // bounded facets whose bound exceeds the largest exact value are then evaluated
@@ -105,7 +117,7 @@ impl Mesher<'_> {
                 None => criteria.sigma_at(rf.center).map(|s| (rf.radius / s, true)),
             }
         };
-        let measure = |(_, rf): &([VertexId; 3], RFacet)| -> Measure {
+        let measure = |rf: &RFacet| -> Measure {
             let pts = rf.oriented.map(|v| tri.point(v));
             let rs = r_over_sigma(rf);
             let dist = criteria.distance_ratio(pts, rf.center);
@@ -140,7 +152,7 @@ impl Mesher<'_> {
             .map(|(i, _)| i)
             .collect();
         let values = self.policy.field(exact.len()).map(&exact, |&i| {
-            let rf = &facets[i].1;
+            let rf = &facets[i];
             criteria.sigma_at(rf.center).map(|s| rf.radius / s)
         });
         for v in values {
@@ -150,17 +162,14 @@ impl Mesher<'_> {
     }
 
     /// The figures of the run and the unmet criteria, into `self.stats`.
-    fn fill_stats(&mut self, mesh: &TriMesh, ext: &Extremes, scaffold_dropped: usize) {
-        let (bad_edges, bad_vertices) = match self.manifold.last.take() {
-            Some((n, r)) if n == self.tri.num_vertices() => r,
-            _ => self.nonmanifold_elements(),
-        };
-        let missing = self
-            .control
-            .vertices
-            .iter()
-            .filter(|&&v| self.restricted.facets_at(v) == 0)
-            .count();
+    fn fill_stats(
+        &mut self,
+        mesh: &TriMesh,
+        ext: &Extremes,
+        scaffold_dropped: usize,
+        (bad_edges, bad_vertices): (Vec<[VertexId; 2]>, Vec<VertexId>),
+        missing: usize,
+    ) {
         let sample_points = self.sample_points();
         let st = &mut self.stats;
         st.vertices = mesh.vertices.len();

@@ -3,8 +3,8 @@
 //! queue entries (slab index + version).
 //!
 //! # Invariants
-//! - A slab slot is live iff `slots[i].key[0] != FREE`; a live key (sorted vertex triple) is
-//!   in at most one live slot.
+//! - A slab slot is live iff `slots[i].oriented[0] != FREE`; a live key (the sorted vertex
+//!   triple, `sorted3(oriented)`) is in at most one live slot.
 //! - When a facet is registered, `of_facet` of both its cells points at its slot. A pointer
 //!   may go stale (the slot freed, or reused by another facet): every lookup through
 //!   `of_facet` compares the key, so a stale pointer is a miss, never a wrong hit.
@@ -18,11 +18,14 @@
 use delaunay3::{CellId, Facet, VertexId};
 use glam::DVec3;
 
-/// A restricted facet and its surface Delaunay ball.
+/// A restricted facet and its surface Delaunay ball: 64 bytes (the facet's cell and index
+/// are two fields, not a padded `Facet`; the key is `sorted3(oriented)`, not stored).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RFacet {
-    /// The facet, seen from a finite cell.
-    pub facet: Facet,
+    /// The cell the facet is seen from (a finite cell).
+    pub cell: CellId,
+    /// The facet's index in `cell`.
+    pub index: u8,
     /// Vertex ids oriented counter-clockwise seen from outside (normal toward value > 0).
     pub oriented: [VertexId; 3],
     /// The center of its surface Delaunay ball (a point of S on its dual).
@@ -39,13 +42,20 @@ pub(crate) struct RFacet {
     pub lazy: bool,
 }
 
-#[derive(Clone, Copy)]
-struct Slot {
-    key: [VertexId; 3],
-    rf: RFacet,
+impl RFacet {
+    /// The facet, seen from its finite cell.
+    #[inline]
+    pub fn facet(&self) -> Facet {
+        Facet {
+            cell: self.cell,
+            index: self.index,
+        }
+    }
 }
 
-/// The key of a free slot.
+const _: () = assert!(std::mem::size_of::<RFacet>() == 64);
+
+/// `oriented[0]` of a free slot.
 const FREE: VertexId = VertexId::INFINITE;
 /// No slot.
 const NONE: u32 = u32::MAX;
@@ -54,7 +64,7 @@ const NONE: u32 = u32::MAX;
 /// docs).
 #[derive(Default)]
 pub(crate) struct Restricted {
-    slots: Vec<Slot>,
+    slots: Vec<RFacet>,
     free: Vec<u32>,
     len: usize,
     /// `of_facet[4 c + i]`: the slot last registered for facet i of cell c, or `NONE`.
@@ -70,7 +80,7 @@ impl Restricted {
     pub fn heap_bytes(&self) -> (usize, usize) {
         use std::mem::size_of;
         (
-            self.slots.capacity() * size_of::<Slot>() + self.free.capacity() * 4,
+            self.slots.capacity() * size_of::<RFacet>() + self.free.capacity() * 4,
             self.of_facet.capacity() * 4
                 + self.facet_mask.capacity()
                 + self.vertex_facets.capacity() * 4,
@@ -125,11 +135,11 @@ impl Restricted {
     pub fn register(&mut self, key: [VertexId; 3], mut rf: RFacet, m: Facet) -> (u32, RFacet) {
         self.version = self.version.wrapping_add(1);
         rf.version = self.version;
-        let f = rf.facet;
+        let f = rf.facet();
         let idx = self.insert(key, rf, m);
         let need = (f.cell.max(m.cell)).index() + 1;
         if self.facet_mask.len() < need {
-            self.facet_mask.resize(need + need / 2, 0);
+            self.facet_mask.resize(need, 0);
         }
         self.facet_mask[f.cell.index()] |= 1 << f.index;
         self.facet_mask[m.cell.index()] |= 1 << m.index;
@@ -148,33 +158,39 @@ impl Restricted {
         Some(rf)
     }
 
-    /// The facets with their keys, sorted by key.
-    pub fn sorted(&self) -> Vec<([VertexId; 3], RFacet)> {
-        // Sort the (unique) keys with their slots, then gather: cheaper than moving facets.
-        let mut keys: Vec<([VertexId; 3], u32)> = self.iter().map(|(i, k, _)| (k, i)).collect();
-        keys.sort_unstable();
-        keys.into_iter().map(|(k, i)| (k, *self.slot(i))).collect()
+    /// The facets sorted by key, moved out of the slab (no copy); `self` is left empty, its
+    /// indexes freed (versions keep counting).
+    pub fn take_sorted(&mut self) -> Vec<RFacet> {
+        let mut facets = std::mem::take(&mut self.slots);
+        facets.retain(|s| s.oriented[0] != FREE);
+        facets.sort_by_cached_key(|rf| sorted3(rf.oriented));
+        *self = Restricted {
+            version: self.version,
+            ..Default::default()
+        };
+        facets
     }
 
     /// The facet in slot `idx` if it is live with `version`.
     #[inline]
     pub fn get(&self, idx: u32, version: u32) -> Option<&RFacet> {
         let s = self.slots.get(idx as usize)?;
-        (s.key[0] != FREE && s.rf.version == version).then_some(&s.rf)
+        (s.oriented[0] != FREE && s.version == version).then_some(s)
     }
 
     /// Mutable access to the facet in slot `idx` if it is live with `version`.
     #[inline]
     pub fn get_mut(&mut self, idx: u32, version: u32) -> Option<&mut RFacet> {
         let s = self.slots.get_mut(idx as usize)?;
-        (s.key[0] != FREE && s.rf.version == version).then_some(&mut s.rf)
+        (s.oriented[0] != FREE && s.version == version).then_some(s)
     }
 
     /// Store `rf` under `key` (which must not be registered), pointed at from the facet
     /// `f` and its mirror `m`. Returns the slot index. (Slab only: see `register`.)
     fn insert(&mut self, key: [VertexId; 3], rf: RFacet, m: Facet) -> u32 {
-        debug_assert!(self.find(rf.facet.cell, rf.facet.index, key).is_none());
-        let slot = Slot { key, rf };
+        debug_assert!(self.find(rf.cell, rf.index, key).is_none());
+        debug_assert_eq!(sorted3(rf.oriented), key);
+        let slot = rf;
         let idx = match self.free.pop() {
             Some(i) => {
                 self.slots[i as usize] = slot;
@@ -186,11 +202,14 @@ impl Restricted {
             }
         };
         self.len += 1;
-        let need = 4 * (rf.facet.cell.max(m.cell).index() + 1);
+        // Grown to the cell it stores, not beyond: the vector's doubling amortizes the
+        // resizes and leaves its spare capacity unwritten (no resident memory), where a 1.5x
+        // over-resize wrote `NONE` into it.
+        let need = 4 * (rf.cell.max(m.cell).index() + 1);
         if self.of_facet.len() < need {
-            self.of_facet.resize(need + need / 2, NONE);
+            self.of_facet.resize(need, NONE);
         }
-        self.of_facet[4 * rf.facet.cell.index() + rf.facet.index as usize] = idx;
+        self.of_facet[4 * rf.cell.index() + rf.index as usize] = idx;
         self.of_facet[4 * m.cell.index() + m.index as usize] = idx;
         idx
     }
@@ -200,7 +219,7 @@ impl Restricted {
     fn find(&self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<u32> {
         let idx = *self.of_facet.get(4 * c.index() + i as usize)?;
         let s = self.slots.get(idx as usize)?;
-        (s.key == key).then_some(idx)
+        (sorted3(s.oriented) == key).then_some(idx)
     }
 
     /// Remove the facet `key`, seen as facet `i` of cell `c`, if stored, and return it.
@@ -208,18 +227,11 @@ impl Restricted {
     fn remove(&mut self, c: CellId, i: u8, key: [VertexId; 3]) -> Option<RFacet> {
         let idx = self.find(c, i, key)?;
         let s = &mut self.slots[idx as usize];
-        s.key[0] = FREE;
+        let rf = *s;
+        s.oriented[0] = FREE;
         self.free.push(idx);
         self.len -= 1;
-        Some(s.rf)
-    }
-
-    /// The facet in live slot `idx` (as given by [`Restricted::iter`]).
-    #[inline]
-    pub fn slot(&self, idx: u32) -> &RFacet {
-        let s = &self.slots[idx as usize];
-        debug_assert!(s.key[0] != FREE);
-        &s.rf
+        Some(rf)
     }
 
     /// Live facets with their keys, in slot order (deterministic, not sorted).
@@ -227,8 +239,8 @@ impl Restricted {
         self.slots
             .iter()
             .enumerate()
-            .filter(|(_, s)| s.key[0] != FREE)
-            .map(|(i, s)| (i as u32, s.key, &s.rf))
+            .filter(|(_, s)| s.oriented[0] != FREE)
+            .map(|(i, s)| (i as u32, sorted3(s.oriented), s))
     }
 }
 
@@ -259,10 +271,11 @@ mod tests {
         k.map(VertexId::from_u32)
     }
 
-    fn rf(cell: CellId, index: u8, version: u32) -> RFacet {
+    fn rf(cell: CellId, index: u8, version: u32, k: [u32; 3]) -> RFacet {
         RFacet {
-            facet: Facet { cell, index },
-            oriented: key([0, 1, 2]),
+            cell,
+            index,
+            oriented: key([k[1], k[0], k[2]]),
             center: DVec3::ZERO,
             radius: 1.0,
             bad: 0.5,
@@ -278,7 +291,7 @@ mod tests {
             cell: cid(7),
             index: 2,
         };
-        let a = r.insert(key([1, 2, 3]), rf(cid(3), 0, 10), m);
+        let a = r.insert(key([1, 2, 3]), rf(cid(3), 0, 10, [1, 2, 3]), m);
         assert_eq!(r.len(), 1);
         assert!(r.get(a, 10).is_some());
         assert!(r.get(a, 9).is_none());
@@ -293,7 +306,7 @@ mod tests {
         // their own facet's key) miss.
         let b = r.insert(
             key([4, 5, 6]),
-            rf(cid(9), 1, 11),
+            rf(cid(9), 1, 11, [4, 5, 6]),
             Facet {
                 cell: cid(8),
                 index: 0,

@@ -75,7 +75,7 @@ impl Mesher<'_> {
     /// Returns the resolved facet.
     pub(crate) fn resolve_lazy(&mut self, idx: u32, rf: RFacet) -> Result<RFacet, MeshError> {
         debug_assert!(rf.lazy);
-        let f = rf.facet;
+        let f = rf.facet();
         let m = self.tri.mirror_facet(f);
         let verts = self.tri.facet_vertices(f);
         let (p, fp, q, fq) = self

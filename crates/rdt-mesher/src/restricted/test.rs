@@ -271,7 +271,8 @@ impl Mesher<'_> {
             [verts[0], verts[2], verts[1]]
         };
         let rf = RFacet {
-            facet: f,
+            cell: f.cell,
+            index: f.index,
             oriented,
             center,
             radius,

@@ -52,7 +52,8 @@ impl Mesher<'_> {
             }
         }
         want.sort_unstable();
-        let have: Vec<[VertexId; 3]> = self.restricted.sorted().iter().map(|x| x.0).collect();
+        let mut have: Vec<[VertexId; 3]> = self.restricted.iter().map(|(_, k, _)| k).collect();
+        have.sort_unstable();
         let missing = want
             .iter()
             .filter(|k| have.binary_search(k).is_err())
@@ -72,9 +73,9 @@ impl Mesher<'_> {
             for v in k {
                 count[v.index()] += 1;
             }
-            let m = self.tri.mirror_facet(rf.facet);
+            let m = self.tri.mirror_facet(rf.facet());
             let bit = |f: Facet| self.restricted.mask(f.cell) & (1 << f.index) != 0;
-            unmasked += usize::from(!(bit(rf.facet) && bit(m)));
+            unmasked += usize::from(!(bit(rf.facet()) && bit(m)));
         }
         if unmasked > 0 {
             problems.push(format!(

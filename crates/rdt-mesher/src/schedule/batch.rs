@@ -147,7 +147,7 @@ impl Scheduler {
             // were just read by the search.
             let found = exec.map_zip_mut(batch, zones, |(e, rf), z| {
                 let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version);
-                tri.find_cavity(rf.center, Some(rf.facet.cell), seed, &mut z.cav)?;
+                tri.find_cavity(rf.center, Some(rf.cell), seed, &mut z.cav)?;
                 z.infos.clear();
                 let p = z.cav.point();
                 z.infos.extend(
