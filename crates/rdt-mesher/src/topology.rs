@@ -36,13 +36,84 @@ pub(crate) fn nonmanifold_elements_with(
         .map(|&v| v as usize + 1)
         .max()
         .unwrap_or(0);
-    let (start, link) = link_buckets(tris, n);
+    // The links are built for one range of vertices at a time, at most 2^20 link edges
+    // each: a bounded buffer, where the links of every vertex at once were 8 bytes a link
+    // edge (48 MB at 10^6 vertices, the peak of the run's end).
+    nonmanifold_in_ranges(tris, n, parallel, 1 << 20)
+}
+
+/// [`nonmanifold_elements_with`] on vertices `0..n`, building the links of a range of
+/// vertices with at most `link_edges` link edges at a time (a range has at least one
+/// vertex), one pass over the triangles a range. The ranges do not change the result.
+fn nonmanifold_in_ranges(
+    tris: &[[VertexId; 3]],
+    n: usize,
+    parallel: bool,
+    link_edges: u32,
+) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
+    let start = bucket_starts(tris, n);
+    let mut bad_edges = Vec::new();
+    let mut bad_vertices = Vec::new();
+    let mut link: Vec<[VertexId; 2]> = Vec::new();
+    let mut lo = 0;
+    while lo < n {
+        let mut hi = lo + 1;
+        while hi < n && start[hi + 1] - start[lo] <= link_edges {
+            hi += 1;
+        }
+        let base = start[lo];
+        link.clear();
+        link.resize((start[hi] - base) as usize, [0, 0]);
+        let mut fill: Vec<u32> = start[lo..hi].iter().map(|&s| s - base).collect();
+        for t in tris {
+            for i in 0..3 {
+                let a = t[i] as usize;
+                if (lo..hi).contains(&a) {
+                    let k = &mut fill[a - lo];
+                    link[*k as usize] = [t[(i + 1) % 3], t[(i + 2) % 3]];
+                    *k += 1;
+                }
+            }
+        }
+        let (e, v) = check_links(&start, base, &link, lo..hi, parallel);
+        bad_edges.extend(e);
+        bad_vertices.extend(v);
+        lo = hi;
+    }
+    // Bad edges with both endpoints seen from the smaller one come out sorted.
+    (bad_edges, bad_vertices)
+}
+
+/// `start[v]..start[v + 1]`: where vertex v's link edges go in a counting sort of the link
+/// edges of `tris` by vertex (vertices `0..n`).
+fn bucket_starts(tris: &[[VertexId; 3]], n: usize) -> Vec<u32> {
+    let mut start = vec![0u32; n + 1];
+    for t in tris {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    start
+}
+
+/// The bad edges and vertices among `range`, whose link edges are `link` (vertex v's at
+/// `start[v] - base..start[v + 1] - base`), on rayon's threads when `parallel`.
+fn check_links(
+    start: &[u32],
+    base: u32,
+    link: &[[VertexId; 2]],
+    range: std::ops::Range<usize>,
+    parallel: bool,
+) -> (Vec<[VertexId; 2]>, Vec<VertexId>) {
     let check = |range: std::ops::Range<usize>| {
         let mut bad_edges = Vec::new();
         let mut bad_vertices = Vec::new();
         let mut ends: Vec<(VertexId, u32)> = Vec::new();
         for v in range {
-            let l = &link[start[v] as usize..start[v + 1] as usize];
+            let l = &link[(start[v] - base) as usize..(start[v + 1] - base) as usize];
             if l.is_empty() {
                 continue;
             }
@@ -70,11 +141,15 @@ pub(crate) fn nonmanifold_elements_with(
     };
     use rayon::prelude::*;
     const CHUNK: usize = 4096;
-    let chunk = |k: usize| check(k * CHUNK..((k + 1) * CHUNK).min(n));
+    let (lo, hi) = (range.start, range.end);
+    let chunk = |k: usize| check(lo + k * CHUNK..(lo + (k + 1) * CHUNK).min(hi));
     let parts: Vec<_> = if parallel {
-        (0..n.div_ceil(CHUNK)).into_par_iter().map(chunk).collect()
+        (0..(hi - lo).div_ceil(CHUNK))
+            .into_par_iter()
+            .map(chunk)
+            .collect()
     } else {
-        (0..n.div_ceil(CHUNK)).map(chunk).collect()
+        (0..(hi - lo).div_ceil(CHUNK)).map(chunk).collect()
     };
     let mut bad_edges = Vec::new();
     let mut bad_vertices = Vec::new();
@@ -82,7 +157,6 @@ pub(crate) fn nonmanifold_elements_with(
         bad_edges.extend(e);
         bad_vertices.extend(v);
     }
-    // Bad edges with both endpoints seen from the smaller one come out sorted.
     (bad_edges, bad_vertices)
 }
 
@@ -90,15 +164,7 @@ pub(crate) fn nonmanifold_elements_with(
 /// triangle order: the triangle (a, b, c) puts (b, c) in a's bucket, (c, a) in b's, (a, b) in
 /// c's. Bucket v is `link[start[v]..start[v + 1]]`.
 pub(crate) fn link_buckets(tris: &[[VertexId; 3]], n: usize) -> (Vec<u32>, Vec<[VertexId; 2]>) {
-    let mut start = vec![0u32; n + 1];
-    for t in tris {
-        for &v in t {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
+    let start = bucket_starts(tris, n);
     let mut fill = start.clone();
     let mut link = vec![[0 as VertexId; 2]; tris.len() * 3];
     for t in tris {
@@ -322,6 +388,13 @@ mod tests {
         ) {
             let t: Vec<[VertexId; 3]> = soup.iter().map(|&(a, b, c)| [a, b, c]).collect();
             proptest::prop_assert_eq!(nonmanifold_elements(&t), reference(&t));
+            let n = t.iter().flatten().map(|&v| v as usize + 1).max().unwrap_or(0);
+            for limit in [1, 5] {
+                proptest::prop_assert_eq!(
+                    nonmanifold_in_ranges(&t, n, false, limit),
+                    reference(&t)
+                );
+            }
             // An octahedron with vertex ids shifted, some triangles dropped or doubled.
             let oct = [
                 [0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],

@@ -139,7 +139,7 @@ impl Mesher<'_> {
         for &c in created {
             let idx = c.index();
             if idx >= self.created_stamp.len() {
-                self.created_stamp.resize(idx + 1 + idx / 2, 0);
+                self.created_stamp.resize(idx + 1, 0);
             }
             self.created_stamp[idx] = self.round;
         }

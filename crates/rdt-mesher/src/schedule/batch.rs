@@ -212,7 +212,7 @@ impl Scheduler {
             for &c in z.cav.cells() {
                 let c = c.index();
                 if c >= self.touched.len() {
-                    self.touched.resize(c + 1 + c / 2, 0);
+                    self.touched.resize(c + 1, 0);
                 }
                 self.touched[c] = round;
             }
