@@ -43,8 +43,8 @@ impl Mesher<'_> {
                 bytes: self.queue.heap_bytes(),
             },
             MemoryUse {
-                structure: "cell stamps and vertex sizes",
-                bytes: self.created_stamp.capacity() * 4 + self.vertex_sizes.heap_bytes(),
+                structure: "vertex sizes",
+                bytes: self.vertex_sizes.heap_bytes(),
             },
         ]);
         out

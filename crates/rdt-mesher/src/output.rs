@@ -33,7 +33,6 @@ impl Mesher<'_> {
         // here: the structures and the output at once).
         self.voronoi = Default::default();
         self.queue = Default::default();
-        self.created_stamp = Vec::new();
         // The figures that read Del_S(E)'s indexes, before its facets are moved out of it.
         let nonmanifold = match self.manifold.last.take() {
             Some((n, r)) if n == self.tri.num_vertices() => r,

@@ -77,10 +77,6 @@ pub(crate) struct Mesher<'a> {
     pub manifold: ManifoldProgress,
     /// The control points.
     pub control: Control,
-    /// `created_stamp[c] == round`: cell c was created in the current `process_created`.
-    pub created_stamp: Vec<u32>,
-    /// The current `process_created` round.
-    pub round: u32,
     /// The figures of the run so far.
     pub stats: Stats,
     /// Time in the triangulation.
@@ -124,8 +120,6 @@ impl<'a> Mesher<'a> {
                 ray_attempts: Vec::new(),
                 rng: SplitMix64(opts.seed ^ 0xA076_1D64_78BD_642F),
             },
-            created_stamp: Vec::new(),
-            round: 0,
             stats: Stats::default(),
             t_delaunay: Duration::ZERO,
             t_oracle: Duration::ZERO,

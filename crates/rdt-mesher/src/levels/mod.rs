@@ -43,7 +43,6 @@ impl Mesher<'_> {
         self.stats.scaffold_rebuilds += 1;
         self.voronoi.clear();
         self.restricted.clear();
-        self.created_stamp.clear();
         self.queue.clear();
         self.vertex_sizes.clear();
         self.manifold.last = None;

@@ -12,7 +12,8 @@
 //!   is fresh iff the slot is live with that version.
 //! - Bit i of `facet_mask[c]`: facet i of cell c may be registered. Set on both cells of a
 //!   facet when it is registered; a set bit without an entry is harmless (a missed lookup),
-//!   a registered facet always has its bits set.
+//!   a registered facet always has its bits set. Bit 7 (`CREATED`) is set only during one
+//!   `process_created` round, on the cells that round created, and cleared before it ends.
 //! - `vertex_facets[v]` counts the registered facets incident to `v`.
 
 use delaunay3::{CellId, Facet, VertexId};
@@ -59,6 +60,8 @@ const _: () = assert!(std::mem::size_of::<RFacet>() == 64);
 const FREE: VertexId = VertexId::INFINITE;
 /// No slot.
 const NONE: u32 = u32::MAX;
+/// Bit 7 of `facet_mask`: the cell was created in the current round (see the invariants).
+const CREATED: u8 = 0x80;
 
 /// Del_S(E): the registered facets and their per-cell and per-vertex indexes (see the module
 /// docs).
@@ -118,14 +121,33 @@ impl Restricted {
     /// The facets of cell `c` that may be registered (bit i: facet i).
     #[inline]
     pub fn mask(&self, c: CellId) -> u8 {
-        self.facet_mask.get(c.index()).copied().unwrap_or(0)
+        self.facet_mask.get(c.index()).copied().unwrap_or(0) & !CREATED
     }
 
-    /// Cell `c` is new: none of its facets is registered.
+    /// A round starts: the `created` cells are new (none of their facets is registered) and
+    /// are marked created until [`Restricted::end_round`].
+    pub fn start_round(&mut self, created: &[CellId]) {
+        let need = created.iter().map(|c| c.index() + 1).max().unwrap_or(0);
+        if self.facet_mask.len() < need {
+            self.facet_mask.resize(need, 0);
+        }
+        for c in created {
+            self.facet_mask[c.index()] = CREATED;
+        }
+    }
+
+    /// Whether cell `c` was created in the current round.
     #[inline]
-    pub fn reset_mask(&mut self, c: CellId) {
-        if let Some(m) = self.facet_mask.get_mut(c.index()) {
-            *m = 0;
+    pub fn is_created(&self, c: CellId) -> bool {
+        self.facet_mask
+            .get(c.index())
+            .is_some_and(|&m| m & CREATED != 0)
+    }
+
+    /// The round of [`Restricted::start_round`] ends (the same `created` cells).
+    pub fn end_round(&mut self, created: &[CellId]) {
+        for c in created {
+            self.facet_mask[c.index()] &= !CREATED;
         }
     }
 

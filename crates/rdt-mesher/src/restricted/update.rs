@@ -109,7 +109,6 @@ impl Mesher<'_> {
         created: &[CellId],
         infos: &[CellInfo],
     ) -> Result<(), MeshError> {
-        self.round = self.round.wrapping_add(1);
         if infos.len() == created.len() {
             for (&c, &info) in created.iter().zip(infos) {
                 debug_assert_eq!(
@@ -132,22 +131,14 @@ impl Mesher<'_> {
                 self.voronoi.set(c, info);
             }
         }
-        for &c in created {
-            self.restricted.reset_mask(c);
-        }
         self.eval_cells(created)?;
-        for &c in created {
-            let idx = c.index();
-            if idx >= self.created_stamp.len() {
-                self.created_stamp.resize(idx + 1, 0);
-            }
-            self.created_stamp[idx] = self.round;
-        }
+        self.restricted.start_round(created);
         let this = &*self;
         let pairs = self
             .policy
             .cells(created.len())
             .flat_map_chunks(created, 64, |chunk, out| this.facets_to_test(chunk, out));
+        self.restricted.end_round(created);
         self.test_facets(&pairs)
     }
 
@@ -159,9 +150,7 @@ impl Mesher<'_> {
             let fc = self.voronoi.get(c).f;
             for i in 0..4u8 {
                 let n = self.tri.neighbor(c, i as usize);
-                let n_created = n.index() < self.created_stamp.len()
-                    && self.created_stamp[n.index()] == self.round;
-                if n_created && n < c {
+                if n < c && self.restricted.is_created(n) {
                     continue; // tested from n's side
                 }
                 // Invariant (kept by `full_scan` and `process_created`): every live cell has

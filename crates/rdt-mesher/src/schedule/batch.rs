@@ -47,9 +47,9 @@ pub(crate) struct Scheduler {
     zones: Vec<Zone>,
     pending: Vec<CellId>,
     pending_infos: Vec<CellInfo>,
-    /// `touched[c] == touch_round`: cell c was destroyed by a zone inserted in this batch.
-    touched: Vec<u32>,
-    touch_round: u32,
+    /// The cells destroyed by the zones inserted in this batch (a set the size of a batch's
+    /// zones, where a stamp per cell slot cost 4 bytes a cell).
+    touched: rustc_hash::FxHashSet<u32>,
     changes: Changes,
 }
 
@@ -178,12 +178,7 @@ impl Scheduler {
         found: &[Result<(), delaunay3::Error>],
         since_progress: &mut usize,
     ) -> (usize, bool, Result<(), MeshError>) {
-        self.touch_round = self.touch_round.wrapping_add(1);
-        if self.touch_round == 0 {
-            self.touched.iter_mut().for_each(|x| *x = 0);
-            self.touch_round = 1;
-        }
-        let round = self.touch_round;
+        self.touched.clear();
         let mut inserted = 0usize;
         for (i, (&(e, _), res)) in self.batch.iter().zip(found).enumerate() {
             if let Err(err) = res {
@@ -195,7 +190,7 @@ impl Scheduler {
             }
             if z.cav
                 .touched_cells()
-                .any(|c| self.touched.get(c.index()).is_some_and(|&r| r == round))
+                .any(|c| self.touched.contains(&c.to_u32()))
             {
                 m.queue.push(e); // its zone overlaps an earlier one: next batch
                 m.stats.batch_deferrals += 1;
@@ -209,13 +204,8 @@ impl Scheduler {
                 return (inserted, true, Ok(()));
             }
             // Only destroyed cells invalidate later zones (see `insert_cavity`).
-            for &c in z.cav.cells() {
-                let c = c.index();
-                if c >= self.touched.len() {
-                    self.touched.resize(c + 1, 0);
-                }
-                self.touched[c] = round;
-            }
+            self.touched
+                .extend(z.cav.cells().iter().map(|c| c.to_u32()));
             let t = Instant::now();
             let ins = m.tri_mut().insert_cavity(&z.cav, Some(&mut self.changes));
             m.t_delaunay += t.elapsed();
