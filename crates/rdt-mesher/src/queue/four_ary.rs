@@ -11,27 +11,27 @@
 
 use std::cmp::Ordering;
 
-/// A queue entry in 16 bytes: the badness bits (positive `f64`, so its bits order like its
-/// value), the version, and the slot with the `forced` flag in its top bit.
+/// A queue entry in 16 bytes: its priority (larger first; see `super::Queue`), the version,
+/// and the slot with the `forced` flag in its top bit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Packed {
-    pub bad_bits: u64,
+    pub prio: u64,
     pub version: u32,
     pub slot_forced: u32,
 }
 
 impl Packed {
-    /// The priority: larger badness first, then the older entry (smaller version).
+    /// The order: larger priority first, then the older entry (smaller version).
     #[inline]
-    fn prio(&self) -> (u64, u32) {
-        (self.bad_bits, u32::MAX - self.version)
+    fn key(&self) -> (u64, u32) {
+        (self.prio, u32::MAX - self.version)
     }
 }
 
 impl Ord for Packed {
     #[inline]
     fn cmp(&self, o: &Self) -> Ordering {
-        self.prio().cmp(&o.prio())
+        self.key().cmp(&o.key())
     }
 }
 
@@ -84,6 +84,22 @@ impl FourAryHeap {
     /// Keeps the entries for which `keep` holds, then restores the heap (bottom-up, O(n)).
     pub fn retain(&mut self, keep: impl FnMut(&Packed) -> bool) {
         self.items.retain(keep);
+        self.heapify();
+    }
+
+    /// The entries, in heap order.
+    pub fn into_vec(self) -> Vec<Packed> {
+        self.items
+    }
+
+    /// A heap of `items` (any order; bottom-up, O(n)).
+    pub fn from_vec(items: Vec<Packed>) -> FourAryHeap {
+        let mut h = FourAryHeap { items };
+        h.heapify();
+        h
+    }
+
+    fn heapify(&mut self) {
         for i in (0..self.items.len().div_ceil(4)).rev() {
             self.sift_down(i);
         }
@@ -136,7 +152,7 @@ mod tests {
 
     fn entry(bad: u8, version: u32) -> Packed {
         Packed {
-            bad_bits: (1.0 + f64::from(bad)).to_bits(),
+            prio: (1.0 + f64::from(bad)).to_bits(),
             version,
             slot_forced: version.wrapping_mul(7),
         }

@@ -8,7 +8,10 @@
 mod four_ary;
 
 use crate::restricted::{RFacet, Restricted};
+use delaunay3::VertexId;
 use four_ary::{FourAryHeap, Packed};
+use geom::morton::morton_key;
+use glam::DVec3;
 
 /// Queue length below which `Queue::purge_stale` leaves stale entries alone.
 const PURGE_MIN: usize = 4096;
@@ -24,16 +27,16 @@ pub(crate) struct QEntry {
     pub version: u32,
     /// Queued by the manifold patch (section 6.6.1), not by a criterion.
     pub forced: bool,
+    /// Where the facet is (a vertex of it): the spatial order's key (see [`Queue`]).
+    pub at: DVec3,
 }
 
 /// The top bit of [`Packed::slot_forced`]: the `forced` flag.
 const FORCED: u32 = 1 << 31;
 
 impl QEntry {
-    /// The heap's 16-byte form. Its order is the queue's: larger badness first; `bad` > 0, so
-    /// its bits order like its value; versions are unique, so the order is total and
-    /// deterministic (older entries first among equals).
-    fn pack(self) -> Packed {
+    /// The heap's 16-byte form, ordered by `prio` (see [`Queue`]), then the older entry.
+    fn pack(self, prio: u64) -> Packed {
         assert!(
             self.idx < FORCED,
             "restricted facet slot {} above 2^31",
@@ -41,28 +44,76 @@ impl QEntry {
         );
         debug_assert!(self.bad > 0.0);
         Packed {
-            bad_bits: self.bad.to_bits(),
+            prio,
             version: self.version,
             slot_forced: self.idx | if self.forced { FORCED } else { 0 },
         }
     }
+}
 
-    fn unpack(p: Packed) -> QEntry {
-        QEntry {
-            bad: f64::from_bits(p.bad_bits),
-            idx: p.slot_forced & !FORCED,
-            version: p.version,
-            forced: p.slot_forced & FORCED != 0,
+/// An entry taken from the queue: its slot, version and flag, and its place in the order
+/// (kept, so that [`Queue::requeue`] puts it back where it was).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Popped(Packed);
+
+impl Popped {
+    /// Slot in `Restricted`.
+    pub fn idx(&self) -> u32 {
+        self.0.slot_forced & !FORCED
+    }
+
+    /// The facet's version when queued.
+    pub fn version(&self) -> u32 {
+        self.0.version
+    }
+
+    /// Queued by the manifold patch.
+    pub fn forced(&self) -> bool {
+        self.0.slot_forced & FORCED != 0
+    }
+}
+
+/// The Z-order frame of the spatial order: a cube (center, half side).
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    center: DVec3,
+    half: f64,
+}
+
+/// The priority of `bad` at `at`: in the badness order, `bad`'s bits (a positive f64's bits
+/// order like its value); in the spatial order, its eighth of an octave (sign, exponent and
+/// 3 mantissa bits: 14 bits) above 48 bits of Z-order key, ascending along the curve.
+fn prio(bad: f64, at: DVec3, frame: Option<Frame>) -> u64 {
+    match frame {
+        None => bad.to_bits(),
+        Some(f) => {
+            const LOW48: u64 = (1 << 48) - 1;
+            let z = morton_key(at, f.center, f.half) >> 15;
+            ((bad.to_bits() >> 49) << 48) | (!z & LOW48)
         }
     }
 }
 
 /// The priority queue, with an estimate of its stale entries.
+///
+/// Two orders, both total (the priority, then the older entry first), so a run's pops do not
+/// depend on the heap's shape or the push order:
+/// - the badness order (worst first), the paper's section 6.1 order, until the run has
+///   `MeshOptions::spatial_order_from` vertices (2^17 by default);
+/// - then the spatial order: entries within an eighth of an octave of badness of each other
+///   are taken along a Z-order curve over S's bounding cube. Consecutive insertions then touch
+///   nearby cells, points and facets, where the worst-first order jumped across the surface
+///   at every insertion (cache misses: a 10^6-vertex torus took 1.4x the CPU time; 1.6% fewer
+///   vertices). Any order of refinement of bad balls keeps the paper's guarantees (section
+///   6.1 needs only that every bad ball is eventually refined). Runs below the threshold are
+///   unchanged.
 #[derive(Default)]
 pub(crate) struct Queue {
     heap: FourAryHeap,
     /// About how many entries of `heap` are stale (forced entries are not counted: rare).
     stale: usize,
+    /// The spatial order's frame, once it is on.
+    frame: Option<Frame>,
 }
 
 impl Queue {
@@ -81,9 +132,44 @@ impl Queue {
         self.heap.is_empty()
     }
 
-    /// Queue `e`. The order is total (badness, then version): push order does not matter.
+    /// Queue `e`. The order is total: push order does not matter.
     pub fn push(&mut self, e: QEntry) {
-        self.heap.push(e.pack());
+        self.heap.push(e.pack(prio(e.bad, e.at, self.frame)));
+    }
+
+    /// Put back an entry taken by [`Queue::pop_fresh`], at its place in the order.
+    pub fn requeue(&mut self, p: Popped) {
+        self.heap.push(p.0);
+    }
+
+    /// Whether the spatial order is on.
+    pub fn is_spatial(&self) -> bool {
+        self.frame.is_some()
+    }
+
+    /// Turn the spatial order on, over the cube (center, half side): stale entries are
+    /// dropped, the others re-keyed from their facet (`point` gives a vertex's position).
+    pub fn go_spatial(
+        &mut self,
+        (center, half): (DVec3, f64),
+        r: &Restricted,
+        point: impl Fn(VertexId) -> DVec3,
+    ) {
+        let frame = Frame { center, half };
+        let old = std::mem::take(&mut self.heap);
+        let mut items = old.into_vec();
+        items.retain_mut(|p| {
+            let Some(rf) = r.get(p.slot_forced & !FORCED, p.version) else {
+                return false;
+            };
+            // Badness order: the priority is the badness's bits.
+            let bad = f64::from_bits(p.prio);
+            p.prio = prio(bad, point(rf.oriented[0]), Some(frame));
+            true
+        });
+        self.heap = FourAryHeap::from_vec(items);
+        self.stale = 0;
+        self.frame = Some(frame);
     }
 
     /// Drop every entry.
@@ -98,10 +184,10 @@ impl Queue {
     }
 
     /// The worst fresh entry and its facet, skipping stale ones.
-    pub fn pop_fresh(&mut self, r: &Restricted) -> Option<(QEntry, RFacet)> {
+    pub fn pop_fresh(&mut self, r: &Restricted) -> Option<(Popped, RFacet)> {
         loop {
-            let e = QEntry::unpack(self.heap.pop()?);
-            match r.get(e.idx, e.version) {
+            let e = Popped(self.heap.pop()?);
+            match r.get(e.idx(), e.version()) {
                 Some(rf) => return Some((e, *rf)),
                 None => self.stale = self.stale.saturating_sub(1),
             }
@@ -116,6 +202,28 @@ impl Queue {
             self.heap
                 .retain(|p| r.get(p.slot_forced & !FORCED, p.version).is_some());
             self.stale = 0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spatial_priority_is_badness_bucket_then_z_order() {
+        let at = |x: f64| DVec3::new(x, -0.9, -0.9);
+        // The badness order is the badness's bits.
+        assert_eq!(prio(2.5, at(0.0), None), 2.5f64.to_bits());
+        let f = Some(Frame {
+            center: DVec3::ZERO,
+            half: 1.0,
+        });
+        // 2.0 and 2.2 share an eighth of an octave ([2, 2.25)); 2.3 does not.
+        assert!(prio(2.0, at(0.5), f) > prio(2.2, at(0.6), f));
+        assert!(prio(2.2, at(-0.5), f) > prio(2.0, at(0.5), f));
+        for x in [-0.9, 0.0, 0.9] {
+            assert!(prio(2.3, at(x), f) > prio(2.2, at(-0.9), f));
         }
     }
 }

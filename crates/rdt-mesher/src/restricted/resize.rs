@@ -54,6 +54,7 @@ impl Mesher<'_> {
                     idx,
                     version: rf.version,
                     forced: false,
+                    at: self.tri.point(rf.oriented[0]),
                 });
             }
         }

@@ -287,6 +287,7 @@ impl Mesher<'_> {
                 idx,
                 version: rf.version,
                 forced: false,
+                at: self.tri.point(oriented[0]),
             });
         }
         Ok(())

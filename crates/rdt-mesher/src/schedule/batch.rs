@@ -12,7 +12,7 @@
 //! any number of threads.
 
 use crate::error::MeshError;
-use crate::queue::QEntry;
+use crate::queue::Popped;
 use crate::restricted::RFacet;
 use crate::state::Mesher;
 use crate::voronoi::{CellInfo, NEW, cell_info_of};
@@ -43,7 +43,7 @@ struct Zone {
 /// (computed during the search); both empty when the loop ends.
 #[derive(Default)]
 pub(crate) struct Scheduler {
-    batch: Vec<(QEntry, RFacet)>,
+    batch: Vec<(Popped, RFacet)>,
     zones: Vec<Zone>,
     pending: Vec<CellId>,
     pending_infos: Vec<CellInfo>,
@@ -87,6 +87,11 @@ impl Scheduler {
     /// leaving for the next batch, without a search, those close to one already taken.
     fn take_batch(&mut self, m: &mut Mesher) -> Result<(), MeshError> {
         let k = batch_size(m);
+        if !m.queue.is_spatial() && m.tri.num_vertices() >= m.opts.spatial_order_from {
+            let (tri, ball) = (&m.tri, &m.ball);
+            m.queue
+                .go_spatial((ball.center, ball.radius), &m.restricted, |v| tri.point(v));
+        }
         m.queue.purge_stale(&m.restricted);
         self.batch.clear();
         let mut near = Vec::new();
@@ -95,9 +100,9 @@ impl Scheduler {
                 break;
             };
             if rf.lazy {
-                rf = m.resolve_lazy(e.idx, rf)?;
+                rf = m.resolve_lazy(e.idx(), rf)?;
             }
-            if e.forced && rf.radius < m.manifold_floor(rf.center) {
+            if e.forced() && rf.radius < m.manifold_floor(rf.center) {
                 continue;
             }
             // A point close to one already in the batch has overlapping conflict zones.
@@ -112,7 +117,7 @@ impl Scheduler {
         }
         m.stats.batch_deferrals += near.len() as u64;
         for e in near {
-            m.queue.push(e);
+            m.queue.requeue(e);
         }
         Ok(())
     }
@@ -146,7 +151,7 @@ impl Scheduler {
             // The zone, then the circumcenters of the cells it will create: their points
             // were just read by the search.
             let found = exec.map_zip_mut(batch, zones, |(e, rf), z| {
-                let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version);
+                let seed = 0x9E37_79B9_7F4A_7C15 ^ u64::from(e.version());
                 tri.find_cavity(rf.center, Some(rf.cell), seed, &mut z.cav)?;
                 z.infos.clear();
                 let p = z.cav.point();
@@ -192,14 +197,14 @@ impl Scheduler {
                 .touched_cells()
                 .any(|c| self.touched.contains(&c.to_u32()))
             {
-                m.queue.push(e); // its zone overlaps an earlier one: next batch
+                m.queue.requeue(e); // its zone overlaps an earlier one: next batch
                 m.stats.batch_deferrals += 1;
                 continue;
             }
             if m.budget_exceeded() {
                 // The rest of the batch stays queued (for a caller that continues).
                 for &(e, _) in &self.batch[i..] {
-                    m.queue.push(e);
+                    m.queue.requeue(e);
                 }
                 return (inserted, true, Ok(()));
             }
@@ -214,7 +219,7 @@ impl Scheduler {
             debug_assert_eq!(self.changes.created.len(), z.infos.len());
             self.pending.extend_from_slice(&self.changes.created);
             self.pending_infos.extend_from_slice(&z.infos);
-            m.count_insertion(e.forced, since_progress);
+            m.count_insertion(e.forced(), since_progress);
             inserted += 1;
         }
         (inserted, false, Ok(()))
