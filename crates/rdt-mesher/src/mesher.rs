@@ -29,6 +29,7 @@ pub fn mesh_with_progress(
         r.run(progress)?;
         let mut out = r.finish()?;
         crate::levels::repair::apply(&mut out, opts);
+        crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })
 }
@@ -87,6 +88,7 @@ pub(crate) fn mesh_in_rounds(
         }
         let mut out = r.finish()?;
         crate::levels::repair::apply(&mut out, opts);
+        crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })
 }

@@ -27,7 +27,7 @@ use anyhow::{Context, Result};
 use glam::DVec3;
 use oracle::Surface;
 use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
-use rdt_mesher::{Criteria, DecisionKind, MeshOptions, MeshResult};
+use rdt_mesher::{ComponentKind, Criteria, MeshOptions, MeshResult};
 use std::path::Path;
 
 /// The verify checks of a closed, embedded, oriented manifold mesh (both regression suites
@@ -191,28 +191,94 @@ fn checks(
         }
     }
     let comps = mesh_components(&r.mesh.triangles, r.mesh.vertices.len());
-    if comps + dropped != reference {
-        let (per, unlabelled) = account(s, r);
-        let topo = s.topology();
-        let missing: Vec<usize> = (0..per.len())
-            .filter(|&i| per[i] == 0 && !topo.component_vanishing[i])
-            .collect();
-        let split = per.iter().filter(|&&c| c > 1).count();
-        let list: Vec<String> = missing
+    // The mesher's component decisions, checked against this suite's own accounting: per
+    // scan component, its pieces are 1 + its split decisions, or none with one joined, missed
+    // or dropped decision; and the counts add up.
+    let (per, unlabelled) = account(s, r);
+    let topo = s.topology();
+    let mut said = vec![(0usize, 0usize); per.len()];
+    for d in &r.stats.component_decisions {
+        if let Some(x) = said.get_mut(d.component) {
+            match d.kind {
+                ComponentKind::Split => x.0 += 1,
+                _ => x.1 += 1,
+            }
+        }
+    }
+    let wrong: Vec<String> = (0..per.len())
+        .filter(|&i| {
+            let (split, absent) = said[i];
+            let vanishing = topo.component_vanishing[i];
+            match per[i] {
+                0 => absent != usize::from(!vanishing) || split > 0,
+                k => absent > 0 || split != k - 1,
+            }
+        })
+        .take(4)
+        .map(|i| {
+            let p = topo.component_seeds[i];
+            format!(
+                "component {i} at ({:.1}, {:.1}, {:.1}): {} pieces, {} split and {} other decisions",
+                p.x, p.y, p.z, per[i], said[i].0, said[i].1
+            )
+        })
+        .collect();
+    let count = |f: fn(&ComponentKind) -> bool| {
+        r.stats
+            .component_decisions
             .iter()
+            .filter(|d| f(&d.kind))
+            .count()
+    };
+    let split = count(|k| matches!(k, ComponentKind::Split));
+    let joined = count(|k| matches!(k, ComponentKind::Joined { .. }));
+    let missed = count(|k| matches!(k, ComponentKind::Missed));
+    if !wrong.is_empty() || unlabelled > 0 || comps + joined + missed + dropped != reference + split
+    {
+        fails.push(format!(
+            "component decisions: {comps} pieces != {reference} (voxel scan) - {joined} joined - \
+             {missed} missed - {dropped} dropped + {split} split; {unlabelled} pieces on no \
+             component; not as reported: [{}]",
+            wrong.join("; ")
+        ));
+    }
+    if missed > 0 {
+        let list: Vec<String> = r
+            .stats
+            .component_decisions
+            .iter()
+            .filter(|d| d.kind == ComponentKind::Missed)
             .take(4)
-            .map(|&i| {
-                let p = topo.component_seeds[i];
-                let e = topo.component_edges[i];
-                format!("({:.1}, {:.1}, {:.1}) {e} crossing edges", p.x, p.y, p.z)
+            .map(|d| {
+                let p = d.center;
+                format!(
+                    "({:.1}, {:.1}, {:.1}) {} crossing edges",
+                    p.x, p.y, p.z, d.crossing_edges
+                )
             })
             .collect();
+        fails.push(format!("components missed: {missed} [{}]", list.join(", ")));
+    }
+    if comps + dropped != reference {
+        let list = |f: fn(&ComponentKind) -> bool| -> String {
+            let v: Vec<String> = r
+                .stats
+                .component_decisions
+                .iter()
+                .filter(|d| f(&d.kind))
+                .take(4)
+                .map(|d| {
+                    let p = d.center;
+                    format!("({:.1}, {:.1}, {:.1}) size {:.2}", p.x, p.y, p.z, d.size)
+                })
+                .collect();
+            v.join(", ")
+        };
         gaps.push(format!(
             "components: {comps} in the mesh + {dropped} dropped != {reference} (voxel scan): \
-             {} scan components missing [{}], {split} split in several pieces, \
-             {unlabelled} mesh pieces unlabelled",
-            missing.len(),
-            list.join(", ")
+             {joined} joined [{}], {split} split pieces [{}]",
+            list(|k| matches!(k, ComponentKind::Joined { .. })),
+            list(|k| matches!(k, ComponentKind::Split)),
         ));
     }
     // Mesh -> S: every point of a triangle is within its ball's radius of the ball's center
@@ -286,14 +352,11 @@ fn run_one(name: &str, s: &ImageSurface, k: f64) -> Result<ImageRow> {
     let r = rdt_mesher::mesh(s, &opts).with_context(|| format!("meshing {name}"))?;
     let seconds = t.elapsed().as_secs_f64();
     let dec = &r.stats.topology_decisions;
-    let dropped = dec
+    let dropped = r
+        .stats
+        .component_decisions
         .iter()
-        .filter(|d| {
-            matches!(
-                d.kind,
-                DecisionKind::DropSliver | DecisionKind::DropSmallComponent { .. }
-            )
-        })
+        .filter(|d| d.kind == ComponentKind::Dropped)
         .count();
     let reference = s.component_count();
     let (mut failures, mut gaps) = checks(s, &r, h + sigma, reference, dropped);
