@@ -28,7 +28,7 @@ pub fn mesh_with_progress(
         let mut r = Mesher::new(surface, opts);
         r.run(progress)?;
         let mut out = r.finish()?;
-        crate::levels::repair::apply(&mut out, opts);
+        crate::levels::repair::apply(&mut out, surface, opts);
         crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })
@@ -87,7 +87,7 @@ pub(crate) fn mesh_in_rounds(
             r.refine_loop(progress)?;
         }
         let mut out = r.finish()?;
-        crate::levels::repair::apply(&mut out, opts);
+        crate::levels::repair::apply(&mut out, surface, opts);
         crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })

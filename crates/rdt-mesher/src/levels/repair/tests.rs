@@ -23,7 +23,7 @@ fn run(mut m: TriMesh, min_volume: Option<f64>) -> (TriMesh, Vec<TopologyDecisio
         };
         m.triangles.len()
     ];
-    let d = repair(&mut m, &mut balls, min_volume);
+    let d = repair(&mut m, &mut balls, min_volume, &[]);
     assert_eq!(balls.len(), m.triangles.len());
     (m, d)
 }
