@@ -3,8 +3,14 @@
 //! stated with its rule, where it is and how large, never left silent.
 //!
 //! The neck and bridge rounds (`necks`) refine down to the manifold floor (an eighth of a
-//! voxel) and for at most `NECK_ROUNDS` rounds each. What they leave is decided by these
-//! rules, on the output mesh (after the topological repair):
+//! voxel) and for at most `NECK_ROUNDS` rounds each; the topological repair separates what
+//! stays bridged (`repair`, rule 0). What they leave is decided by these rules, on the output
+//! mesh (after the topological repair):
+//! - **drop a fragment** (a mesh change, reported as a [`TopologyDecision`] of kind
+//!   `drop_fragment`): a piece of a scan component meshed in several pieces, not its largest,
+//!   whose box diagonal is below the resolution (a voxel): a sub-voxel piece cut off by a neck
+//!   thinner than the floor (or by the repair's cut), which no sample of the size bound
+//!   resolves. The piece is closed, so the mesh stays a closed manifold.
 //! - **split**: a scan component meshed as several pieces (a neck the rounds did not mesh)
 //!   keeps its pieces; each piece but the largest is one decision (its box).
 //! - **joined**: a scan component with vertices of the mesh on it but no piece of its own (a
@@ -22,7 +28,7 @@
 //! so, the scan's components of zero volume left aside, pieces = scan components - joined -
 //! missed - dropped + split + the pieces on no component (none where the scan is right), exactly.
 
-use crate::levels::repair::DecisionKind;
+use crate::levels::repair::{DecisionKind, TopologyDecision};
 use crate::stats::MeshResult;
 use crate::topology::VertexUnion;
 use glam::DVec3;
@@ -75,13 +81,11 @@ fn bbox(pts: impl Iterator<Item = DVec3>) -> (DVec3, f64) {
     (0.5 * (lo + hi), lo.distance(hi))
 }
 
-/// The component decisions of `out` against `img`'s voxel scan (see the module docs), in
-/// component order (splits by piece order).
-pub(crate) fn decide(out: &MeshResult, img: &ImageSurface) -> Vec<ComponentDecision> {
+/// The pieces of `mesh` (by shared vertices; roots ascending): their vertices and the scan
+/// component most of them lie on (lowest index on ties; `None`: no vertex on any).
+fn pieces(mesh: &meshio::TriMesh, img: &ImageSurface) -> Vec<(Vec<u32>, Option<usize>)> {
     use rayon::prelude::*;
-    let topo = img.topology();
-    let nc = topo.component_seeds.len();
-    let mesh = &out.mesh;
+    let nc = img.topology().component_seeds.len();
     let n = mesh.vertices.len();
     let mut union = VertexUnion::new(n);
     let mut used = vec![false; n];
@@ -98,22 +102,114 @@ pub(crate) fn decide(out: &MeshResult, img: &ImageSurface) -> Vec<ComponentDecis
                 .filter(|&c| c < nc)
         })
         .collect();
-    // Per piece (root, ascending): its vertices and its votes.
-    let mut pieces: BTreeMap<u32, (Vec<u32>, BTreeMap<usize, usize>)> = BTreeMap::new();
+    let mut by_root: BTreeMap<u32, (Vec<u32>, BTreeMap<usize, usize>)> = BTreeMap::new();
     for v in (0..n).filter(|&v| used[v]) {
-        let e = pieces.entry(union.find(v as u32)).or_default();
+        let e = by_root.entry(union.find(v as u32)).or_default();
         e.0.push(v as u32);
         if let Some(l) = labels[v] {
             *e.1.entry(l).or_default() += 1;
         }
     }
+    by_root
+        .into_values()
+        .map(|(vs, votes)| {
+            let l = votes
+                .iter()
+                .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+                .map(|(&l, _)| l);
+            (vs, l)
+        })
+        .collect()
+}
+
+/// The fragment rule (module docs): remove the closed pieces, not the largest of their scan
+/// component, whose box diagonal is below `h`; one decision per piece removed.
+fn drop_fragments(out: &mut MeshResult, img: &ImageSurface, h: f64) -> Vec<TopologyDecision> {
+    let mesh = &out.mesh;
+    let mut by_label: BTreeMap<usize, Vec<Vec<u32>>> = BTreeMap::new();
+    for (vs, l) in pieces(mesh, img) {
+        if let Some(l) = l {
+            by_label.entry(l).or_default().push(vs);
+        }
+    }
+    let mut dead = vec![false; mesh.vertices.len()];
+    let mut found: Vec<(DVec3, f64, Vec<u32>)> = Vec::new();
+    for (_, mut ps) in by_label {
+        if ps.len() < 2 {
+            continue;
+        }
+        ps.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
+        for p in &ps[1..] {
+            let (center, size) = bbox(p.iter().map(|&v| mesh.vertices[v as usize]));
+            if size < h {
+                p.iter().for_each(|&v| dead[v as usize] = true);
+                found.push((center, size, p.clone()));
+            }
+        }
+    }
+    if found.is_empty() {
+        return Vec::new();
+    }
+    let mut out_d = Vec::new();
+    for (center, size, vs) in &found {
+        let removed = mesh.triangles.iter().filter(|t| vs.contains(&t[0])).count();
+        out_d.push(TopologyDecision {
+            kind: DecisionKind::DropFragment,
+            center: *center,
+            size: *size,
+            facets_removed: removed,
+            facets_added: 0,
+        });
+    }
+    let keep: Vec<bool> = out
+        .mesh
+        .triangles
+        .iter()
+        .map(|t| !dead[t[0] as usize])
+        .collect();
+    let mut k = 0;
+    out.mesh.triangles.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    let mut k = 0;
+    out.balls.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    crate::levels::repair::compact(&mut out.mesh);
+    out_d
+}
+
+/// The component decisions of `out` against `img`'s voxel scan (see the module docs), in
+/// component order (splits by piece order).
+pub(crate) fn decide(out: &MeshResult, img: &ImageSurface) -> Vec<ComponentDecision> {
+    let topo = img.topology();
+    let nc = topo.component_seeds.len();
+    let mesh = &out.mesh;
+    let all = pieces(mesh, img);
+    // The piece of every vertex, and the label of every vertex.
+    let mut piece_of = vec![usize::MAX; mesh.vertices.len()];
+    for (i, (vs, _)) in all.iter().enumerate() {
+        vs.iter().for_each(|&v| piece_of[v as usize] = i);
+    }
+    let labels: Vec<Option<usize>> = {
+        use rayon::prelude::*;
+        (0..mesh.vertices.len())
+            .into_par_iter()
+            .map(|v| {
+                (piece_of[v] != usize::MAX)
+                    .then(|| img.component_of(mesh.vertices[v]))
+                    .flatten()
+                    .filter(|&c| c < nc)
+            })
+            .collect()
+    };
+    let n = mesh.vertices.len();
     let mut own: Vec<Vec<&Vec<u32>>> = vec![Vec::new(); nc];
-    let mut piece_label: BTreeMap<u32, usize> = BTreeMap::new();
-    for (root, (vs, votes)) in &pieces {
-        // Most votes, lowest index on ties.
-        if let Some((&l, _)) = votes.iter().max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0))) {
-            own[l].push(vs);
-            piece_label.insert(*root, l);
+    for (vs, l) in &all {
+        if let Some(l) = l {
+            own[*l].push(vs);
         }
     }
     // Components whose pieces were removed: the repair's dropped slivers and small
@@ -172,16 +268,16 @@ pub(crate) fn decide(out: &MeshResult, img: &ImageSurface) -> Vec<ComponentDecis
             });
             continue;
         }
-        // The piece holding most of its vertices (lowest root on ties).
-        let mut hold: BTreeMap<u32, usize> = BTreeMap::new();
+        // The piece holding most of its vertices (lowest piece on ties).
+        let mut hold: BTreeMap<usize, usize> = BTreeMap::new();
         for &v in &mine {
-            *hold.entry(union.find(v as u32)).or_default() += 1;
+            *hold.entry(piece_of[v]).or_default() += 1;
         }
-        let root = hold
+        let with = hold
             .iter()
             .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
-            .map(|(r, _)| *r);
-        let with = root.and_then(|r| piece_label.get(&r).copied()).unwrap_or(c);
+            .and_then(|(&i, _)| all[i].1)
+            .unwrap_or(c);
         let (center, size) = bbox(mine.iter().map(|&v| mesh.vertices[v]));
         out_d.push(ComponentDecision {
             kind: ComponentKind::Joined { with },
@@ -205,6 +301,23 @@ pub(crate) fn apply(
         return;
     };
     let t = std::time::Instant::now();
+    if let Some(h) = opts.resolution {
+        let d = drop_fragments(out, img, h);
+        if !d.is_empty() {
+            let st = &mut out.stats;
+            st.vertices = out.mesh.vertices.len();
+            st.facets = out.mesh.triangles.len();
+            match st.unmet.iter_mut().find_map(|u| match u {
+                crate::Unmet::Repaired { decisions } => Some(decisions),
+                _ => None,
+            }) {
+                Some(n) => *n += d.len(),
+                None => st.unmet.push(crate::Unmet::Repaired { decisions: d.len() }),
+            }
+            st.criteria_met = false;
+            st.topology_decisions.extend(d);
+        }
+    }
     out.stats.component_decisions = decide(out, img);
     let dt = t.elapsed().as_secs_f64();
     out.stats.time_total_s += dt;

@@ -56,6 +56,9 @@ pub enum DecisionKind {
     },
     /// A piece with boundary and no interior vertex removed.
     DropSliver,
+    /// A closed piece smaller than a voxel of a scan component meshed in several pieces,
+    /// not its largest, removed (`crate::levels::components`).
+    DropFragment,
     /// A closed component enclosing less than `--min-component` removed.
     DropSmallComponent {
         /// The volume it enclosed, in the surface's units cubed.
@@ -523,7 +526,7 @@ fn circumball(p: [DVec3; 3]) -> SurfaceBall {
 }
 
 /// Drop the vertices no triangle uses (keeping the order of the others).
-fn compact(mesh: &mut TriMesh) {
+pub(crate) fn compact(mesh: &mut TriMesh) {
     let mut remap = vec![u32::MAX; mesh.vertices.len()];
     for t in &mesh.triangles {
         for &v in t {
