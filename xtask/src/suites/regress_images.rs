@@ -290,7 +290,7 @@ fn checks(
             list(|k| matches!(k, ComponentKind::Split)),
         ));
     }
-    let (mesh_to_s, s_to_mesh, crossings) = distances(s, r, d);
+    let (mesh_to_s, s_to_mesh, crossings, worst) = distances(s, r, d);
     if mesh_to_s > 0 {
         gaps.push(format!(
             "mesh->S: {mesh_to_s} triangles not shown within {d:.3} of S"
@@ -298,7 +298,11 @@ fn checks(
     }
     if s_to_mesh > 0 {
         gaps.push(format!(
-            "S->mesh: {s_to_mesh} of {crossings} voxel-edge crossings farther than {d:.3}"
+            "S->mesh: {s_to_mesh} of {crossings} voxel-edge crossings farther than {d:.3}{}",
+            worst.map_or(String::new(), |(e, p)| format!(
+                " (farthest {e:.2} at ({:.1}, {:.1}, {:.1}))",
+                p.x, p.y, p.z
+            ))
         ));
     }
     (fails, gaps)
@@ -309,15 +313,19 @@ const STEPS: usize = 8;
 
 /// The two-sided distance measures against `d`: the triangles not shown within `d` of S, the
 /// voxel-edge crossings of S (the vertices of marching cubes at the same level, exact points
-/// of S; those at nodes of the iso value left out) farther than `d` from the mesh, and how
-/// many crossings there are.
+/// of S; those at nodes of the iso value left out) farther than `d` from the mesh, how many
+/// crossings there are, and the farthest (distance, point).
 ///
 /// Mesh -> S: a triangle is within `d` of S when its longest edge is (its vertices are on S),
 /// or its ball's radius when the ball's center is on S (a restricted facet); otherwise every
 /// point of a barycentric grid of `STEPS` steps a side is measured against the exact level
 /// set ([`verify::level_set::LevelSet`], upper bounds), and each point of the triangle lies
 /// within its longest edge / `STEPS` of one of them.
-fn distances(s: &ImageSurface, r: &MeshResult, d: f64) -> (usize, usize, usize) {
+fn distances(
+    s: &ImageSurface,
+    r: &MeshResult,
+    d: f64,
+) -> (usize, usize, usize, Option<(f64, DVec3)>) {
     use rayon::prelude::*;
     let e = 1e-3 * d;
     let on_s = |c: DVec3| {
@@ -364,11 +372,18 @@ fn distances(s: &ImageSurface, r: &MeshResult, d: f64) -> (usize, usize, usize) 
         let u = w2v.transform_point3(p);
         (u - u.round()).abs().max_element() > 1e-9
     });
-    let far_s = pts
+    let far_s: Vec<(f64, DVec3)> = pts
         .par_iter()
-        .filter(|p| dist.nearest(**p).is_none_or(|(_, e)| e > d))
-        .count();
-    (far, far_s, pts.len())
+        .filter_map(|p| {
+            let e = dist.nearest(*p).map_or(f64::INFINITY, |(_, e)| e);
+            (e > d).then_some((e, *p))
+        })
+        .collect();
+    let worst = far_s.iter().copied().max_by(|a, b| {
+        a.0.total_cmp(&b.0)
+            .then(b.1.to_array().partial_cmp(&a.1.to_array()).unwrap())
+    });
+    (far, far_s.len(), pts.len(), worst)
 }
 
 /// The cases (name prefixes) whose mesh components must equal the scan's, and at which sizes
