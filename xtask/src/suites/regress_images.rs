@@ -180,25 +180,15 @@ fn account(s: &ImageSurface, r: &MeshResult) -> (Vec<usize>, usize) {
     (per, unlabelled)
 }
 
-/// The checks of the module docs on one result; failures and gaps as text.
-fn checks(
+/// The component checks of the module docs: failures and gaps pushed to `fails`, `gaps`.
+fn components(
     s: &ImageSurface,
     r: &MeshResult,
-    d: f64,
     reference: usize,
     dropped: usize,
-) -> (Vec<String>, Vec<String>) {
-    let mut fails = Vec::new();
-    let mut gaps = Vec::new();
-    let rep = verify::check(&r.mesh, &verify::Options::default());
-    for name in MANIFOLD_CHECKS {
-        if rep.status(name) != Some(verify::Status::Pass) {
-            let detail = rep
-                .check(name)
-                .map_or("not run".into(), |c| c.detail.clone());
-            fails.push(format!("{name}: {detail}"));
-        }
-    }
+    fails: &mut Vec<String>,
+    gaps: &mut Vec<String>,
+) {
     let comps = mesh_components(&r.mesh.triangles, r.mesh.vertices.len());
     // The mesher's component decisions, checked against this suite's own accounting: per
     // scan component, its pieces are 1 + its split decisions, or none with one joined, missed
@@ -290,6 +280,28 @@ fn checks(
             list(|k| matches!(k, ComponentKind::Split)),
         ));
     }
+}
+
+/// The checks of the module docs on one result; failures and gaps as text.
+fn checks(
+    s: &ImageSurface,
+    r: &MeshResult,
+    d: f64,
+    reference: usize,
+    dropped: usize,
+) -> (Vec<String>, Vec<String>) {
+    let mut fails = Vec::new();
+    let mut gaps = Vec::new();
+    let rep = verify::check(&r.mesh, &verify::Options::default());
+    for name in MANIFOLD_CHECKS {
+        if rep.status(name) != Some(verify::Status::Pass) {
+            let detail = rep
+                .check(name)
+                .map_or("not run".into(), |c| c.detail.clone());
+            fails.push(format!("{name}: {detail}"));
+        }
+    }
+    components(s, r, reference, dropped, &mut fails, &mut gaps);
     let (mesh_to_s, s_to_mesh, crossings, worst) = distances(s, r, d);
     if mesh_to_s > 0 {
         gaps.push(format!(
