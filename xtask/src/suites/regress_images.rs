@@ -10,9 +10,8 @@
 //!   are 1 + its split decisions, or none with one other decision) and in total (pieces =
 //!   scan - joined - missed - dropped + split), by this suite's own count; or a component is
 //!   missed;
-//! - on the cases and sizes of `EXACT_COMPONENTS` (blobs, tube, integer, motor; noise at 1
-//!   and 2 voxels, mni-half at 1 and 4), the mesh's components (plus those dropped) differ
-//!   from the voxel scan's;
+//! - on the cases and sizes of `EXACT_COMPONENTS` (blobs, tube, integer, motor, noise,
+//!   mni-half), the mesh's components (plus those dropped) differ from the voxel scan's;
 //! - on the cases and sizes of `EXACT_DISTANCE` (blobs, tube, integer, noise, checker; motor
 //!   and sheet at 2 and 4 voxels), the two-sided distance bound below does not hold.
 //!
@@ -405,8 +404,8 @@ const EXACT_COMPONENTS: [(&str, &[f64]); 6] = [
     ("tube@", &[1.0, 2.0, 4.0]),
     ("integer@", &[1.0, 2.0, 4.0]),
     ("motor@", &[1.0, 2.0, 4.0]),
-    ("noise@", &[1.0, 2.0]),
-    ("mni-half@", &[1.0, 4.0]),
+    ("noise@", &[1.0, 2.0, 4.0]),
+    ("mni-half@", &[1.0, 2.0, 4.0]),
 ];
 
 /// The cases (name prefixes) and sizes (voxels) where the two-sided distance bound of one
