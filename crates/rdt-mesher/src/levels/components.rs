@@ -83,7 +83,7 @@ fn bbox(pts: impl Iterator<Item = DVec3>) -> (DVec3, f64) {
 
 /// The pieces of `mesh` (by shared vertices; roots ascending): their vertices and the scan
 /// component most of them lie on (lowest index on ties; `None`: no vertex on any).
-fn pieces(mesh: &meshio::TriMesh, img: &ImageSurface) -> Vec<(Vec<u32>, Option<usize>)> {
+pub(crate) fn pieces(mesh: &meshio::TriMesh, img: &ImageSurface) -> Vec<(Vec<u32>, Option<usize>)> {
     use rayon::prelude::*;
     let nc = img.topology().component_seeds.len();
     let n = mesh.vertices.len();
