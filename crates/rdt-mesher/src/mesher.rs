@@ -28,7 +28,8 @@ pub fn mesh_with_progress(
         let mut r = Mesher::new(surface, opts);
         r.run(progress)?;
         let mut out = r.finish()?;
-        crate::levels::repair::apply(&mut out, surface, opts);
+        let sep = crate::levels::components::separation(&out, surface, opts);
+        crate::levels::repair::apply(&mut out, opts, &sep);
         crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })
@@ -87,7 +88,8 @@ pub(crate) fn mesh_in_rounds(
             r.refine_loop(progress)?;
         }
         let mut out = r.finish()?;
-        crate::levels::repair::apply(&mut out, surface, opts);
+        let sep = crate::levels::components::separation(&out, surface, opts);
+        crate::levels::repair::apply(&mut out, opts, &sep);
         crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })

@@ -290,6 +290,50 @@ pub(crate) fn decide(out: &MeshResult, img: &ImageSurface) -> Vec<ComponentDecis
     out_d
 }
 
+/// Rule 0: the vertices (sorted) of the triangles whose corners lie on two different
+/// components of `img`'s voxel scan, one of them *joined* (vertices on it, but no piece whose
+/// majority it is: a bridge that hides a component; a mixed triangle between components that
+/// have their own pieces changes no count and is left alone). Corners on no component are
+/// left out.
+fn bridge_vertices(mesh: &meshio::TriMesh, img: &ImageSurface) -> Vec<u32> {
+    use rayon::prelude::*;
+    let labels: Vec<Option<usize>> = mesh
+        .vertices
+        .par_iter()
+        .map(|&p| img.component_of(p))
+        .collect();
+    let nc = img.topology().component_seeds.len();
+    let mut own = vec![false; nc];
+    for (_, l) in pieces(mesh, img) {
+        if let Some(l) = l {
+            own[l] = true;
+        }
+    }
+    let joined = |c: usize| c < nc && !own[c];
+    let mut out: Vec<u32> = Vec::new();
+    for t in &mesh.triangles {
+        let l: Vec<usize> = t.iter().filter_map(|&v| labels[v as usize]).collect();
+        if l.iter().any(|&x| x != l[0]) && l.iter().any(|&x| joined(x)) {
+            out.extend(t);
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Rule 0's vertices for `out` (empty unless the surface is an image and a resolution is set).
+pub(crate) fn separation(
+    out: &MeshResult,
+    surface: &dyn oracle::Surface,
+    opts: &crate::MeshOptions,
+) -> Vec<u32> {
+    match (opts.resolution, surface.as_image()) {
+        (Some(_), Some(img)) => bridge_vertices(&out.mesh, img),
+        _ => Vec::new(),
+    }
+}
+
 /// Record the component decisions of a run on an image with a resolution set (the pipeline's
 /// images); nothing otherwise.
 pub(crate) fn apply(

@@ -421,20 +421,11 @@ pub(crate) fn enclosed_volume(mesh: &TriMesh, comp: &[usize]) -> f64 {
 /// resolution, i.e. on images; rule 4 with `min_component`), and bring its figures up to
 /// date: the non-manifold counts are measured again on the repaired mesh, and the decisions
 /// that changed Del_S(E) are reported unmet (the mesh is not Del_S(E) there).
-pub(crate) fn apply(
-    out: &mut crate::MeshResult,
-    surface: &dyn oracle::Surface,
-    opts: &crate::MeshOptions,
-) {
+/// `separate`: the vertices of rule 0 (`crate::levels::components::bridge_vertices`).
+pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions, separate: &[u32]) {
     let t = std::time::Instant::now();
     let decisions = match (opts.resolution, opts.min_component) {
-        (Some(_), m) => {
-            let sep = surface
-                .as_image()
-                .map(|img| bridge_vertices(&out.mesh, img))
-                .unwrap_or_default();
-            repair(&mut out.mesh, &mut out.balls, m, &sep)
-        }
+        (Some(_), m) => repair(&mut out.mesh, &mut out.balls, m, separate),
         (None, Some(m)) => {
             let d = drop_small(&mut out.mesh, &mut out.balls, m);
             if !d.is_empty() {
@@ -495,38 +486,6 @@ pub(crate) fn apply(
         st.criteria_met = false;
     }
     st.topology_decisions = decisions;
-}
-
-/// Rule 0: the vertices (sorted) of the triangles whose corners lie on two different
-/// components of `img`'s voxel scan, one of them *joined* (vertices on it, but no piece whose
-/// majority it is: a bridge that hides a component; a mixed triangle between components that
-/// have their own pieces changes no count and is left alone). Corners on no component are
-/// left out.
-fn bridge_vertices(mesh: &TriMesh, img: &oracle::image::ImageSurface) -> Vec<u32> {
-    use rayon::prelude::*;
-    let labels: Vec<Option<usize>> = mesh
-        .vertices
-        .par_iter()
-        .map(|&p| img.component_of(p))
-        .collect();
-    let nc = img.topology().component_seeds.len();
-    let mut own = vec![false; nc];
-    for (_, l) in super::components::pieces(mesh, img) {
-        if let Some(l) = l {
-            own[l] = true;
-        }
-    }
-    let joined = |c: usize| c < nc && !own[c];
-    let mut out: Vec<u32> = Vec::new();
-    for t in &mesh.triangles {
-        let l: Vec<usize> = t.iter().filter_map(|&v| labels[v as usize]).collect();
-        if l.iter().any(|&x| x != l[0]) && l.iter().any(|&x| joined(x)) {
-            out.extend(t);
-        }
-    }
-    out.sort_unstable();
-    out.dedup();
-    out
 }
 
 /// The ball circumscribing the triangle `p`: its circumcircle's center (the centroid if
