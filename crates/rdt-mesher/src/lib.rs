@@ -70,6 +70,7 @@ mod voronoi;
 
 pub use criteria::{Criteria, Sizing};
 pub use error::MeshError;
+pub use levels::components::{ComponentDecision, ComponentKind};
 pub use levels::repair::{DecisionKind, TopologyDecision};
 pub use memory::MemoryUse;
 pub use mesher::{mesh, mesh_with_progress};

@@ -28,7 +28,9 @@ pub fn mesh_with_progress(
         let mut r = Mesher::new(surface, opts);
         r.run(progress)?;
         let mut out = r.finish()?;
-        crate::levels::repair::apply(&mut out, opts);
+        let sep = crate::levels::components::separation(&out, surface, opts);
+        crate::levels::repair::apply(&mut out, opts, &sep);
+        crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })
 }
@@ -86,7 +88,9 @@ pub(crate) fn mesh_in_rounds(
             r.refine_loop(progress)?;
         }
         let mut out = r.finish()?;
-        crate::levels::repair::apply(&mut out, opts);
+        let sep = crate::levels::components::separation(&out, surface, opts);
+        crate::levels::repair::apply(&mut out, opts, &sep);
+        crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })
 }

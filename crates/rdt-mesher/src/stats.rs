@@ -262,6 +262,10 @@ pub struct Stats {
     /// Topological decisions taken on the output (images, `--min-component`): kind, where,
     /// size (see `MeshOptions::resolution`).
     pub topology_decisions: Vec<crate::TopologyDecision>,
+    /// Images with a resolution: where the output's pieces differ from the voxel scan's
+    /// components (split, joined, missed, dropped), each with its rule, place and size
+    /// (`crate::levels::components`).
+    pub component_decisions: Vec<crate::ComponentDecision>,
     /// Heap bytes of the mesher's structures at the end of the refinement
     /// (`crate::memory`).
     pub memory: Vec<crate::MemoryUse>,

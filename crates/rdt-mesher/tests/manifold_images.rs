@@ -172,3 +172,126 @@ fn a_neck_thinner_than_the_size_is_meshed_and_keeps_one_component() {
         assert!(r.stats.min_angle_deg >= 30.0, "{}", r.stats.min_angle_deg);
     }
 }
+
+/// Per scan component, the mesh pieces most of whose vertices lie on it; and each piece's box
+/// diagonal with its component.
+fn pieces_by_component(s: &ImageSurface, r: &MeshResult) -> (Vec<usize>, Vec<(usize, f64)>) {
+    use std::collections::BTreeMap;
+    let n = r.mesh.vertices.len();
+    let mut p: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for t in &r.mesh.triangles {
+        for k in 1..3 {
+            let (a, b) = (find(&mut p, t[0] as usize), find(&mut p, t[k] as usize));
+            p[a.max(b)] = a.min(b);
+        }
+    }
+    let mut votes: BTreeMap<usize, (BTreeMap<usize, usize>, glam::DVec3, glam::DVec3)> =
+        BTreeMap::new();
+    let mut used = vec![false; n];
+    r.mesh
+        .triangles
+        .iter()
+        .flatten()
+        .for_each(|&v| used[v as usize] = true);
+    for v in (0..n).filter(|&v| used[v]) {
+        let root = find(&mut p, v);
+        let x = r.mesh.vertices[v];
+        let e = votes.entry(root).or_insert((BTreeMap::new(), x, x));
+        e.1 = e.1.min(x);
+        e.2 = e.2.max(x);
+        if let Some(c) = s.component_of(x) {
+            *e.0.entry(c).or_default() += 1;
+        }
+    }
+    let mut per = vec![0; s.topology().component_seeds.len()];
+    let mut boxes = Vec::new();
+    for (_, (v, lo, hi)) in votes {
+        let c = v
+            .iter()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+            .map(|(&c, _)| c)
+            .expect("every piece lies on a component");
+        per[c] += 1;
+        boxes.push((c, lo.distance(hi)));
+    }
+    (per, boxes)
+}
+
+#[test]
+fn component_decisions_account_for_every_scan_component() {
+    use rdt_mesher::ComponentKind;
+    // The 2 mm template at iso 171.2: a one-voxel speck at (38, -38, -38) lies at a trilinear
+    // saddle within a twentieth of a voxel of the large component (the bridge rounds stop at
+    // an eighth of a voxel), so Del_S(E) joins them; the repair separates them (rule 0).
+    let p = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/images/mni_t1_half.nii.gz"
+    );
+    let opts = ImageOptions {
+        iso: Some(171.2),
+        ..Default::default()
+    };
+    let s = ImageSurface::open(p, &LoadOptions::default(), &opts)
+        .expect("the fixture opens")
+        .with_seed_budget(None);
+    let speck = s
+        .component_of(glam::DVec3::new(38.1, -38.0, -38.0))
+        .expect("the speck is a scan component");
+    for size in [2.0, 4.0] {
+        let r = run(&s, 2.0 * size, Some(2.0), None);
+        assert_closed_manifold(&r);
+        let (per, boxes) = pieces_by_component(&s, &r);
+        assert_eq!(per[speck], 1, "size {size}: the speck has its own piece");
+        assert!(
+            r.stats
+                .topology_decisions
+                .iter()
+                .any(|d| matches!(d.kind, DecisionKind::Separate { .. })),
+            "size {size}: the bridge to the speck is separated by rule 0"
+        );
+        // Every component's pieces are as the decisions say.
+        let mut split = vec![0; per.len()];
+        let mut absent = vec![0; per.len()];
+        for d in &r.stats.component_decisions {
+            match d.kind {
+                ComponentKind::Split => split[d.component] += 1,
+                _ => absent[d.component] += 1,
+            }
+        }
+        for c in 0..per.len() {
+            if per[c] == 0 {
+                assert_eq!(
+                    absent[c], 1,
+                    "size {size}: component {c} has no piece, unstated"
+                );
+            } else {
+                assert_eq!(
+                    (split[c], absent[c]),
+                    (per[c] - 1, 0),
+                    "size {size}: component {c}"
+                );
+            }
+        }
+        // The fragment rule: of a component in several pieces, only the largest may be
+        // smaller than a voxel.
+        for c in (0..per.len()).filter(|&c| per[c] > 1) {
+            let small = boxes.iter().filter(|b| b.0 == c && b.1 < 2.0).count();
+            assert!(
+                small <= 1,
+                "size {size}: component {c}: {small} sub-voxel pieces"
+            );
+        }
+        for d in &r.stats.topology_decisions {
+            if d.kind == DecisionKind::DropFragment {
+                assert!(d.size < 2.0 && d.facets_removed > 0, "{d:?}");
+            }
+        }
+    }
+}

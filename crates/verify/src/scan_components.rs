@@ -5,9 +5,9 @@
 //! set exactly (union-find on the grid's sign runs). Each connected piece of the mesh is
 //! assigned the scan component that most of its vertices lie on
 //! ([`ImageSurface::component_of`]; ties to the lowest index), so:
-//! - a component with one piece, or with mesh vertices on it but no piece of its own (a piece
-//!   assigned to a neighbour it nearly touches), is *meshed*; with two or more pieces, *split*
-//!   (a neck cut by the topological repair, or a neck thinner than the size bound);
+//! - a component with one piece is *meshed*; with mesh vertices on it but no piece of its own
+//!   (a piece assigned to a neighbour it nearly touches), *joined*; with two or more pieces,
+//!   *split* (a neck cut by the topological repair, or a neck thinner than the size bound);
 //! - a component with no vertex on it is *dropped* when it was removed on request (`--min-component`:
 //!   a vertex of each removed piece is passed in [`account`]'s `dropped`) and *missed*
 //!   otherwise; every missed component is listed with a point on it and its size;
@@ -32,6 +32,8 @@ pub enum Fate {
     Meshed,
     /// Two or more mesh pieces.
     Split,
+    /// Mesh vertices on it but no piece of its own: part of a neighbour's piece.
+    Joined,
     /// Removed on request (`--min-component`).
     Dropped,
     /// No mesh piece and not removed on request.
@@ -66,6 +68,8 @@ pub struct ScanComponents {
     pub meshed: usize,
     /// Scan components with two or more pieces.
     pub split: usize,
+    /// Scan components with vertices on them but no piece of their own.
+    pub joined: usize,
     /// Scan components removed on request.
     pub dropped: usize,
     /// Scan components with no piece, not removed on request.
@@ -74,8 +78,8 @@ pub struct ScanComponents {
     pub vanishing: usize,
     /// Mesh pieces on no scan component.
     pub unassigned_pieces: usize,
-    /// Every missed, dropped, split and vanishing component (in that order; the largest first
-    /// within each).
+    /// Every missed, joined, dropped, split and vanishing component (in that order; the
+    /// largest first within each).
     pub components: Vec<ScanComponent>,
 }
 
@@ -102,6 +106,7 @@ impl ScanComponents {
         );
         for (n, what) in [
             (self.split, "split into pieces"),
+            (self.joined, "joined to a neighbour's piece"),
             (self.dropped, "dropped (--min-component)"),
             (self.missed, "missed"),
             (
@@ -158,7 +163,7 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
             let vanishing = topo.component_vanishing.get(i).copied().unwrap_or(false);
             let fate = match per[i] {
                 0 if vanishing => Fate::Vanishing,
-                _ if per[i] == 0 && touched[i] => return None,
+                0 if touched[i] => Fate::Joined,
                 0 if was_dropped[i] => Fate::Dropped,
                 0 => Fate::Missed,
                 1 => return None,
@@ -175,10 +180,11 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
         .collect();
     let rank = |f: Fate| match f {
         Fate::Missed => 0,
-        Fate::Dropped => 1,
-        Fate::Split => 2,
-        Fate::Vanishing => 3,
-        Fate::Meshed => 4,
+        Fate::Joined => 1,
+        Fate::Dropped => 2,
+        Fate::Split => 3,
+        Fate::Vanishing => 4,
+        Fate::Meshed => 5,
     };
     components.sort_by(|a, b| {
         (rank(a.fate), std::cmp::Reverse(a.crossing_edges), a.index).cmp(&(
@@ -191,10 +197,9 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
     ScanComponents {
         scan: n,
         mesh_pieces: pieces.len(),
-        meshed: (0..n)
-            .filter(|&i| per[i] == 1 || (per[i] == 0 && touched[i]))
-            .count(),
+        meshed: (0..n).filter(|&i| per[i] == 1).count(),
         split: count(Fate::Split),
+        joined: count(Fate::Joined),
         dropped: count(Fate::Dropped),
         missed: count(Fate::Missed),
         vanishing: count(Fate::Vanishing),

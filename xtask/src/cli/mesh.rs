@@ -473,7 +473,13 @@ fn print_single(spec: &str, out: &Outcome, out_path: &Path) {
         out_path.display()
     );
     if let Some(acc) = out.report.as_ref().and_then(|r| r.scan_components.as_ref())
-        && (acc.split + acc.missed + acc.dropped + acc.vanishing + acc.unassigned_pieces > 0)
+        && (acc.split
+            + acc.joined
+            + acc.missed
+            + acc.dropped
+            + acc.vanishing
+            + acc.unassigned_pieces
+            > 0)
     {
         outln!(
             "components: {}{} (each listed with a point on it in the report's verify.scan_components)",

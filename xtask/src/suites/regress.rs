@@ -522,11 +522,13 @@ pub fn run(a: &RegressArgs) -> Result<()> {
     }
     let nfail = failed.len() + cross.len() + image_fails;
     outln!(
-        "regress{}: {} cases, {} passed, {} failed{} in {:.1} s{}",
+        "regress{}: {} cases, {} passed, {} failed; {} image cases, {} failed{} in {:.1} s{}",
         if a.quick { " --quick" } else { "" },
         rows.len(),
         rows.len() - failed.len(),
         failed.len(),
+        images.len(),
+        image_fails,
         if cross.is_empty() {
             String::new()
         } else {

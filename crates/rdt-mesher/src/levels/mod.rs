@@ -3,8 +3,10 @@
 //! of section 6.6.1 (`manifold`), and the final
 //! check of the scaffold (`scaffold`, ours), which may rebuild Del(E) without it; on sampled
 //! surfaces (images), the topological repair of what the patch leaves (`repair`, ours, with
-//! `links` and `holes`).
+//! `links` and `holes`), then the component decisions on what the scan and the output still
+//! disagree about (`components`, ours).
 
+pub(crate) mod components;
 mod holes;
 mod links;
 pub(crate) mod manifold;

@@ -17,6 +17,18 @@
 //! 4. **Drop a small component** (`--min-component`): closed components enclosing less than
 //!    the given volume are removed.
 //!
+//! On an image, rule 0 comes first: 0. **Separate**: the vertices of every triangle whose
+//! corners lie on different components of the voxel scan, one of them with no piece of its
+//! own (a bridge across a gap of S that the bridge rounds of `necks` could not refine away
+//! above the floor hides that component: two components of the trilinear level set are
+//! disjoint, so such a triangle is never part of a faithful mesh), are bad in the first
+//! round: rule 1 cuts their stars, so every triangle left there has corners on one component
+//! and so has every boundary loop, which rule 3 closes on its own side. (A piece left with no
+//! interior vertex, e.g. a one-voxel speck, is then a sliver, rule 2.) A mixed triangle
+//! between components that both have pieces of their own changes no count and is left alone
+//! (its labels may come from the nearest corners of an ambiguous cell; cutting there only
+//! made skinny closings: the motor map at 1 voxel fell from 30 to 16 degrees).
+//!
 //! Each decision is reported ([`TopologyDecision`]): its kind, where (the center of the
 //! bounding box of the triangles removed and added) and its size (that box's diagonal). The
 //! new triangles are not restricted Delaunay facets: their balls are their circumballs.
@@ -40,8 +52,17 @@ pub enum DecisionKind {
     },
     /// A hole of Del_S(E) (boundary edges, no triangle removed) closed.
     Close,
+    /// Triangles joining two components of the voxel scan removed (rule 0) and the `loops`
+    /// boundary loops left closed.
+    Separate {
+        /// Boundary loops closed.
+        loops: usize,
+    },
     /// A piece with boundary and no interior vertex removed.
     DropSliver,
+    /// A closed piece smaller than a voxel of a scan component meshed in several pieces,
+    /// not its largest, removed (`crate::levels::components`).
+    DropFragment,
     /// A closed component enclosing less than `--min-component` removed.
     DropSmallComponent {
         /// The volume it enclosed, in the surface's units cubed.
@@ -74,13 +95,17 @@ const ROUNDS: usize = 16;
 /// Make `mesh` a closed oriented 2-manifold by the rules of the module docs; `balls` follow
 /// the triangles. Returns the decisions (empty if the mesh was one and no component is below
 /// `min_volume`).
+/// `separate`: the vertices of rule 0 (sorted), bad in the first round.
 pub(crate) fn repair(
     mesh: &mut TriMesh,
     balls: &mut Vec<SurfaceBall>,
     min_volume: Option<f64>,
+    separate: &[u32],
 ) -> Vec<TopologyDecision> {
     let mut decisions = Vec::new();
-    let mut forced: Vec<u32> = Vec::new();
+    let mut forced: Vec<u32> = separate.to_vec();
+    let mut sep = vec![false; mesh.vertices.len()];
+    separate.iter().for_each(|&v| sep[v as usize] = true);
     for _ in 0..ROUNDS {
         if mesh.triangles.is_empty() {
             break;
@@ -91,7 +116,8 @@ pub(crate) fn repair(
         if closed && forced.is_empty() {
             break;
         }
-        let (d, first_new) = cut_and_close(mesh, balls, &forced);
+        let (d, first_new) = cut_and_close(mesh, balls, &forced, &sep);
+        sep.iter_mut().for_each(|b| *b = false);
         decisions.extend(d);
         forced = intersecting_vertices(mesh, first_new);
     }
@@ -137,6 +163,7 @@ fn cut_and_close(
     mesh: &mut TriMesh,
     balls: &mut Vec<SurfaceBall>,
     forced: &[u32],
+    sep: &[bool],
 ) -> (Vec<TopologyDecision>, usize) {
     let n = mesh.vertices.len();
     let mut live = vec![true; mesh.triangles.len()];
@@ -193,7 +220,7 @@ fn cut_and_close(
         let added = close_loop(&lp, &mut mesh.vertices, &mut edges);
         loops.push((lp, added));
     }
-    let out = report(mesh, &cut, &slivers, &loops);
+    let out = report(mesh, &cut, &slivers, &loops, sep);
     let first_new = kept.len();
     // The new triangle list: the kept ones in order, then the closings.
     let mut tris = Vec::with_capacity(kept.len());
@@ -274,6 +301,7 @@ fn report(
     cut: &[usize],
     slivers: &[Vec<usize>],
     loops: &[(Vec<u32>, Vec<[u32; 3]>)],
+    sep: &[bool],
 ) -> Vec<TopologyDecision> {
     let n = mesh.vertices.len();
     // Clusters: the cut triangles and the closings, joined by shared vertices.
@@ -289,8 +317,13 @@ fn report(
         let mut lps: Vec<usize> = comp.iter().filter_map(|&i| owner[i]).collect();
         lps.dedup();
         let removed = comp.iter().filter(|&&i| owner[i].is_none()).count();
+        let separated = comp.iter().any(|&i| {
+            owner[i].is_none() && tris[i].iter().any(|&v| sep.get(v as usize) == Some(&true))
+        });
         let kind = if removed == 0 {
             DecisionKind::Close
+        } else if separated {
+            DecisionKind::Separate { loops: lps.len() }
         } else {
             DecisionKind::Cut { loops: lps.len() }
         };
@@ -388,10 +421,11 @@ pub(crate) fn enclosed_volume(mesh: &TriMesh, comp: &[usize]) -> f64 {
 /// resolution, i.e. on images; rule 4 with `min_component`), and bring its figures up to
 /// date: the non-manifold counts are measured again on the repaired mesh, and the decisions
 /// that changed Del_S(E) are reported unmet (the mesh is not Del_S(E) there).
-pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
+/// `separate`: the vertices of rule 0 (`crate::levels::components::bridge_vertices`).
+pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions, separate: &[u32]) {
     let t = std::time::Instant::now();
     let decisions = match (opts.resolution, opts.min_component) {
-        (Some(_), m) => repair(&mut out.mesh, &mut out.balls, m),
+        (Some(_), m) => repair(&mut out.mesh, &mut out.balls, m, separate),
         (None, Some(m)) => {
             let d = drop_small(&mut out.mesh, &mut out.balls, m);
             if !d.is_empty() {
@@ -466,7 +500,7 @@ fn circumball(p: [DVec3; 3]) -> SurfaceBall {
 }
 
 /// Drop the vertices no triangle uses (keeping the order of the others).
-fn compact(mesh: &mut TriMesh) {
+pub(crate) fn compact(mesh: &mut TriMesh) {
     let mut remap = vec![u32::MAX; mesh.vertices.len()];
     for t in &mesh.triangles {
         for &v in t {

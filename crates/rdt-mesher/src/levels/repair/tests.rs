@@ -23,7 +23,7 @@ fn run(mut m: TriMesh, min_volume: Option<f64>) -> (TriMesh, Vec<TopologyDecisio
         };
         m.triangles.len()
     ];
-    let d = repair(&mut m, &mut balls, min_volume);
+    let d = repair(&mut m, &mut balls, min_volume, &[]);
     assert_eq!(balls.len(), m.triangles.len());
     (m, d)
 }
@@ -145,4 +145,41 @@ fn small_components_are_dropped_on_request() {
     ));
     let (out, d) = run(m, Some(1e-6));
     assert!(d.is_empty() && out.triangles.len() == 8);
+}
+
+#[test]
+fn rule_0_cuts_the_stars_of_the_separated_vertices_and_closes_them() {
+    // An octahedron, its north pole (vertex 4) to be separated (as if its triangles bridged
+    // two scan components): the star of the pole goes, the equator is closed.
+    let vertices = vec![
+        DVec3::X,
+        -DVec3::X,
+        DVec3::Y,
+        -DVec3::Y,
+        DVec3::Z,
+        -DVec3::Z,
+    ];
+    let triangles: Vec<[u32; 3]> = crate::topology::OCTAHEDRON.to_vec();
+    let mut m = TriMesh {
+        vertices,
+        triangles,
+    };
+    let mut balls = vec![
+        SurfaceBall {
+            center: DVec3::ZERO,
+            radius: 1.0
+        };
+        m.triangles.len()
+    ];
+    // Without rule 0 the closed octahedron is left alone.
+    let d = repair(&mut m.clone(), &mut balls.clone(), None, &[]);
+    assert!(d.is_empty());
+    let d = repair(&mut m, &mut balls, None, &[4]);
+    assert!(closed_oriented(&m), "{d:?}");
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert_eq!(d[0].kind, DecisionKind::Separate { loops: 1 });
+    assert_eq!((d[0].facets_removed, d[0].facets_added), (4, 2));
+    assert_eq!(m.triangles.len(), 6);
+    assert!(!m.vertices.contains(&DVec3::Z), "the pole is gone");
+    assert_eq!(balls.len(), m.triangles.len());
 }
