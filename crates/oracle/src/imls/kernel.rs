@@ -253,10 +253,7 @@ impl PointSetSurface {
         let u = 1.0 - d2 / it.r2;
         let u2 = u * u;
         let alpha = match normal {
-            Some(g) => {
-                let inv_sn2 = 1.0 / (self.robust_sigma_n * self.robust_sigma_n);
-                (-(it.n - g).length_squared() * inv_sn2).exp()
-            }
+            Some(g) => (-(it.n - g).length_squared() * self.robust_inv_sn2).exp(),
             None => 1.0,
         };
         let w = alpha * u2 * u2;
