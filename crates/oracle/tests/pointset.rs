@@ -307,6 +307,29 @@ fn bad_point_sets_give_clear_errors() {
             ..
         })
     ));
+    // A robust pass needs a positive finite σ_n (0 made every weight NaN).
+    for sigma in [0.0, -0.5, f64::NAN, f64::INFINITY] {
+        let bad = PointSetParams {
+            robust_sigma_n: sigma,
+            ..PointSetParams::scan()
+        };
+        assert!(matches!(
+            PointSetSurface::new(&pts, None, &bad),
+            Err(PointSetError::BadParameter {
+                name: "robust_sigma_n",
+                ..
+            })
+        ));
+    }
+    // Without a robust pass σ_n is unused.
+    let unused = PointSetParams {
+        robust_sigma_n: 0.0,
+        ..Default::default()
+    };
+    assert!(!matches!(
+        PointSetSurface::new(&pts, None, &unused),
+        Err(PointSetError::BadParameter { .. })
+    ));
 }
 
 #[test]

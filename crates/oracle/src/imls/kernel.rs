@@ -173,20 +173,14 @@ impl PointSetSurface {
         }
         let mut f = s.num / s.den;
         let mut g = (s.dnum - f * s.dden) / s.den;
-        for _ in 0..self.robust {
+        for pass in 0..self.robust {
             let normal = Some(g.normalize_or_zero());
-            // The same points in the same order as the grid would give (bit-identical sums).
-            let r = if kept <= KEEP {
-                let mut r = Sums {
-                    band2: if self.banded { f64::INFINITY } else { 0.0 },
-                    ..Default::default()
-                };
-                for it in &buf[..kept] {
-                    self.add::<true>(&mut r, x, it, normal);
-                }
-                r
+            // The last pass's gradient only when asked for (its value is the same bit for
+            // bit: `add` computes the sums by the same operations either way).
+            let r = if GRAD || pass + 1 < self.robust {
+                self.reweighted::<true>(x, normal, &buf, kept)
             } else {
-                self.pass::<true>(x, normal, None).0
+                self.reweighted::<false>(x, normal, &buf, kept)
             };
             // α_i ≥ exp(−4 / σ_n²) > 0, so r.den > 0 where s.den > 0 (unless it underflows).
             if r.den.is_nan() || r.den <= 0.0 {
@@ -201,6 +195,30 @@ impl PointSetSurface {
             dden: DVec3::ZERO,
             ..s
         }
+    }
+
+    /// A reweighted pass at `x` over the `kept` points of the first pass (`buf`), or over
+    /// the grid when they overflowed it: the same points in the same order as the grid
+    /// would give (bit-identical sums).
+    #[inline]
+    fn reweighted<const GRAD: bool>(
+        &self,
+        x: DVec3,
+        normal: Option<DVec3>,
+        buf: &[&Item; KEEP],
+        kept: usize,
+    ) -> Sums {
+        if kept > KEEP {
+            return self.pass::<GRAD>(x, normal, None).0;
+        }
+        let mut r = Sums {
+            band2: if self.banded { f64::INFINITY } else { 0.0 },
+            ..Default::default()
+        };
+        for it in &buf[..kept] {
+            self.add::<GRAD>(&mut r, x, it, normal);
+        }
+        r
     }
 
     /// One pass of kernel sums at `x`; with `normal = Some(g)`, each point's weight is
@@ -253,10 +271,7 @@ impl PointSetSurface {
         let u = 1.0 - d2 / it.r2;
         let u2 = u * u;
         let alpha = match normal {
-            Some(g) => {
-                let inv_sn2 = 1.0 / (self.robust_sigma_n * self.robust_sigma_n);
-                (-(it.n - g).length_squared() * inv_sn2).exp()
-            }
+            Some(g) => (-(it.n - g).length_squared() * self.robust_inv_sn2).exp(),
             None => 1.0,
         };
         let w = alpha * u2 * u2;

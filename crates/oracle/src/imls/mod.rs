@@ -235,9 +235,9 @@ pub struct PointSetSurface {
     grid: grid::Levels,
     /// The support band is on ([`PointSetParams::support_band`]).
     banded: bool,
-    /// [`PointSetParams::robust`] and [`PointSetParams::robust_sigma_n`].
+    /// [`PointSetParams::robust`] and `1 / σ_n²` ([`PointSetParams::robust_sigma_n`]).
     robust: usize,
-    robust_sigma_n: f64,
+    robust_inv_sn2: f64,
     tree: ImmutableKdTree<f64, 3>,
     lo: DVec3,
     hi: DVec3,
@@ -340,7 +340,7 @@ impl PointSetSurface {
             grid,
             banded: params.support_band,
             robust: params.robust,
-            robust_sigma_n: params.robust_sigma_n,
+            robust_inv_sn2: 1.0 / (params.robust_sigma_n * params.robust_sigma_n),
             tree,
             lo,
             hi,
@@ -487,6 +487,13 @@ fn validate(
             name: "max_spacing_ratio",
             value: params.max_spacing_ratio,
             hint: "at least 0.5, e.g. 1.5 (uniform samples) or 3.5 (scans)",
+        });
+    }
+    if params.robust > 0 && !(params.robust_sigma_n.is_finite() && params.robust_sigma_n > 0.0) {
+        return Err(PointSetError::BadParameter {
+            name: "robust_sigma_n",
+            value: params.robust_sigma_n,
+            hint: "a positive scale of the normals' disagreement, e.g. 0.8",
         });
     }
     if !(params.bandwidth.is_finite() && params.bandwidth > 0.0) {

@@ -219,6 +219,18 @@ mod tests {
             );
         }
         assert!(near > 50 && far > 50, "{near} near, {far} far");
+        // With the robust pass (whose last pass skips its gradient for a value): the same
+        // value bit for bit, at points near the surface.
+        let r = PointSetSurface::new(&pts, None, &PointSetParams::scan()).unwrap();
+        let mut reweighted = 0;
+        for _ in 0..400 {
+            let x = rng.unit_vector() * (0.9 + 0.2 * rng.next_f64());
+            let (f, g) = r.value_grad(x);
+            assert_eq!(f.to_bits(), r.value(x).to_bits(), "{x}");
+            assert_ne!(f.to_bits(), s.value(x).to_bits(), "{x}");
+            reweighted += usize::from(g.is_finite());
+        }
+        assert!(reweighted > 200, "{reweighted}");
         // The crossing oracle lands on the surface.
         let (a, b) = (DVec3::ZERO, DVec3::new(2.0, 0.1, 0.3));
         let c = s.crossing(a, s.value(a), b, s.value(b));
