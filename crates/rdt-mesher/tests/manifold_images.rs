@@ -124,8 +124,9 @@ fn dumbbell(w: f64) -> ImageSurface {
         .with_seed_budget(None)
 }
 
-/// Mesh components (by shared vertices).
-fn pieces(r: &MeshResult) -> usize {
+/// The piece (component by shared vertices) of each vertex used by a triangle, as a root
+/// vertex id; `None` for unused vertices.
+fn piece_roots(r: &MeshResult) -> Vec<Option<usize>> {
     let n = r.mesh.vertices.len();
     let mut p: Vec<usize> = (0..n).collect();
     fn find(p: &mut [usize], mut x: usize) -> usize {
@@ -147,7 +148,16 @@ fn pieces(r: &MeshResult) -> usize {
         .iter()
         .flatten()
         .for_each(|&v| used[v as usize] = true);
-    (0..n).filter(|&v| used[v] && find(&mut p, v) == v).count()
+    (0..n).map(|v| used[v].then(|| find(&mut p, v))).collect()
+}
+
+/// Mesh components (by shared vertices).
+fn pieces(r: &MeshResult) -> usize {
+    piece_roots(r)
+        .iter()
+        .enumerate()
+        .filter(|&(v, root)| *root == Some(v))
+        .count()
 }
 
 #[test]
@@ -177,31 +187,10 @@ fn a_neck_thinner_than_the_size_is_meshed_and_keeps_one_component() {
 /// diagonal with its component.
 fn pieces_by_component(s: &ImageSurface, r: &MeshResult) -> (Vec<usize>, Vec<(usize, f64)>) {
     use std::collections::BTreeMap;
-    let n = r.mesh.vertices.len();
-    let mut p: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
-        }
-        x
-    }
-    for t in &r.mesh.triangles {
-        for k in 1..3 {
-            let (a, b) = (find(&mut p, t[0] as usize), find(&mut p, t[k] as usize));
-            p[a.max(b)] = a.min(b);
-        }
-    }
     let mut votes: BTreeMap<usize, (BTreeMap<usize, usize>, glam::DVec3, glam::DVec3)> =
         BTreeMap::new();
-    let mut used = vec![false; n];
-    r.mesh
-        .triangles
-        .iter()
-        .flatten()
-        .for_each(|&v| used[v as usize] = true);
-    for v in (0..n).filter(|&v| used[v]) {
-        let root = find(&mut p, v);
+    for (v, root) in piece_roots(r).into_iter().enumerate() {
+        let Some(root) = root else { continue };
         let x = r.mesh.vertices[v];
         let e = votes.entry(root).or_insert((BTreeMap::new(), x, x));
         e.1 = e.1.min(x);
