@@ -247,25 +247,21 @@ pub(crate) fn decide(out: &MeshResult, img: &ImageSurface) -> Vec<ComponentDecis
         if !ps.is_empty() || topo.component_vanishing.get(c) == Some(&true) {
             continue;
         }
+        // A component with no mesh vertex: reported at its seed.
+        let at_seed = |kind| ComponentDecision {
+            kind,
+            component: c,
+            center: topo.component_seeds[c],
+            size: 0.0,
+            crossing_edges,
+        };
         if excused[c] {
-            out_d.push(ComponentDecision {
-                kind: ComponentKind::Dropped,
-                component: c,
-                center: topo.component_seeds[c],
-                size: 0.0,
-                crossing_edges,
-            });
+            out_d.push(at_seed(ComponentKind::Dropped));
             continue;
         }
         let mine: Vec<usize> = (0..n).filter(|&v| labels[v] == Some(c)).collect();
         if mine.is_empty() {
-            out_d.push(ComponentDecision {
-                kind: ComponentKind::Missed,
-                component: c,
-                center: topo.component_seeds[c],
-                size: 0.0,
-                crossing_edges,
-            });
+            out_d.push(at_seed(ComponentKind::Missed));
             continue;
         }
         // The piece holding most of its vertices (lowest piece on ties).

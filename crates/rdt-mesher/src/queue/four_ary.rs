@@ -4,8 +4,8 @@
 //! `QEntry` walked log2(n) levels with a line per level.
 //!
 //! # Invariant
-//! `items[i] >= items[(i - 1) / 4]` never holds strictly for `i > 0`: every node is at most
-//! its parent in the total order of [`Packed`], so the root is the maximum. The order is
+//! `items[i] <= items[(i - 1) / 4]` for every `i > 0`: every node is at most its parent in
+//! the total order of [`Packed`], so the root is the maximum. The order is
 //! total, so the sequence of pops does not depend on the heap's shape: any correct heap
 //! yields the same meshes.
 
