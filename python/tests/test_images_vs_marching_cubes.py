@@ -102,11 +102,10 @@ XFAIL_ISSUE_14 = {
     ("nib-example4d@q60", 1): _MC.format(597, 586, 624, "643 (19 split)") + "; S gap: 351 MC vertices, up to 7.9 (bound 4)",
     ("nib-example4d@q60", 2): _MC.format(597, 586, 624, "644 (20 split)") + "; S gap: 118 MC vertices, up to 8.1 (bound 6)",
     ("nib-example4d@q60", 4): _MC.format(597, 586, 624, "648 (24 split)"),
-    ("sheet", 1): "issue 14: split: 14 components for MC's 10 (= scan), 4 split pieces; S gap: 71 MC vertices, up to 4.6 "
-    "(bound 2), 21 of them at nodes of value 0 = iso (the Rust regress leaves those out)",
-    ("sheet", 2): "issue 14: split: 11 components for MC's 10 (= scan), 1 split piece; S gap: 6 MC vertices, up to 3.7 "
-    "(bound 3), all at nodes of value 0 = iso (the Rust regress leaves those out)",
-    ("sheet", 4): "issue 14: split: 11 components for MC's 10 (= scan), 1 split piece",
+    ("sheet", 1): "issue 14: split: 11 components for MC's 10 (= scan), 1 split piece; S gap: MC vertices up to 4.6 "
+    "(bound 2), some of them at nodes of value 0 = iso (the Rust regress leaves those out)",
+    ("sheet", 2): "issue 14: S gap: 6 MC vertices, up to 3.7 (bound 3), all at nodes of value 0 = iso (the Rust "
+    "regress leaves those out); the components equal MC's since the necks' growing box",
     ("checker", 1): "issue 14: split: 44 components for MC's 43 (= scan), 1 split piece at (-0.6, -4.4, -2.5)",
     ("checker", 2): "issue 14: split: 45 components for MC's 43 (= scan), 2 split pieces",
     ("checker", 4): "issue 14: split: 45 components for MC's 43 (= scan), 2 split pieces",
