@@ -106,9 +106,6 @@ XFAIL_ISSUE_14 = {
     "(bound 2), some of them at nodes of value 0 = iso (the Rust regress leaves those out)",
     ("sheet", 2): "issue 14: S gap: 6 MC vertices, up to 3.7 (bound 3), all at nodes of value 0 = iso (the Rust "
     "regress leaves those out); the components equal MC's since the necks' growing box",
-    ("checker", 1): "issue 14: split: 44 components for MC's 43 (= scan), 1 split piece at (-0.6, -4.4, -2.5)",
-    ("checker", 2): "issue 14: split: 45 components for MC's 43 (= scan), 2 split pieces",
-    ("checker", 4): "issue 14: split: 45 components for MC's 43 (= scan), 2 split pieces",
     ("smooth-noise", 2): "issue 14: S gap: 49 MC vertices up to 4.8 from our mesh (bound 3), 22 of them on the grid's "
     "faces, the farthest at (11.5, -0.5, -11.7); sizes 1 and 4 pass",
 }

@@ -29,7 +29,7 @@ pub fn mesh_with_progress(
         r.run(progress)?;
         let mut out = r.finish()?;
         let sep = crate::levels::components::separation(&out, surface, opts);
-        crate::levels::repair::apply(&mut out, opts, &sep);
+        crate::levels::repair::apply(&mut out, opts, &sep.vertices, &sep.labels);
         crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })
@@ -89,7 +89,7 @@ pub(crate) fn mesh_in_rounds(
         }
         let mut out = r.finish()?;
         let sep = crate::levels::components::separation(&out, surface, opts);
-        crate::levels::repair::apply(&mut out, opts, &sep);
+        crate::levels::repair::apply(&mut out, opts, &sep.vertices, &sep.labels);
         crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })

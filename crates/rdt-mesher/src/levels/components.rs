@@ -291,13 +291,11 @@ pub(crate) fn decide(out: &MeshResult, img: &ImageSurface) -> Vec<ComponentDecis
 /// majority it is: a bridge that hides a component; a mixed triangle between components that
 /// have their own pieces changes no count and is left alone). Corners on no component are
 /// left out.
-fn bridge_vertices(mesh: &meshio::TriMesh, img: &ImageSurface) -> Vec<u32> {
-    use rayon::prelude::*;
-    let labels: Vec<Option<usize>> = mesh
-        .vertices
-        .par_iter()
-        .map(|&p| img.component_of(p))
-        .collect();
+fn bridge_vertices(
+    mesh: &meshio::TriMesh,
+    img: &ImageSurface,
+    labels: &[Option<usize>],
+) -> Vec<u32> {
     let nc = img.topology().component_seeds.len();
     let mut own = vec![false; nc];
     for (_, l) in pieces(mesh, img) {
@@ -318,15 +316,37 @@ fn bridge_vertices(mesh: &meshio::TriMesh, img: &ImageSurface) -> Vec<u32> {
     out
 }
 
-/// Rule 0's vertices for `out` (empty unless the surface is an image and a resolution is set).
+/// What the repair needs of the voxel scan (empty unless the surface is an image and a
+/// resolution is set): rule 0's vertices, and the scan component of every vertex (rule 3').
+#[derive(Default)]
+pub(crate) struct Separation {
+    /// Rule 0's vertices, sorted.
+    pub vertices: Vec<u32>,
+    /// The scan component of each mesh vertex.
+    pub labels: Vec<Option<usize>>,
+}
+
+/// [`Separation`] for `out`.
 pub(crate) fn separation(
     out: &MeshResult,
     surface: &dyn oracle::Surface,
     opts: &crate::MeshOptions,
-) -> Vec<u32> {
+) -> Separation {
+    use rayon::prelude::*;
     match (opts.resolution, surface.as_image()) {
-        (Some(_), Some(img)) => bridge_vertices(&out.mesh, img),
-        _ => Vec::new(),
+        (Some(_), Some(img)) => {
+            let labels: Vec<Option<usize>> = out
+                .mesh
+                .vertices
+                .par_iter()
+                .map(|&p| img.component_of(p))
+                .collect();
+            Separation {
+                vertices: bridge_vertices(&out.mesh, img, &labels),
+                labels,
+            }
+        }
+        _ => Separation::default(),
     }
 }
 

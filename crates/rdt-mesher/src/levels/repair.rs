@@ -14,6 +14,14 @@
 //!    oriented 2-manifold on the same vertices (a centroid vertex when no such triangulation
 //!    exists). A closing triangle that intersects another triangle (exact test) marks the
 //!    vertices of both bad, and rules 1 to 3 run again around them (up to 16 rounds).
+//!    On an image, rule 3' comes first: when the triangles removed around one place leave
+//!    exactly two boundary loops, on two pieces of the mesh that the cut disconnected, and
+//!    most vertices of both loops lie on the same component of the voxel scan, the cut was a
+//!    neck of that component pinched in Del_S(E) (S itself is connected there: near a
+//!    trilinear saddle it is a tube, whichever side of it the inside is): the two loops are
+//!    joined by a tube (the zipper of the two loops, shortest diagonal first) rather than
+//!    closed apart, so the component stays one piece (`join_neck` decisions). A tube that
+//!    intersects another triangle is cut again in the next round like any closing.
 //! 4. **Drop a small component** (`--min-component`): closed components enclosing less than
 //!    the given volume are removed.
 //!
@@ -50,6 +58,10 @@ pub enum DecisionKind {
         /// Boundary loops closed.
         loops: usize,
     },
+    /// Triangles at non-manifold vertices removed and the two boundary loops left joined by
+    /// a tube instead of closed each on its own (rule 3'): a neck of one scan component
+    /// pinched to a vertex or an edge, kept.
+    JoinNeck,
     /// A hole of Del_S(E) (boundary edges, no triangle removed) closed.
     Close,
     /// Triangles joining two components of the voxel scan removed (rule 0) and the `loops`
@@ -95,12 +107,14 @@ const ROUNDS: usize = 16;
 /// Make `mesh` a closed oriented 2-manifold by the rules of the module docs; `balls` follow
 /// the triangles. Returns the decisions (empty if the mesh was one and no component is below
 /// `min_volume`).
-/// `separate`: the vertices of rule 0 (sorted), bad in the first round.
+/// `separate`: the vertices of rule 0 (sorted), bad in the first round; `labels`: the scan
+/// component of each vertex (rule 3'; empty, or shorter than the vertices, for none).
 pub(crate) fn repair(
     mesh: &mut TriMesh,
     balls: &mut Vec<SurfaceBall>,
     min_volume: Option<f64>,
     separate: &[u32],
+    labels: &[Option<usize>],
 ) -> Vec<TopologyDecision> {
     let mut decisions = Vec::new();
     let mut forced: Vec<u32> = separate.to_vec();
@@ -116,7 +130,7 @@ pub(crate) fn repair(
         if closed && forced.is_empty() {
             break;
         }
-        let (d, first_new) = cut_and_close(mesh, balls, &forced, &sep);
+        let (d, first_new) = cut_and_close(mesh, balls, &forced, &sep, labels);
         sep.iter_mut().for_each(|b| *b = false);
         decisions.extend(d);
         forced = intersecting_vertices(mesh, first_new);
@@ -164,6 +178,7 @@ fn cut_and_close(
     balls: &mut Vec<SurfaceBall>,
     forced: &[u32],
     sep: &[bool],
+    labels: &[Option<usize>],
 ) -> (Vec<TopologyDecision>, usize) {
     let n = mesh.vertices.len();
     let mut live = vec![true; mesh.triangles.len()];
@@ -201,7 +216,7 @@ fn cut_and_close(
         }
     }
     let mut seen = vec![false; n];
-    let mut loops: Vec<(Vec<u32>, Vec<[u32; 3]>)> = Vec::new();
+    let mut traced: Vec<Vec<u32>> = Vec::new();
     for v0 in 0..n as u32 {
         if seen[v0 as usize] || !matches!(links.kind(v0), Link::Path { .. }) {
             continue;
@@ -217,10 +232,30 @@ fn cut_and_close(
             v = first;
         }
         lp.reverse();
-        let added = close_loop(&lp, &mut mesh.vertices, &mut edges);
-        loops.push((lp, added));
+        traced.push(lp);
     }
-    let out = report(mesh, &cut, &slivers, &loops, sep);
+    // Rule 3': the pairs of loops to join by a tube (image labels only).
+    let pairs = neck_pairs(&mesh.triangles, &cut, &kept, &traced, labels, n);
+    let mut partner = vec![usize::MAX; traced.len()];
+    for &(a, b) in &pairs {
+        partner[a] = b;
+        partner[b] = a;
+    }
+    let mut loops: Vec<(Vec<u32>, Vec<[u32; 3]>)> = Vec::new();
+    let mut joined = vec![false; traced.len()];
+    for (k, lp) in traced.iter().enumerate() {
+        let added = match partner[k] {
+            j if j == usize::MAX => close_loop(lp, &mut mesh.vertices, &mut edges),
+            j if j > k => {
+                joined[k] = true;
+                joined[j] = true;
+                tube(lp, &traced[j], &mesh.vertices, &mut edges)
+            }
+            _ => Vec::new(),
+        };
+        loops.push((lp.clone(), added));
+    }
+    let out = report(mesh, &cut, &slivers, &loops, &joined, sep);
     let first_new = kept.len();
     // The new triangle list: the kept ones in order, then the closings.
     let mut tris = Vec::with_capacity(kept.len());
@@ -301,12 +336,15 @@ fn report(
     cut: &[usize],
     slivers: &[Vec<usize>],
     loops: &[(Vec<u32>, Vec<[u32; 3]>)],
+    joined: &[bool],
     sep: &[bool],
 ) -> Vec<TopologyDecision> {
     let n = mesh.vertices.len();
     // Clusters: the cut triangles and the closings, joined by shared vertices.
     let mut tris: Vec<[u32; 3]> = cut.iter().map(|&i| mesh.triangles[i]).collect();
     let mut owner: Vec<Option<usize>> = vec![None; tris.len()];
+    // (The second loop of a tube adds nothing: the tube, on both loops' vertices, is its
+    // partner's.)
     for (k, (_, added)) in loops.iter().enumerate() {
         tris.extend(added);
         owner.extend(std::iter::repeat_n(Some(k), added.len()));
@@ -320,7 +358,9 @@ fn report(
         let separated = comp.iter().any(|&i| {
             owner[i].is_none() && tris[i].iter().any(|&v| sep.get(v as usize) == Some(&true))
         });
-        let kind = if removed == 0 {
+        let kind = if lps.iter().any(|&k| joined[k]) {
+            DecisionKind::JoinNeck
+        } else if removed == 0 {
             DecisionKind::Close
         } else if separated {
             DecisionKind::Separate { loops: lps.len() }
@@ -422,10 +462,16 @@ pub(crate) fn enclosed_volume(mesh: &TriMesh, comp: &[usize]) -> f64 {
 /// date: the non-manifold counts are measured again on the repaired mesh, and the decisions
 /// that changed Del_S(E) are reported unmet (the mesh is not Del_S(E) there).
 /// `separate`: the vertices of rule 0 (`crate::levels::components::bridge_vertices`).
-pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions, separate: &[u32]) {
+/// `labels`: the scan component of each vertex (rule 3'; empty for none).
+pub(crate) fn apply(
+    out: &mut crate::MeshResult,
+    opts: &crate::MeshOptions,
+    separate: &[u32],
+    labels: &[Option<usize>],
+) {
     let t = std::time::Instant::now();
     let decisions = match (opts.resolution, opts.min_component) {
-        (Some(_), m) => repair(&mut out.mesh, &mut out.balls, m, separate),
+        (Some(_), m) => repair(&mut out.mesh, &mut out.balls, m, separate, labels),
         (None, Some(m)) => {
             let d = drop_small(&mut out.mesh, &mut out.balls, m);
             if !d.is_empty() {
@@ -486,6 +532,110 @@ pub(crate) fn apply(out: &mut crate::MeshResult, opts: &crate::MeshOptions, sepa
         st.criteria_met = false;
     }
     st.topology_decisions = decisions;
+}
+
+/// Rule 3': the pairs of loops (indices into `loops`) to join by a tube: the only two loops
+/// of one cluster of cut triangles, on two different components of the kept triangles, whose
+/// vertices' most frequent scan label is the same component.
+fn neck_pairs(
+    tris: &[[u32; 3]],
+    cut: &[usize],
+    kept: &[[u32; 3]],
+    loops: &[Vec<u32>],
+    labels: &[Option<usize>],
+    n: usize,
+) -> Vec<(usize, usize)> {
+    if labels.is_empty() || loops.len() < 2 {
+        return Vec::new();
+    }
+    let mut clusters = crate::topology::VertexUnion::new(n);
+    for &i in cut {
+        clusters.join_triangle(tris[i]);
+    }
+    let mut pieces = crate::topology::VertexUnion::new(n);
+    for t in kept {
+        pieces.join_triangle(*t);
+    }
+    // The most frequent label of a loop's vertices (ties to the lowest), if any.
+    let label = |lp: &[u32]| {
+        let mut votes: std::collections::BTreeMap<usize, usize> = Default::default();
+        for &v in lp {
+            if let Some(Some(l)) = labels.get(v as usize) {
+                *votes.entry(*l).or_default() += 1;
+            }
+        }
+        votes
+            .into_iter()
+            .max_by_key(|&(l, c)| (c, std::cmp::Reverse(l)))
+            .map(|(l, _)| l)
+    };
+    let mut by_cluster: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
+    for (k, lp) in loops.iter().enumerate() {
+        if lp.len() >= 3 {
+            by_cluster.entry(clusters.find(lp[0])).or_default().push(k);
+        }
+    }
+    let mut out = Vec::new();
+    for ks in by_cluster.values() {
+        let &[a, b] = ks.as_slice() else {
+            continue;
+        };
+        // The cut must have disconnected them.
+        if pieces.find(loops[a][0]) == pieces.find(loops[b][0]) {
+            continue;
+        }
+        match (label(&loops[a]), label(&loops[b])) {
+            (Some(x), Some(y)) if x == y => out.push((a, b)),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The tube joining the loops `p` and `q` (each in the order whose consecutive pairs the new
+/// triangles must contain, as for [`close_loop`]): the zipper that walks `p` forwards and `q`
+/// backwards from their closest pair of vertices, taking the shorter diagonal first. Every
+/// loop edge is in one triangle, in its order, and the diagonals pair up oppositely, so the
+/// tube is an oriented annulus. Its edges are added to `edges`.
+fn tube(p: &[u32], q: &[u32], pts: &[DVec3], edges: &mut HashSet<[u32; 2]>) -> Vec<[u32; 3]> {
+    let (m, n) = (p.len(), q.len());
+    let at = |v: u32| pts[v as usize];
+    let (mut i, mut j) = (0usize, 0usize);
+    let mut best = f64::INFINITY;
+    for (a, &u) in p.iter().enumerate() {
+        for (b, &w) in q.iter().enumerate() {
+            let d = at(u).distance_squared(at(w));
+            if d < best {
+                (best, i, j) = (d, a, b);
+            }
+        }
+    }
+    let pv = |k: usize| p[k % m];
+    // q walked backwards: the k-th step back from j.
+    let qv = |k: usize| q[(j + n * (k / n + 1) - k % n) % n];
+    let (mut a, mut b) = (0usize, 0usize);
+    let mut out = Vec::with_capacity(m + n);
+    while a < m || b < n {
+        let (pi, qj) = (pv(i + a), qv(b));
+        let step_p = b == n
+            || (a < m
+                && at(pv(i + a + 1)).distance_squared(at(qj))
+                    <= at(qv(b + 1)).distance_squared(at(pi)));
+        if step_p {
+            out.push([pi, pv(i + a + 1), qj]);
+            a += 1;
+        } else {
+            out.push([qv(b + 1), qj, pi]);
+            b += 1;
+        }
+    }
+    let key = |a: u32, b: u32| [a.min(b), a.max(b)];
+    for t in &out {
+        for k in 0..3 {
+            edges.insert(key(t[k], t[(k + 1) % 3]));
+        }
+    }
+    out
 }
 
 /// The ball circumscribing the triangle `p`: its circumcircle's center (the centroid if

@@ -23,7 +23,7 @@ fn run(mut m: TriMesh, min_volume: Option<f64>) -> (TriMesh, Vec<TopologyDecisio
         };
         m.triangles.len()
     ];
-    let d = repair(&mut m, &mut balls, min_volume, &[]);
+    let d = repair(&mut m, &mut balls, min_volume, &[], &[]);
     assert_eq!(balls.len(), m.triangles.len());
     (m, d)
 }
@@ -67,28 +67,24 @@ fn a_hole_is_closed() {
     );
 }
 
-/// Two closed octahedra-like cones glued at one vertex (a pinched neck): cut, two caps.
-#[test]
-fn a_pinch_is_cut_into_two_closed_pieces() {
-    // Two square pyramids sharing the apex 0, each closed by its base, made of two
-    // octahedra sharing vertex 0.
-    let oct = |c: DVec3, apex_at_origin: bool| -> Vec<DVec3> {
-        let mut v = vec![
+/// Two octahedra sharing one vertex, the upper one's -Z and the lower one's +Z, at the
+/// origin (a neck pinched to a vertex): 11 vertices (index 5 shared), 16 triangles; the
+/// upper one's vertices are 0..6.
+fn pinched() -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let oct = |c: DVec3| -> Vec<DVec3> {
+        vec![
             c + DVec3::X,
             c - DVec3::X,
             c + DVec3::Y,
             c - DVec3::Y,
             c + DVec3::Z,
             c - DVec3::Z,
-        ];
-        if apex_at_origin {
-            v[5] = DVec3::ZERO;
-        }
-        v
+        ]
     };
     let faces = crate::topology::OCTAHEDRON;
-    let mut vertices = oct(DVec3::Z, true); // its -Z vertex (5) at the origin
-    let mut lower = oct(-DVec3::Z, false);
+    let mut vertices = oct(DVec3::Z);
+    vertices[5] = DVec3::ZERO;
+    let mut lower = oct(-DVec3::Z);
     lower[4] = DVec3::ZERO; // its +Z vertex at the origin: shared with vertex 5
     vertices.extend(lower);
     let mut triangles: Vec<[u32; 3]> = faces.to_vec();
@@ -97,13 +93,79 @@ fn a_pinch_is_cut_into_two_closed_pieces() {
             .iter()
             .map(|f| f.map(|v| if v == 4 { 5 } else { v + 6 })),
     );
-    let (out, d) = run_closed(vertices, triangles);
+    (vertices, triangles)
+}
+
+/// The pinch with no scan labels (or two components): cut, two caps.
+#[test]
+fn a_pinch_is_cut_into_two_closed_pieces() {
+    let (vertices, triangles) = pinched();
+    let (out, d) = run_closed(vertices.clone(), triangles.clone());
     assert_eq!(d.len(), 1, "{d:?}");
     assert_eq!(d[0].kind, DecisionKind::Cut { loops: 2 });
     assert_eq!(d[0].facets_removed, 8);
     // Two closed pieces, each of the 4 upper (lower) faces and a 2-triangle cap.
     assert_eq!(out.triangles.len(), 12);
     assert_eq!(out.vertices.len(), 10);
+    // Labelled as two scan components: cut as well.
+    let labels: Vec<Option<usize>> = (0..vertices.len())
+        .map(|v| Some(usize::from(v >= 6)))
+        .collect();
+    let (out2, d2) = run_labelled(vertices, triangles, &labels);
+    assert_eq!(d2[0].kind, DecisionKind::Cut { loops: 2 });
+    assert_eq!(pieces_of(&out2), 2);
+}
+
+/// The pinch on one scan component (rule 3'): the two loops left by the cut are joined by a
+/// tube, one closed oriented piece without self-intersections.
+#[test]
+fn a_pinched_neck_of_one_component_is_joined_by_a_tube() {
+    let (vertices, triangles) = pinched();
+    let labels = vec![Some(0); vertices.len()];
+    let (out, d) = run_labelled(vertices, triangles, &labels);
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert_eq!(d[0].kind, DecisionKind::JoinNeck);
+    assert_eq!(d[0].facets_removed, 8);
+    // 8 faces kept, the tube between two 4-vertex loops: 8 triangles; one piece.
+    assert_eq!(out.triangles.len(), 16);
+    assert_eq!(pieces_of(&out), 1);
+    assert!(intersecting_vertices(&out, 0).is_empty());
+    // Genus 1 would be a handle; a tube between two pieces keeps genus 0: V - E + F = 2.
+    let (v, f) = (out.vertices.len() as i64, out.triangles.len() as i64);
+    assert_eq!(v - 3 * f / 2 + f, 2);
+}
+
+/// [`run_closed`] with scan labels.
+fn run_labelled(
+    vertices: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    labels: &[Option<usize>],
+) -> (TriMesh, Vec<TopologyDecision>) {
+    let mut m = TriMesh {
+        vertices,
+        triangles,
+    };
+    let mut balls = vec![
+        SurfaceBall {
+            center: DVec3::ZERO,
+            radius: 1.0
+        };
+        m.triangles.len()
+    ];
+    let d = repair(&mut m, &mut balls, None, &[], labels);
+    assert_eq!(balls.len(), m.triangles.len());
+    assert!(closed_oriented(&m), "{d:?}");
+    (m, d)
+}
+
+/// Pieces of a triangle mesh (by shared vertices).
+fn pieces_of(m: &TriMesh) -> usize {
+    let mut u = crate::topology::VertexUnion::new(m.vertices.len());
+    m.triangles.iter().for_each(|t| u.join_triangle(*t));
+    let mut roots: Vec<u32> = m.triangles.iter().map(|t| u.find(t[0])).collect();
+    roots.sort_unstable();
+    roots.dedup();
+    roots.len()
 }
 
 #[test]
@@ -172,9 +234,9 @@ fn rule_0_cuts_the_stars_of_the_separated_vertices_and_closes_them() {
         m.triangles.len()
     ];
     // Without rule 0 the closed octahedron is left alone.
-    let d = repair(&mut m.clone(), &mut balls.clone(), None, &[]);
+    let d = repair(&mut m.clone(), &mut balls.clone(), None, &[], &[]);
     assert!(d.is_empty());
-    let d = repair(&mut m, &mut balls, None, &[4]);
+    let d = repair(&mut m, &mut balls, None, &[4], &[]);
     assert!(closed_oriented(&m), "{d:?}");
     assert_eq!(d.len(), 1, "{d:?}");
     assert_eq!(d[0].kind, DecisionKind::Separate { loops: 1 });
