@@ -3,9 +3,11 @@
 //! of section 6.6.1 (`manifold`), and the final
 //! check of the scaffold (`scaffold`, ours), which may rebuild Del(E) without it; on sampled
 //! surfaces (images), the topological repair of what the patch leaves (`repair`, ours, with
-//! `links` and `holes`), then the component decisions on what the scan and the output still
+//! `links` and `holes`), the bridges between the pieces of a split scan component
+//! (`bridges`, ours), then the component decisions on what the scan and the output still
 //! disagree about (`components`, ours).
 
+mod bridges;
 pub(crate) mod components;
 mod holes;
 mod links;

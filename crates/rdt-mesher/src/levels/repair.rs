@@ -64,6 +64,9 @@ pub enum DecisionKind {
     JoinNeck,
     /// A hole of Del_S(E) (boundary edges, no triangle removed) closed.
     Close,
+    /// Two pieces of one split scan component joined by a tube at the scan's join between
+    /// them, one triangle of each replaced (`crate::levels::bridges`).
+    Bridge,
     /// Triangles joining two components of the voxel scan removed (rule 0) and the `loops`
     /// boundary loops left closed.
     Separate {
@@ -146,7 +149,7 @@ pub(crate) fn repair(
 
 /// The vertices of the triangles from `first_new` on that intersect another triangle (or are
 /// degenerate), and of the triangles they intersect, sorted.
-fn intersecting_vertices(mesh: &TriMesh, first_new: usize) -> Vec<u32> {
+pub(super) fn intersecting_vertices(mesh: &TriMesh, first_new: usize) -> Vec<u32> {
     if first_new >= mesh.triangles.len() {
         return Vec::new();
     }
@@ -593,12 +596,19 @@ fn neck_pairs(
 }
 
 /// The tube joining the loops `p` and `q` (each in the order whose consecutive pairs the new
-/// triangles must contain, as for [`close_loop`]): the zipper that walks `p` forwards and `q`
+/// triangles must contain, as for [`close_loop`]): a zipper that walks `p` forwards and `q`
 /// backwards from their closest pair of vertices, taking the shorter diagonal first. Every
 /// loop edge is in one triangle, in its order, and the diagonals pair up oppositely, so the
-/// tube is an oriented annulus. Its edges are added to `edges`.
-fn tube(p: &[u32], q: &[u32], pts: &[DVec3], edges: &mut HashSet<[u32; 2]>) -> Vec<[u32; 3]> {
-    let (m, n) = (p.len(), q.len());
+/// tube is an oriented annulus, provided no diagonal is taken twice: a step onto a pair of
+/// vertices already joined is not taken (the other step is), and where both are, the zipper
+/// that alternates the two loops' steps (always valid: its diagonals are distinct) is used.
+/// Its edges are added to `edges`.
+pub(super) fn tube(
+    p: &[u32],
+    q: &[u32],
+    pts: &[DVec3],
+    edges: &mut HashSet<[u32; 2]>,
+) -> Vec<[u32; 3]> {
     let at = |v: u32| pts[v as usize];
     let (mut i, mut j) = (0usize, 0usize);
     let mut best = f64::INFINITY;
@@ -610,25 +620,8 @@ fn tube(p: &[u32], q: &[u32], pts: &[DVec3], edges: &mut HashSet<[u32; 2]>) -> V
             }
         }
     }
-    let pv = |k: usize| p[k % m];
-    // q walked backwards: the k-th step back from j.
-    let qv = |k: usize| q[(j + n * (k / n + 1) - k % n) % n];
-    let (mut a, mut b) = (0usize, 0usize);
-    let mut out = Vec::with_capacity(m + n);
-    while a < m || b < n {
-        let (pi, qj) = (pv(i + a), qv(b));
-        let step_p = b == n
-            || (a < m
-                && at(pv(i + a + 1)).distance_squared(at(qj))
-                    <= at(qv(b + 1)).distance_squared(at(pi)));
-        if step_p {
-            out.push([pi, pv(i + a + 1), qj]);
-            a += 1;
-        } else {
-            out.push([qv(b + 1), qj, pi]);
-            b += 1;
-        }
-    }
+    let out = zipper(p, q, i, j, Some(&at))
+        .unwrap_or_else(|| zipper(p, q, i, j, None).expect("the alternating zipper is valid"));
     let key = |a: u32, b: u32| [a.min(b), a.max(b)];
     for t in &out {
         for k in 0..3 {
@@ -638,9 +631,55 @@ fn tube(p: &[u32], q: &[u32], pts: &[DVec3], edges: &mut HashSet<[u32; 2]>) -> V
     out
 }
 
+/// The zipper of [`tube`] from `p[i]`, `q[j]`: shorter diagonal first with `at`, alternating
+/// steps (P first) without; `None` when every step left would repeat a diagonal.
+fn zipper(
+    p: &[u32],
+    q: &[u32],
+    i: usize,
+    j: usize,
+    at: Option<&dyn Fn(u32) -> DVec3>,
+) -> Option<Vec<[u32; 3]>> {
+    let (m, n) = (p.len(), q.len());
+    let pv = |k: usize| p[(i + k) % m];
+    // q walked backwards: the k-th step back from j.
+    let qv = |k: usize| q[(j + n * (k / n + 1) - k % n) % n];
+    let mut seen: HashSet<(usize, usize)> = HashSet::new();
+    seen.insert((0, 0));
+    let (mut a, mut b) = (0usize, 0usize);
+    let mut out = Vec::with_capacity(m + n);
+    while a < m || b < n {
+        let last = a + b + 1 == m + n;
+        let free = |x: usize, y: usize| last || !seen.contains(&(x % m, y % n));
+        let can_p = a < m && free(a + 1, b);
+        let can_q = b < n && free(a, b + 1);
+        let step_p = match (can_p, can_q) {
+            (false, false) => return None,
+            (true, false) => true,
+            (false, true) => false,
+            (true, true) => match at {
+                Some(at) => {
+                    at(pv(a + 1)).distance_squared(at(qv(b)))
+                        <= at(qv(b + 1)).distance_squared(at(pv(a)))
+                }
+                None => a <= b,
+            },
+        };
+        if step_p {
+            out.push([pv(a), pv(a + 1), qv(b)]);
+            a += 1;
+        } else {
+            out.push([qv(b + 1), qv(b), pv(a)]);
+            b += 1;
+        }
+        seen.insert((a % m, b % n));
+    }
+    Some(out)
+}
+
 /// The ball circumscribing the triangle `p`: its circumcircle's center (the centroid if
 /// degenerate) and the largest distance from there to a corner.
-fn circumball(p: [DVec3; 3]) -> SurfaceBall {
+pub(super) fn circumball(p: [DVec3; 3]) -> SurfaceBall {
     let center = verify::certificate::circumcircle(p[0], p[1], p[2])
         .map_or((p[0] + p[1] + p[2]) / 3.0, |(c, _)| c);
     SurfaceBall {

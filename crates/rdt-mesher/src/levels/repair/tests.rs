@@ -245,3 +245,60 @@ fn rule_0_cuts_the_stars_of_the_separated_vertices_and_closes_them() {
     assert!(!m.vertices.contains(&DVec3::Z), "the pole is gone");
     assert_eq!(balls.len(), m.triangles.len());
 }
+
+/// The tube between two loops of every pair of lengths 3 to 7, at pseudo-random positions:
+/// an oriented annulus (each loop edge once, in the loop's order; each diagonal twice, in
+/// opposite directions), `m + n` triangles.
+#[test]
+fn a_tube_is_an_oriented_annulus_for_any_loop_lengths() {
+    let mut seed = 7u64;
+    let mut next = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for m in 3..8usize {
+        for n in 3..8usize {
+            let mut pts = Vec::new();
+            for k in 0..m {
+                let t = k as f64 / m as f64 * std::f64::consts::TAU;
+                pts.push(DVec3::new(t.cos(), t.sin(), 0.0) + DVec3::splat(0.3 * next()));
+            }
+            for k in 0..n {
+                let t = -(k as f64) / n as f64 * std::f64::consts::TAU + next();
+                pts.push(DVec3::new(t.cos(), t.sin(), 1.0) * (0.5 + next()));
+            }
+            let p: Vec<u32> = (0..m as u32).collect();
+            let q: Vec<u32> = (m as u32..(m + n) as u32).collect();
+            let mut edges = HashSet::new();
+            let t = tube(&p, &q, &pts, &mut edges);
+            assert_eq!(t.len(), m + n, "{m} {n}");
+            let mut directed: std::collections::HashMap<(u32, u32), usize> = Default::default();
+            for f in &t {
+                for k in 0..3 {
+                    *directed.entry((f[k], f[(k + 1) % 3])).or_default() += 1;
+                }
+            }
+            assert!(
+                directed.values().all(|&c| c == 1),
+                "{m} {n}: a directed edge twice"
+            );
+            for &(a, b) in directed.keys() {
+                let on_p = a < m as u32 && b < m as u32;
+                let on_q = a >= m as u32 && b >= m as u32;
+                if on_p || on_q {
+                    // A loop edge: only in the loop's order.
+                    let lp = if on_p { &p } else { &q };
+                    let i = lp.iter().position(|&v| v == a).unwrap();
+                    assert_eq!(lp[(i + 1) % lp.len()], b, "{m} {n}: loop edge reversed");
+                } else {
+                    assert!(
+                        directed.contains_key(&(b, a)),
+                        "{m} {n}: diagonal without twin"
+                    );
+                }
+            }
+        }
+    }
+}
