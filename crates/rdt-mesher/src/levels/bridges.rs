@@ -7,8 +7,10 @@
 //! voxels). At the join, the triangle of each piece nearest the join is removed and the two
 //! triangle-shaped loops are joined by a tube of six triangles (`repair`'s zipper), so the
 //! component is one piece again (`bridge` decisions). A tube that intersects another
-//! triangle (exact test) or passes farther than one voxel from the join is not kept: the
-//! piece stays split and is reported as such.
+//! triangle (exact test), or one of whose triangles has a circumball larger than the size
+//! bound sigma there (the loose epsilon-sample certificate measures every triangle), is not
+//! kept; when no pair of triangles near the join gives one, the piece stays split and is
+//! reported as such.
 //!
 //! Invariant kept: the mesh stays a closed, oriented 2-manifold without self-intersections
 //! (the two loops are on different pieces, so the tube adds no existing edge; the tube's
@@ -29,7 +31,11 @@ const NEAR: usize = 8;
 
 /// Bridge every piece but the largest of each split scan component to another piece of it,
 /// where the scan shows the join (see the module docs). Returns the decisions.
-pub(crate) fn bridge_splits(out: &mut MeshResult, img: &ImageSurface) -> Vec<TopologyDecision> {
+pub(crate) fn bridge_splits(
+    out: &mut MeshResult,
+    img: &ImageSurface,
+    criteria: &crate::Criteria,
+) -> Vec<TopologyDecision> {
     let h = img.volume().spacing().min_element();
     let reach = img.volume().spacing().max_element();
     let mut decisions = Vec::new();
@@ -64,7 +70,7 @@ pub(crate) fn bridge_splits(out: &mut MeshResult, img: &ImageSurface) -> Vec<Top
             else {
                 continue;
             };
-            if let Some(d) = bridge(out, &ps[i], &ps[j], &join, reach) {
+            if let Some(d) = bridge(out, &ps[i], &ps[j], &join, reach, criteria) {
                 let (ri, rj) = (root_of(&merged, i), root_of(&merged, j));
                 merged[ri.max(rj)] = ri.min(rj);
                 decisions.push(d);
@@ -144,6 +150,7 @@ fn bridge(
     b: &[u32],
     j: &Join,
     reach: f64,
+    criteria: &crate::Criteria,
 ) -> Option<TopologyDecision> {
     let mesh = &out.mesh;
     let in_a: std::collections::HashSet<u32> = a.iter().copied().collect();
@@ -179,6 +186,18 @@ fn bridge(
         let (fa, fb) = (out.mesh.triangles[ta], out.mesh.triangles[tb]);
         let mut edges = std::collections::HashSet::new();
         let tube = super::repair::tube(&fa, &fb, &out.mesh.vertices, &mut edges);
+        // Within the size bound, as a restricted facet would be (the loose epsilon-sample
+        // certificate measures every triangle's ball).
+        let balls: Vec<_> = tube
+            .iter()
+            .map(|t| super::repair::circumball(t.map(|v| out.mesh.vertices[v as usize])))
+            .collect();
+        if balls
+            .iter()
+            .any(|b| criteria.sigma_at(b.center).is_some_and(|s| b.radius > s))
+        {
+            continue;
+        }
         // The mesh with the two triangles replaced by the tube, checked for intersections.
         let mut trial = out.mesh.clone();
         let (hi, lo) = (ta.max(tb), ta.min(tb));

@@ -362,7 +362,7 @@ pub(crate) fn apply(
     };
     let t = std::time::Instant::now();
     if let Some(h) = opts.resolution {
-        let mut d = super::bridges::bridge_splits(out, img);
+        let mut d = super::bridges::bridge_splits(out, img, &opts.criteria);
         d.extend(drop_fragments(out, img, h));
         if !d.is_empty() {
             let st = &mut out.stats;
