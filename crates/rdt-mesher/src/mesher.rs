@@ -30,6 +30,7 @@ pub fn mesh_with_progress(
         let mut out = r.finish()?;
         let sep = crate::levels::components::separation(&out, surface, opts);
         crate::levels::repair::apply(&mut out, opts, &sep.vertices, &sep.labels);
+        crate::levels::bridges::apply(&mut out, surface, opts);
         crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })
@@ -90,6 +91,7 @@ pub(crate) fn mesh_in_rounds(
         let mut out = r.finish()?;
         let sep = crate::levels::components::separation(&out, surface, opts);
         crate::levels::repair::apply(&mut out, opts, &sep.vertices, &sep.labels);
+        crate::levels::bridges::apply(&mut out, surface, opts);
         crate::levels::components::apply(&mut out, surface, opts);
         Ok(out)
     })

@@ -29,9 +29,27 @@ const ROUNDS: u32 = 6;
 /// Triangles of each piece tried, nearest the join first.
 const NEAR: usize = 8;
 
+/// Bridge the split components of a run on an image with a resolution set (the pipeline's
+/// images) and record the decisions in its figures; nothing otherwise.
+pub(crate) fn apply(
+    out: &mut MeshResult,
+    surface: &dyn oracle::Surface,
+    opts: &crate::MeshOptions,
+) {
+    let (Some(_), Some(img)) = (opts.resolution, surface.as_image()) else {
+        return;
+    };
+    let t = std::time::Instant::now();
+    let d = bridge_splits(out, img, &opts.criteria);
+    super::components::record(out, opts, d);
+    let dt = t.elapsed().as_secs_f64();
+    out.stats.time_total_s += dt;
+    out.stats.time_queue_s += dt;
+}
+
 /// Bridge every piece but the largest of each split scan component to another piece of it,
 /// where the scan shows the join (see the module docs). Returns the decisions.
-pub(crate) fn bridge_splits(
+fn bridge_splits(
     out: &mut MeshResult,
     img: &ImageSurface,
     criteria: &crate::Criteria,

@@ -362,50 +362,56 @@ pub(crate) fn apply(
     };
     let t = std::time::Instant::now();
     if let Some(h) = opts.resolution {
-        let mut d = super::bridges::bridge_splits(out, img, &opts.criteria);
-        d.extend(drop_fragments(out, img, h));
-        if !d.is_empty() {
-            let st = &mut out.stats;
-            st.vertices = out.mesh.vertices.len();
-            st.facets = out.mesh.triangles.len();
-            match st.unmet.iter_mut().find_map(|u| match u {
-                crate::Unmet::Repaired { decisions } => Some(decisions),
-                _ => None,
-            }) {
-                Some(n) => *n += d.len(),
-                None => st.unmet.push(crate::Unmet::Repaired { decisions: d.len() }),
-            }
-            st.criteria_met = false;
-            // The bridges' triangles are not restricted facets: the smallest angle is
-            // measured again on the mesh.
-            let min_angle = out
-                .mesh
-                .triangles
-                .iter()
-                .map(|t| crate::criteria::min_angle_deg(t.map(|v| out.mesh.vertices[v as usize])))
-                .fold(f64::INFINITY, f64::min);
-            if min_angle.is_finite() && min_angle < st.min_angle_deg {
-                st.min_angle_deg = min_angle;
-                let bound = opts.criteria.min_angle_deg;
-                let mut has_angle = false;
-                for u in st.unmet.iter_mut() {
-                    if let crate::Unmet::Angle { min_angle_deg, .. } = u {
-                        *min_angle_deg = min_angle;
-                        has_angle = true;
-                    }
-                }
-                if bound > 0.0 && min_angle < bound && !has_angle {
-                    st.unmet.push(crate::Unmet::Angle {
-                        min_angle_deg: min_angle,
-                        bound_deg: bound,
-                    });
-                }
-            }
-            st.topology_decisions.extend(d);
-        }
+        let d = drop_fragments(out, img, h);
+        record(out, opts, d);
     }
     out.stats.component_decisions = decide(out, img);
     let dt = t.elapsed().as_secs_f64();
     out.stats.time_total_s += dt;
     out.stats.time_queue_s += dt;
+}
+
+/// Record the decisions `d` that changed a run's mesh after the repair (bridges, dropped
+/// fragments) in its figures: vertices, facets, `unmet: repaired`, and the smallest angle
+/// measured again on the mesh (their triangles are not restricted facets), `unmet: angle`
+/// when it is below the bound.
+pub(crate) fn record(out: &mut MeshResult, opts: &crate::MeshOptions, d: Vec<TopologyDecision>) {
+    if d.is_empty() {
+        return;
+    }
+    let st = &mut out.stats;
+    st.vertices = out.mesh.vertices.len();
+    st.facets = out.mesh.triangles.len();
+    match st.unmet.iter_mut().find_map(|u| match u {
+        crate::Unmet::Repaired { decisions } => Some(decisions),
+        _ => None,
+    }) {
+        Some(n) => *n += d.len(),
+        None => st.unmet.push(crate::Unmet::Repaired { decisions: d.len() }),
+    }
+    st.criteria_met = false;
+    let min_angle = out
+        .mesh
+        .triangles
+        .iter()
+        .map(|t| crate::criteria::min_angle_deg(t.map(|v| out.mesh.vertices[v as usize])))
+        .fold(f64::INFINITY, f64::min);
+    if min_angle.is_finite() && min_angle < st.min_angle_deg {
+        st.min_angle_deg = min_angle;
+        let bound = opts.criteria.min_angle_deg;
+        let mut has_angle = false;
+        for u in st.unmet.iter_mut() {
+            if let crate::Unmet::Angle { min_angle_deg, .. } = u {
+                *min_angle_deg = min_angle;
+                has_angle = true;
+            }
+        }
+        if bound > 0.0 && min_angle < bound && !has_angle {
+            st.unmet.push(crate::Unmet::Angle {
+                min_angle_deg: min_angle,
+                bound_deg: bound,
+            });
+        }
+    }
+    st.topology_decisions.extend(d);
 }

@@ -7,7 +7,7 @@
 //! (`bridges`, ours), then the component decisions on what the scan and the output still
 //! disagree about (`components`, ours).
 
-mod bridges;
+pub(crate) mod bridges;
 pub(crate) mod components;
 mod holes;
 mod links;
