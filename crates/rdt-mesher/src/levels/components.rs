@@ -390,28 +390,6 @@ pub(crate) fn record(out: &mut MeshResult, opts: &crate::MeshOptions, d: Vec<Top
         None => st.unmet.push(crate::Unmet::Repaired { decisions: d.len() }),
     }
     st.criteria_met = false;
-    let min_angle = out
-        .mesh
-        .triangles
-        .iter()
-        .map(|t| crate::criteria::min_angle_deg(t.map(|v| out.mesh.vertices[v as usize])))
-        .fold(f64::INFINITY, f64::min);
-    if min_angle.is_finite() && min_angle < st.min_angle_deg {
-        st.min_angle_deg = min_angle;
-        let bound = opts.criteria.min_angle_deg;
-        let mut has_angle = false;
-        for u in st.unmet.iter_mut() {
-            if let crate::Unmet::Angle { min_angle_deg, .. } = u {
-                *min_angle_deg = min_angle;
-                has_angle = true;
-            }
-        }
-        if bound > 0.0 && min_angle < bound && !has_angle {
-            st.unmet.push(crate::Unmet::Angle {
-                min_angle_deg: min_angle,
-                bound_deg: bound,
-            });
-        }
-    }
     st.topology_decisions.extend(d);
+    super::repair::measure_angles(out, opts);
 }

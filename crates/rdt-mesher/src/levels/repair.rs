@@ -510,31 +510,43 @@ pub(crate) fn apply(
         .filter(|d| !matches!(d.kind, DecisionKind::DropSmallComponent { .. }))
         .count();
     if changed > 0 {
-        // The new triangles' angles, measured on the mesh.
-        let min_angle = out
-            .mesh
-            .triangles
-            .iter()
-            .map(|t| crate::criteria::min_angle_deg(t.map(|v| out.mesh.vertices[v as usize])))
-            .fold(f64::INFINITY, f64::min);
-        if min_angle.is_finite() {
-            st.min_angle_deg = min_angle;
-        }
-        let bound = opts.criteria.min_angle_deg;
-        let has_angle = st
-            .unmet
-            .iter()
-            .any(|u| matches!(u, crate::Unmet::Angle { .. }));
-        if bound > 0.0 && st.min_angle_deg < bound && !has_angle {
-            st.unmet.push(crate::Unmet::Angle {
-                min_angle_deg: st.min_angle_deg,
-                bound_deg: bound,
-            });
-        }
         st.unmet.push(crate::Unmet::Repaired { decisions: changed });
         st.criteria_met = false;
     }
     st.topology_decisions = decisions;
+    if changed > 0 {
+        measure_angles(out, opts);
+    }
+}
+
+/// The smallest angle of a run's mesh measured again after triangles that are not restricted
+/// facets were added (closings, tubes), and `unmet: angle` brought up to date with it.
+pub(super) fn measure_angles(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
+    let min_angle = out
+        .mesh
+        .triangles
+        .iter()
+        .map(|t| crate::criteria::min_angle_deg(t.map(|v| out.mesh.vertices[v as usize])))
+        .fold(f64::INFINITY, f64::min);
+    if !min_angle.is_finite() {
+        return;
+    }
+    let st = &mut out.stats;
+    st.min_angle_deg = min_angle;
+    let bound = opts.criteria.min_angle_deg;
+    let mut has_angle = false;
+    for u in st.unmet.iter_mut() {
+        if let crate::Unmet::Angle { min_angle_deg, .. } = u {
+            *min_angle_deg = min_angle;
+            has_angle = true;
+        }
+    }
+    if bound > 0.0 && min_angle < bound && !has_angle {
+        st.unmet.push(crate::Unmet::Angle {
+            min_angle_deg: min_angle,
+            bound_deg: bound,
+        });
+    }
 }
 
 /// Rule 3': the pairs of loops (indices into `loops`) to join by a tube: the only two loops

@@ -16,13 +16,7 @@ fn closed_oriented(m: &TriMesh) -> bool {
 }
 
 fn run(mut m: TriMesh, min_volume: Option<f64>) -> (TriMesh, Vec<TopologyDecision>) {
-    let mut balls = vec![
-        SurfaceBall {
-            center: DVec3::ZERO,
-            radius: 1.0
-        };
-        m.triangles.len()
-    ];
+    let mut balls = unit_balls(m.triangles.len());
     let d = repair(&mut m, &mut balls, min_volume, &[], &[]);
     assert_eq!(balls.len(), m.triangles.len());
     (m, d)
@@ -145,13 +139,7 @@ fn run_labelled(
         vertices,
         triangles,
     };
-    let mut balls = vec![
-        SurfaceBall {
-            center: DVec3::ZERO,
-            radius: 1.0
-        };
-        m.triangles.len()
-    ];
+    let mut balls = unit_balls(m.triangles.len());
     let d = repair(&mut m, &mut balls, None, &[], labels);
     assert_eq!(balls.len(), m.triangles.len());
     assert!(closed_oriented(&m), "{d:?}");
@@ -226,13 +214,7 @@ fn rule_0_cuts_the_stars_of_the_separated_vertices_and_closes_them() {
         vertices,
         triangles,
     };
-    let mut balls = vec![
-        SurfaceBall {
-            center: DVec3::ZERO,
-            radius: 1.0
-        };
-        m.triangles.len()
-    ];
+    let mut balls = unit_balls(m.triangles.len());
     // Without rule 0 the closed octahedron is left alone.
     let d = repair(&mut m.clone(), &mut balls.clone(), None, &[], &[]);
     assert!(d.is_empty());
@@ -301,4 +283,15 @@ fn a_tube_is_an_oriented_annulus_for_any_loop_lengths() {
             }
         }
     }
+}
+
+/// `n` placeholder balls (the repair carries them along with the triangles).
+fn unit_balls(n: usize) -> Vec<SurfaceBall> {
+    vec![
+        SurfaceBall {
+            center: DVec3::ZERO,
+            radius: 1.0
+        };
+        n
+    ]
 }
