@@ -4,13 +4,13 @@
 //! knows where it is: a join (two inside nodes joined by a grid edge or a face saddle, see
 //! [`ImageSurface::neck_joins`]) whose nodes are nearest to different pieces, looked for in
 //! a box around the smaller piece whose margin doubles up to [`ROUNDS`] times (from 1.5
-//! voxels). At the join, the triangle of each piece nearest the join is removed and the two
-//! triangle-shaped loops are joined by a tube of six triangles (`repair`'s zipper), so the
-//! component is one piece again (`bridge` decisions). A tube that intersects another
-//! triangle (exact test), or one of whose triangles has a circumball larger than the size
-//! bound sigma there (the loose epsilon-sample certificate measures every triangle), is not
-//! kept; when no pair of triangles near the join gives one, the piece stays split and is
-//! reported as such.
+//! voxels). At the join, a triangle of each piece is removed and the two triangle-shaped loops
+//! are joined by a tube of six triangles (`repair`'s zipper), so the component is one piece
+//! again (`bridge` decisions): of the [`NEAR`] triangles of each piece nearest the join, the
+//! pair with the nearest centroids whose tube intersects no other triangle (exact test) and
+//! has no triangle whose circumball exceeds the size bound sigma there (the loose
+//! epsilon-sample certificate measures every triangle). When no pair gives one, the piece
+//! stays split and is reported as such.
 //!
 //! Invariant kept: the mesh stays a closed, oriented 2-manifold without self-intersections
 //! (the two loops are on different pieces, so the tube adds no existing edge; the tube's
@@ -68,24 +68,42 @@ fn bridge_splits(
             continue;
         }
         ps.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
+        // The nearest piece (and distance) of a point, over the component's vertices (the
+        // bridges keep every vertex where it is, so one tree serves the whole component).
+        let mut coords: Vec<[f64; 3]> = Vec::new();
+        let mut owner: Vec<usize> = Vec::new();
+        for (k, piece) in ps.iter().enumerate() {
+            coords.extend(
+                piece
+                    .iter()
+                    .map(|&v| out.mesh.vertices[v as usize].to_array()),
+            );
+            owner.extend(std::iter::repeat_n(k, piece.len()));
+        }
+        let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
+            continue;
+        };
+        let nearest = |p: DVec3| -> (usize, f64) {
+            let r = tree
+                .query(&p.to_array())
+                .nearest_one::<SquaredEuclidean<f64>>()
+                .execute();
+            (owner[r.item as usize], r.distance.sqrt())
+        };
         // Which pieces are merged by the bridges built so far (a root per piece).
         let mut merged: Vec<usize> = (0..ps.len()).collect();
         for i in 1..ps.len() {
+            let bbox = ps[i]
+                .iter()
+                .map(|&v| out.mesh.vertices[v as usize])
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p), hi.max(p))
+                });
             // Pieces smaller than a voxel are left to `drop_fragment`.
-            let (lo, hi) =
-                ps[i]
-                    .iter()
-                    .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
-                        (
-                            lo.min(out.mesh.vertices[v as usize]),
-                            hi.max(out.mesh.vertices[v as usize]),
-                        )
-                    });
-            if lo.distance(hi) < h {
+            if bbox.0.distance(bbox.1) < h {
                 continue;
             }
-            let Some((j, join)) = find_join(img, label, &ps, i, &out.mesh.vertices, &merged, h)
-            else {
+            let Some((j, join)) = find_join(img, label, &nearest, i, bbox, &merged, h) else {
                 continue;
             };
             if let Some(d) = bridge(out, &ps[i], &ps[j], &join, reach, criteria) {
@@ -98,51 +116,30 @@ fn bridge_splits(
     decisions
 }
 
-/// The join of the scan between piece `i` and another piece not yet merged with it, nearest
-/// to both (a box around piece `i` whose margin doubles): that piece and the join.
+/// The join of the scan between piece `i` (box `(lo, hi)`) and another piece not yet merged
+/// with it, nearest to both by `nearest` (the piece of a point and its distance), in a box
+/// around piece `i` whose margin doubles: that piece and the join.
 fn find_join(
     img: &ImageSurface,
     label: usize,
-    ps: &[Vec<u32>],
+    nearest: &dyn Fn(DVec3) -> (usize, f64),
     i: usize,
-    pts: &[DVec3],
+    (lo, hi): (DVec3, DVec3),
     merged: &[usize],
     h: f64,
 ) -> Option<(usize, Join)> {
-    // The nearest piece (and distance) of a point, over the component's vertices.
-    let mut coords: Vec<[f64; 3]> = Vec::new();
-    let mut owner: Vec<usize> = Vec::new();
-    for (k, piece) in ps.iter().enumerate() {
-        coords.extend(piece.iter().map(|&v| pts[v as usize].to_array()));
-        owner.extend(std::iter::repeat_n(k, piece.len()));
-    }
-    let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords).ok()?;
-    let nearest = |p: DVec3| -> (usize, f64) {
-        let r = tree
-            .query(&p.to_array())
-            .nearest_one::<SquaredEuclidean<f64>>()
-            .execute();
-        (owner[r.item as usize], r.distance.sqrt())
-    };
-    let (lo, hi) = ps[i]
-        .iter()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
-            (lo.min(pts[v as usize]), hi.max(pts[v as usize]))
-        });
     let root = root_of(merged, i);
     for r in 0..ROUNDS {
         let m = DVec3::splat(1.5 * h * f64::from(1u32 << r));
         let mut best: Option<(f64, usize, Join)> = None;
         for j in img.neck_joins(label, lo - m, hi + m) {
             let ((pa, da), (pb, db)) = (nearest(j.a), nearest(j.b));
-            let (mine, other) = if pa == i && pb != i {
-                (pa, pb)
-            } else if pb == i && pa != i {
-                (pb, pa)
-            } else {
-                continue;
+            let other = match (pa == i, pb == i) {
+                (true, false) => pb,
+                (false, true) => pa,
+                _ => continue,
             };
-            if root_of(merged, other) == root || mine != i {
+            if root_of(merged, other) == root {
                 continue;
             }
             let d = da + db;
@@ -228,11 +225,7 @@ fn bridge(
         }
         out.balls.swap_remove(hi);
         out.balls.swap_remove(lo);
-        for t in &tube {
-            out.balls.push(super::repair::circumball(
-                t.map(|v| trial.vertices[v as usize]),
-            ));
-        }
+        out.balls.extend(balls);
         let (lo_p, hi_p) = tube
             .iter()
             .flatten()

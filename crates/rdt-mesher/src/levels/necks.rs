@@ -181,8 +181,7 @@ impl Mesher<'_> {
 /// box made `mni_t1_half` at 4 voxels take twice the time for the same mesh): the join between
 /// two pieces lies where the nearest piece changes along the component, which can be farther
 /// from the small piece than the first margin (a strip of a sheet thinner than a voxel between
-/// two pieces; on the image regress suite this made the sheet's pieces equal to the scan's at
-/// 2 and 4 voxels, and one split fewer on each mni-crop case).
+/// two pieces: with the fixed margin such a round inserted nothing).
 fn ring_points(img: &ImageSurface, label: usize, pieces: &Split, round: usize) -> Vec<DVec3> {
     let mut coords: Vec<[f64; 3]> = Vec::new();
     let mut owner: Vec<usize> = Vec::new();
