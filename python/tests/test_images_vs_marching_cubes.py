@@ -67,7 +67,7 @@ from scipy.spatial import cKDTree  # noqa: E402
 
 SIZES = (1, 2, 4)
 
-# (case, size in voxels) -> what fails today (issue 14), measured 2026-12-04 (scikit-image 0.26,
+# (case, size in voxels) -> what fails today (issue 14), measured 2026-12-04, session 14 (scikit-image 0.26,
 # trimesh 5.2). strict=True: when one starts passing, the test fails until its entry is
 # removed here.
 # - "MC below the scan": skimage's Lewiner MC has fewer components than the voxel scan (and
@@ -79,35 +79,32 @@ SIZES = (1, 2, 4)
 # - "split": necks not meshed (the report's `split` decisions; the neck work in progress).
 _MC = "issue 14: MC below the scan: MC {}, neg {}, scan {}, ours {}"
 XFAIL_ISSUE_14 = {
-    ("mni-crop@171.2", 1): _MC.format(160, 157, 166, "169 (3 split)") + "; S gap: 266 MC vertices, up to 5.0 (bound 2)",
-    ("mni-crop@171.2", 2): _MC.format(160, 157, 166, "170 (4 split)") + "; S gap: 115 MC vertices, up to 5.8 (bound 3)",
-    ("mni-crop@171.2", 4): _MC.format(160, 157, 166, "170 (4 split)") + "; S gap: 96 MC vertices, up to 6.8 (bound 5)",
-    ("mni-crop@190.5", 1): _MC.format(177, 180, 184, "187 (3 split)") + "; S gap: 310 MC vertices, up to 8.9 (bound 2)",
-    ("mni-crop@190.5", 2): _MC.format(177, 180, 184, "185 (1 split)") + "; S gap: 293 MC vertices, up to 8.9 (bound 3)",
-    ("mni-crop@190.5", 4): _MC.format(177, 180, 184, "186 (2 split)") + "; S gap: 82 MC vertices, up to 9.3 (bound 5)",
-    ("mni-half@171.2", 1): _MC.format(171, 173, 177, 177) + "; S gap: 57 MC vertices, up to 5.6 (bound 4)",
-    ("mni-half@171.2", 2): _MC.format(171, 173, 177, 177) + "; S gap: 5 MC vertices, up to 6.2 (bound 6)",
-    ("mni-half@171.2", 4): _MC.format(171, 173, 177, 177) + "; S gap: 51 MC vertices, up to 11.7 (bound 10)",
+    ("mni-crop@171.2", 1): _MC.format(160, 157, 166, 166) + "; S gap: 42 MC vertices, up to 2.74 (bound 2)",
+    ("mni-crop@171.2", 2): _MC.format(160, 157, 166, 166) + "; S gap: 6 MC vertices, up to 3.27 (bound 3)",
+    ("mni-crop@171.2", 4): _MC.format(160, 157, 166, 166),
+    ("mni-crop@190.5", 1): _MC.format(177, 180, 184, 184) + "; S gap: 24 MC vertices, up to 2.40 (bound 2)",
+    ("mni-crop@190.5", 2): _MC.format(177, 180, 184, 184) + "; S gap: 12 MC vertices, up to 3.41 (bound 3)",
+    ("mni-crop@190.5", 4): _MC.format(177, 180, 184, 184),
+    ("mni-half@171.2", 1): _MC.format(171, 173, 177, 177) + "; S gap: 5 MC vertices, up to 4.26 (bound 4)",
+    ("mni-half@171.2", 2): _MC.format(171, 173, 177, 177),
+    ("mni-half@171.2", 4): _MC.format(171, 173, 177, 177) + "; S gap: 21 MC vertices, up to 12.0 (bound 10)",
     ("motor@3", 1): "issue 14: S gap: 1 MC vertex at 6.11 from our mesh (bound 6.0), at (9.0, 5.0, 70.6)",
-    ("nib-anatomical@q30", 1): _MC.format(93, 92, 96, "97 (1 split)") + "; S gap: 27 MC vertices, up to 5.7 (bound 4)",
-    ("nib-anatomical@q30", 2): _MC.format(93, 92, 96, 96) + "; S gap: 9 MC vertices, up to 8.8 (bound 6)",
-    ("nib-anatomical@q30", 4): _MC.format(93, 92, 96, "97 (1 split)"),
-    ("nib-anatomical@q60", 1): _MC.format(268, 271, 285, "289 (4 split)") + "; S gap: 60 MC vertices, up to 5.8 (bound 4)",
-    ("nib-anatomical@q60", 2): _MC.format(268, 271, 285, "289 (4 split)") + "; S gap: 4 MC vertices, up to 6.6 (bound 6)",
-    ("nib-anatomical@q60", 4): _MC.format(268, 271, 285, "293 (8 split)"),
-    ("nib-reoriented@q60", 2): "issue 14: S gap: 7 MC vertices up to 14.8 from our mesh (bound 12), at (8.7, 45.9, 0.4)",
-    ("nib-example4d@q30", 1): _MC.format(489, 534, 539, "553 (14 split)") + "; S gap: 463 MC vertices, up to 9.8 (bound 4)",
-    ("nib-example4d@q30", 2): _MC.format(489, 534, 539, "551 (12 split)") + "; S gap: 100 MC vertices, up to 9.2 (bound 6)",
-    ("nib-example4d@q30", 4): _MC.format(489, 534, 539, "550 (11 split)"),
-    ("nib-example4d@q60", 1): _MC.format(597, 586, 624, "643 (19 split)") + "; S gap: 351 MC vertices, up to 7.9 (bound 4)",
-    ("nib-example4d@q60", 2): _MC.format(597, 586, 624, "644 (20 split)") + "; S gap: 118 MC vertices, up to 8.1 (bound 6)",
-    ("nib-example4d@q60", 4): _MC.format(597, 586, 624, "648 (24 split)"),
-    ("sheet", 1): "issue 14: split: 11 components for MC's 10 (= scan), 1 split piece; S gap: MC vertices up to 4.6 "
-    "(bound 2), some of them at nodes of value 0 = iso (the Rust regress leaves those out)",
+    ("nib-anatomical@q30", 1): _MC.format(93, 92, 96, "98 (2 split)") + "; S gap: 2 MC vertices, up to 4.19 (bound 4)",
+    ("nib-anatomical@q30", 2): _MC.format(93, 92, 96, 96) + "; S gap: 1 MC vertex at 6.46 (bound 6)",
+    ("nib-anatomical@q30", 4): _MC.format(93, 92, 96, 96),
+    ("nib-anatomical@q60", 1): _MC.format(268, 271, 285, "286 (1 split)") + "; S gap: 9 MC vertices, up to 4.43 (bound 4)",
+    ("nib-anatomical@q60", 2): _MC.format(268, 271, 285, "286 (1 split)") + "; S gap: 1 MC vertex at 6.01 (bound 6)",
+    ("nib-anatomical@q60", 4): _MC.format(268, 271, 285, "286 (1 split)"),
+    ("nib-example4d@q30", 1): _MC.format(489, 534, 539, "555 (16 split)") + "; S gap: 58 MC vertices, up to 6.0 (bound 4)",
+    ("nib-example4d@q30", 2): _MC.format(489, 534, 539, "540 (1 split)") + "; S gap: 12 MC vertices, up to 6.6 (bound 6)",
+    ("nib-example4d@q30", 4): _MC.format(489, 534, 539, 539),
+    ("nib-example4d@q60", 1): _MC.format(597, 586, 624, "629 (5 split)") + "; S gap: 38 MC vertices, up to 5.4 (bound 4)",
+    ("nib-example4d@q60", 2): _MC.format(597, 586, 624, "625 (1 split)") + "; S gap: 15 MC vertices, up to 7.0 (bound 6)",
+    ("nib-example4d@q60", 4): _MC.format(597, 586, 624, 624),
+    ("sheet", 1): "issue 14: S gap: 1 MC vertex at 2.08 (bound 2), at a node of value 0 = iso (the Rust regress "
+    "leaves those out)",
     ("sheet", 2): "issue 14: S gap: 6 MC vertices, up to 3.7 (bound 3), all at nodes of value 0 = iso (the Rust "
-    "regress leaves those out); the components equal MC's since the necks' growing box",
-    ("smooth-noise", 2): "issue 14: S gap: 49 MC vertices up to 4.8 from our mesh (bound 3), 22 of them on the grid's "
-    "faces, the farthest at (11.5, -0.5, -11.7); sizes 1 and 4 pass",
+    "regress leaves those out)",
 }
 
 IMAGES = os.path.join(FIXTURES, "images")

@@ -140,6 +140,10 @@ impl Mesher<'_> {
             if self.shoot_control_rays()? {
                 continue;
             }
+            // Images: parts of S the sample does not reach (ours, `crate::levels::coverage`).
+            if self.cover_crossings()? {
+                continue;
+            }
             // Images: necks thinner than the sample (ours, `crate::levels::necks`).
             if self.reseed_necks()? {
                 continue;

@@ -94,6 +94,9 @@ pub(crate) struct Mesher<'a> {
     pub lazy_balls: bool,
     /// `opts.criteria.two_sin_min_angle()`.
     pub two_sin: f64,
+    /// Images: the voxel-edge crossings of S, computed by the first coverage round
+    /// (`crate::levels::coverage`).
+    pub scan_crossings: Option<Vec<glam::DVec3>>,
 }
 
 impl<'a> Mesher<'a> {
@@ -128,6 +131,7 @@ impl<'a> Mesher<'a> {
             crossing_calls: 0,
             lazy_balls: true,
             two_sin: opts.criteria.two_sin_min_angle(),
+            scan_crossings: None,
         }
     }
 

@@ -202,6 +202,10 @@ pub struct Stats {
     pub neck_rounds: usize,
     /// Points inserted by the neck reseeding.
     pub neck_insertions: usize,
+    /// Rounds of coverage of the scan's crossings (images, `crate::levels::coverage`).
+    pub cover_rounds: usize,
+    /// Crossings inserted by the coverage rounds.
+    pub cover_insertions: usize,
     /// Restricted facets queued (forced) by the neck reseeding because their vertices lie on
     /// different scan components (a bridge between two components).
     pub bridge_facets: usize,

@@ -5,16 +5,24 @@
 //! [`ImageSurface::neck_joins`]) whose nodes are nearest to different pieces, looked for in
 //! a box around the smaller piece whose margin doubles up to [`ROUNDS`] times (from 1.5
 //! voxels). At the join, a triangle of each piece is removed and the two triangle-shaped loops
-//! are joined by a tube of six triangles (`repair`'s zipper), so the component is one piece
-//! again (`bridge` decisions): of the [`NEAR`] triangles of each piece nearest the join, the
-//! pair with the nearest centroids whose tube intersects no other triangle (exact test) and
-//! has no triangle whose circumball exceeds the size bound sigma there (the loose
-//! epsilon-sample certificate measures every triangle). When no pair gives one, the piece
-//! stays split and is reported as such.
+//! are joined by a tube (`repair`'s zipper), so the component is one piece again (`bridge`
+//! decisions): of the [`NEAR`] triangles of each piece nearest the join, the pair with the
+//! nearest centroids whose tube intersects no other triangle (exact test) and has no triangle
+//! whose circumball exceeds the size bound sigma there (the loose epsilon-sample certificate
+//! measures every triangle). A tube is six triangles, or runs through up to [`MAX_RINGS`]
+//! rings of three new points of S (projected from the tube's axis onto the neck's wall), six
+//! triangles per stage: shorter stages have smaller circumballs. When no pair gives one, the
+//! piece stays split and is reported as such.
+//!
+//! The pieces are taken largest first and bridging repeats until no bridge is added: a piece
+//! whose nearest join led to a smaller piece is bridged again, as part of their group,
+//! towards another group (on `sheet` at 1 voxel, a strip first met a sliver of the sheet).
+//! The triangles of a piece are not limited to a distance from the join: the tube's size
+//! bound limits its length.
 //!
 //! Invariant kept: the mesh stays a closed, oriented 2-manifold without self-intersections
-//! (the two loops are on different pieces, so the tube adds no existing edge; the tube's
-//! triangles are checked against all others).
+//! (the two loops are on pieces of different groups, so the tube adds no existing edge; the
+//! tube's triangles are checked against all others).
 
 use super::repair::{DecisionKind, TopologyDecision};
 use crate::stats::MeshResult;
@@ -28,6 +36,9 @@ const ROUNDS: u32 = 6;
 
 /// Triangles of each piece tried, nearest the join first.
 const NEAR: usize = 8;
+
+/// Intermediate rings of points of S tried in a tube (0 first).
+const MAX_RINGS: usize = 2;
 
 /// Bridge the split components of a run on an image with a resolution set (the pipeline's
 /// images) and record the decisions in its figures; nothing otherwise.
@@ -55,7 +66,6 @@ fn bridge_splits(
     criteria: &crate::Criteria,
 ) -> Vec<TopologyDecision> {
     let h = img.volume().spacing().min_element();
-    let reach = img.volume().spacing().max_element();
     let mut decisions = Vec::new();
     let mut by_label: BTreeMap<usize, Vec<Vec<u32>>> = BTreeMap::new();
     for (vs, l) in super::components::pieces(&out.mesh, img) {
@@ -92,24 +102,34 @@ fn bridge_splits(
         };
         // Which pieces are merged by the bridges built so far (a root per piece).
         let mut merged: Vec<usize> = (0..ps.len()).collect();
-        for i in 1..ps.len() {
-            let bbox = ps[i]
-                .iter()
-                .map(|&v| out.mesh.vertices[v as usize])
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-                    (lo.min(p), hi.max(p))
-                });
-            // Pieces smaller than a voxel are left to `drop_fragment`.
-            if bbox.0.distance(bbox.1) < h {
-                continue;
-            }
-            let Some((j, join)) = find_join(img, label, &nearest, i, bbox, &merged, h) else {
-                continue;
-            };
-            if let Some(d) = bridge(out, &ps[i], &ps[j], &join, reach, criteria) {
-                let (ri, rj) = (root_of(&merged, i), root_of(&merged, j));
-                merged[ri.max(rj)] = ri.min(rj);
-                decisions.push(d);
+        // Passes until no bridge is added: a piece bridged to a smaller one first is bridged
+        // again, as part of their group, towards the largest piece.
+        let mut progress = true;
+        while progress {
+            progress = false;
+            for i in 1..ps.len() {
+                if root_of(&merged, i) == 0 {
+                    continue;
+                }
+                let bbox = ps[i]
+                    .iter()
+                    .map(|&v| out.mesh.vertices[v as usize])
+                    .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(p), hi.max(p))
+                    });
+                // Pieces smaller than a voxel are left to `drop_fragment`.
+                if bbox.0.distance(bbox.1) < h {
+                    continue;
+                }
+                let Some((j, join)) = find_join(img, label, &nearest, i, bbox, &merged, h) else {
+                    continue;
+                };
+                if let Some(d) = bridge(out, img, &ps[i], &ps[j], &join, criteria) {
+                    let (ri, rj) = (root_of(&merged, i), root_of(&merged, j));
+                    merged[ri.max(rj)] = ri.min(rj);
+                    decisions.push(d);
+                    progress = true;
+                }
             }
         }
     }
@@ -155,33 +175,29 @@ fn find_join(
 }
 
 /// Replace a triangle of piece `a` and one of piece `b` near the join by a tube between
-/// their loops: of the [`NEAR`] triangles of each piece nearest `j.via` (within `reach` plus
-/// the join's length of it), the pairs by increasing distance between their centroids, the
-/// first whose tube intersects no other triangle. `None` (the mesh unchanged) when there is
+/// their loops: of the [`NEAR`] triangles of each piece nearest `j.via`, the pairs by
+/// increasing distance between their centroids, each with 0 to [`MAX_RINGS`] rings of points
+/// of S and either zipper (`tube_with_rings`), the first tube whose circumballs are within
+/// sigma and which intersects no other triangle. `None` (the mesh unchanged) when there is
 /// none.
 fn bridge(
     out: &mut MeshResult,
+    img: &ImageSurface,
     a: &[u32],
     b: &[u32],
     j: &Join,
-    reach: f64,
     criteria: &crate::Criteria,
 ) -> Option<TopologyDecision> {
     let mesh = &out.mesh;
     let in_a: std::collections::HashSet<u32> = a.iter().copied().collect();
     let in_b: std::collections::HashSet<u32> = b.iter().copied().collect();
     let centroid = |t: &[u32; 3]| t.iter().map(|&v| mesh.vertices[v as usize]).sum::<DVec3>() / 3.0;
-    let limit = reach + j.a.distance(j.b);
     let near = |set: &std::collections::HashSet<u32>| {
         let mut v: Vec<(f64, usize)> = mesh
             .triangles
             .iter()
             .enumerate()
             .filter(|(_, t)| set.contains(&t[0]))
-            .filter(|(_, t)| {
-                t.iter()
-                    .all(|&x| mesh.vertices[x as usize].distance(j.via) <= limit)
-            })
             .map(|(k, t)| (centroid(t).distance_squared(j.via), k))
             .collect();
         v.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
@@ -199,50 +215,139 @@ fn bridge(
     pairs.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
     for (_, ta, tb) in pairs {
         let (fa, fb) = (out.mesh.triangles[ta], out.mesh.triangles[tb]);
-        let mut edges = std::collections::HashSet::new();
-        let tube = super::repair::tube(&fa, &fb, &out.mesh.vertices, &mut edges);
-        // Within the size bound, as a restricted facet would be (the loose epsilon-sample
-        // certificate measures every triangle's ball).
-        let balls: Vec<_> = tube
-            .iter()
-            .map(|t| super::repair::circumball(t.map(|v| out.mesh.vertices[v as usize])))
-            .collect();
-        if balls
-            .iter()
-            .any(|b| criteria.sigma_at(b.center).is_some_and(|s| b.radius > s))
-        {
-            continue;
-        }
-        // The mesh with the two triangles replaced by the tube, checked for intersections.
-        let mut trial = out.mesh.clone();
-        let (hi, lo) = (ta.max(tb), ta.min(tb));
-        trial.triangles.swap_remove(hi);
-        trial.triangles.swap_remove(lo);
-        let first_new = trial.triangles.len();
-        trial.triangles.extend(&tube);
-        if !super::repair::intersecting_vertices(&trial, first_new).is_empty() {
-            continue;
-        }
-        out.balls.swap_remove(hi);
-        out.balls.swap_remove(lo);
-        out.balls.extend(balls);
-        let (lo_p, hi_p) = tube
-            .iter()
-            .flatten()
-            .map(|&v| trial.vertices[v as usize])
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
-                (l.min(p), h.max(p))
+        let variants = (0..=MAX_RINGS).flat_map(|r| [(r, false), (r, true)]);
+        for (rings, superimposed) in variants {
+            let Some((tube, ring_pts)) =
+                tube_with_rings(&out.mesh, img, (fa, fb), j.via, rings, superimposed)
+            else {
+                continue;
+            };
+            let mut vertices = out.mesh.vertices.clone();
+            vertices.extend(&ring_pts);
+            // Within the size bound, as a restricted facet would be (the loose epsilon-sample
+            // certificate measures every triangle's ball).
+            let balls: Vec<_> = tube
+                .iter()
+                .map(|t| super::repair::circumball(t.map(|v| vertices[v as usize])))
+                .collect();
+            if balls
+                .iter()
+                .any(|b| criteria.sigma_at(b.center).is_some_and(|s| b.radius > s))
+            {
+                continue;
+            }
+            // The mesh with the two triangles replaced by the tube, checked for intersections.
+            let mut trial = meshio::TriMesh {
+                vertices,
+                triangles: out.mesh.triangles.clone(),
+            };
+            let (hi, lo) = (ta.max(tb), ta.min(tb));
+            trial.triangles.swap_remove(hi);
+            trial.triangles.swap_remove(lo);
+            let first_new = trial.triangles.len();
+            trial.triangles.extend(&tube);
+            if !super::repair::intersecting_vertices(&trial, first_new).is_empty() {
+                continue;
+            }
+            out.balls.swap_remove(hi);
+            out.balls.swap_remove(lo);
+            out.balls.extend(balls);
+            let (lo_p, hi_p) = tube
+                .iter()
+                .flatten()
+                .map(|&v| trial.vertices[v as usize])
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
+                    (l.min(p), h.max(p))
+                });
+            out.mesh = trial;
+            return Some(TopologyDecision {
+                kind: DecisionKind::Bridge,
+                center: 0.5 * (lo_p + hi_p),
+                size: lo_p.distance(hi_p),
+                facets_removed: 2,
+                facets_added: tube.len(),
             });
-        out.mesh = trial;
-        return Some(TopologyDecision {
-            kind: DecisionKind::Bridge,
-            center: 0.5 * (lo_p + hi_p),
-            size: lo_p.distance(hi_p),
-            facets_removed: 2,
-            facets_added: tube.len(),
-        });
+        }
     }
     None
+}
+
+/// The tube from triangle `fa` to triangle `fb` through `rings` intermediate rings of three
+/// points of S (new vertices, numbered from the mesh's vertex count), and those points. Ring
+/// `i` of `n` is `fb` moved by `i / (n + 1)` of the way from `fb`'s centroid to `fa`'s, each
+/// point projected on S as the first crossing of the ray from the axis (the line through `via`,
+/// inside the component, along the tube) away from it. `None` when a ray meets no crossing
+/// within three tube lengths.
+fn tube_with_rings(
+    mesh: &meshio::TriMesh,
+    img: &ImageSurface,
+    (fa, fb): ([u32; 3], [u32; 3]),
+    via: DVec3,
+    rings: usize,
+    superimposed: bool,
+) -> Option<(Vec<[u32; 3]>, Vec<DVec3>)> {
+    use oracle::Surface;
+    let at = |v: u32| mesh.vertices[v as usize];
+    let ca = fa.iter().map(|&v| at(v)).sum::<DVec3>() / 3.0;
+    let cb = fb.iter().map(|&v| at(v)).sum::<DVec3>() / 3.0;
+    let mut pts: Vec<DVec3> = Vec::new();
+    let mut buf = Vec::new();
+    // Loops from `fb`'s side to `fa`'s, each in `fb`'s order.
+    let mut loops: Vec<Vec<u32>> = vec![fb.to_vec()];
+    let axis = (ca - cb).normalize_or_zero();
+    if axis == DVec3::ZERO {
+        return None;
+    }
+    let reach = 3.0 * ca.distance(cb);
+    for i in (1..=rings).rev() {
+        let t = i as f64 / (rings + 1) as f64;
+        let shift = (ca - cb) * (1.0 - t);
+        let centre = cb + shift;
+        let mut ring = Vec::with_capacity(3);
+        for &v in &fb {
+            let x = at(v) + shift;
+            // Out from the axis (the line through `via` along `fb` -> `fa`), at `x`'s place
+            // along it, towards `x` as seen from the ring's centre.
+            let o = via + axis * (x - via).dot(axis);
+            let d = x - centre;
+            let d = (d - axis * d.dot(axis)).normalize_or_zero();
+            if d == DVec3::ZERO {
+                return None;
+            }
+            buf.clear();
+            img.crossings(o, o + d * reach, &mut buf);
+            let p = *buf.first()?;
+            ring.push((mesh.vertices.len() + pts.len()) as u32);
+            pts.push(p);
+        }
+        loops.push(ring);
+    }
+    // `fa`, then each ring from `fa`'s side reversed (its edges used the other way), zipped to
+    // the next loop towards `fb`. The zipper picks its diagonals by length, as they are or
+    // with the loops `superimposed` (`p` moved onto `q`'s centroid): along a tube longer than
+    // its loops are wide, the raw lengths can favour one loop's steps and twist the tube into
+    // itself (the tests' octahedra).
+    let mut edges = std::collections::HashSet::new();
+    let mut all = mesh.vertices.clone();
+    all.extend(&pts);
+    let centroid =
+        |l: &[u32], all: &[DVec3]| l.iter().map(|&v| all[v as usize]).sum::<DVec3>() / 3.0;
+    let mut tube = Vec::new();
+    let mut p: Vec<u32> = fa.to_vec();
+    for q in loops.iter().rev() {
+        let shift = if superimposed {
+            centroid(q, &all) - centroid(&p, &all)
+        } else {
+            DVec3::ZERO
+        };
+        let mut moved = all.clone();
+        for &v in &p {
+            moved[v as usize] += shift;
+        }
+        tube.extend(super::repair::tube(&p, q, &moved, &mut edges));
+        p = q.iter().rev().copied().collect();
+    }
+    Some((tube, pts))
 }
 
 /// The root of piece `i` in the merge forest `m` (each entry points to a smaller index).
@@ -251,4 +356,102 @@ fn root_of(m: &[usize], mut i: usize) -> usize {
         i = m[i];
     }
     i
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DAffine3;
+    use oracle::image::{ImageOptions, Volume, Voxels};
+
+    /// A cylinder of radius 3 voxels along x through (·, 12, 12), 28 x 24 x 24 voxels of 1 mm.
+    fn cylinder() -> ImageSurface {
+        let n = [28usize, 24, 24];
+        let mut d = Vec::new();
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for _ in 0..n[0] {
+                    let r = ((j as f64 - 12.0).powi(2) + (k as f64 - 12.0).powi(2)).sqrt();
+                    d.push((3.0 - r) as f32);
+                }
+            }
+        }
+        let vol = Volume::new(n, Voxels::F32(d), DAffine3::IDENTITY).unwrap();
+        let opts = ImageOptions {
+            iso: Some(0.0),
+            ..Default::default()
+        };
+        ImageSurface::new(vol, &opts).unwrap()
+    }
+
+    /// Two outward octahedra of radius 2 centred at `(x, 12, 12)` for each `x`.
+    fn octahedra(xs: &[f64]) -> meshio::TriMesh {
+        let mut m = meshio::TriMesh {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for &x in xs {
+            let c = DVec3::new(x, 12.0, 12.0);
+            let o = m.vertices.len() as u32;
+            for a in [
+                DVec3::X,
+                -DVec3::X,
+                DVec3::Y,
+                -DVec3::Y,
+                DVec3::Z,
+                -DVec3::Z,
+            ] {
+                m.vertices.push(c + 2.0 * a);
+            }
+            for (s, t) in [(0, 2), (2, 1), (1, 3), (3, 0)] {
+                m.triangles.push([o + s, o + t, o + 4]);
+                m.triangles.push([o + t, o + s, o + 5]);
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn a_tube_with_rings_on_s_joins_two_closed_pieces_into_one_sphere() {
+        let img = cylinder();
+        let via = DVec3::new(10.0, 12.0, 12.0);
+        for rings in 0..=MAX_RINGS {
+            let mut m = octahedra(&[5.0, 15.0]);
+            // The triangles facing each other: (+x, +y, +z) of the first, (-x, +y, +z) of the
+            // second.
+            let ta = m.triangles.iter().position(|t| *t == [0, 2, 4]).unwrap();
+            let tb = m.triangles.iter().position(|t| *t == [8, 7, 10]).unwrap();
+            let (fa, fb) = (m.triangles[ta], m.triangles[tb]);
+            let (tube, pts) = tube_with_rings(&m, &img, (fa, fb), via, rings, true).unwrap();
+            assert_eq!(pts.len(), 3 * rings);
+            for p in &pts {
+                // Each ring point is on S: the cylinder's wall.
+                let r = ((p.y - 12.0).powi(2) + (p.z - 12.0).powi(2)).sqrt();
+                assert!(
+                    (r - 3.0).abs() < 0.05,
+                    "rings {rings}: {p} off the wall ({r})"
+                );
+            }
+            m.vertices.extend(&pts);
+            let (hi, lo) = (ta.max(tb), ta.min(tb));
+            m.triangles.swap_remove(hi);
+            m.triangles.swap_remove(lo);
+            let first_new = m.triangles.len();
+            m.triangles.extend(&tube);
+            let rep = verify::check(&m, &verify::Options::default());
+            for name in verify::CLOSED_MANIFOLD_CHECKS {
+                assert_eq!(
+                    rep.status(name),
+                    Some(verify::Status::Pass),
+                    "rings {rings}: {name}: {:?}",
+                    rep.check(name)
+                );
+            }
+            assert!(super::super::repair::intersecting_vertices(&m, first_new).is_empty());
+            // One sphere: V - E + F = 2, one component.
+            let (v, f) = (m.vertices.len() as i64, m.triangles.len() as i64);
+            assert_eq!(v - f / 2, 2, "rings {rings}");
+            assert_eq!(tube.len(), 6 * (rings + 1));
+        }
+    }
 }

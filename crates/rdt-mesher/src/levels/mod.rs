@@ -1,5 +1,6 @@
 //! What runs after the queue of section 6.1 empties, level by level (as CGAL's surface mesher
-//! layers its refinement): on images, the neck reseeding (`necks`, ours), the manifold patch
+//! layers its refinement): on images, the coverage of the scan's crossings (`coverage`,
+//! ours) and the neck reseeding (`necks`, ours), the manifold patch
 //! of section 6.6.1 (`manifold`), and the final
 //! check of the scaffold (`scaffold`, ours), which may rebuild Del(E) without it; on sampled
 //! surfaces (images), the topological repair of what the patch leaves (`repair`, ours, with
@@ -9,6 +10,7 @@
 
 pub(crate) mod bridges;
 pub(crate) mod components;
+mod coverage;
 mod holes;
 mod links;
 pub(crate) mod manifold;

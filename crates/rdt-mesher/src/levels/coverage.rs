@@ -1,0 +1,129 @@
+//! Coverage of the voxel scan's crossings (ours, images; the two-sided distance of issue 14).
+//!
+//! A part of S thinner than the sample spacing (a sheet, a finger, the strip between two
+//! pieces of a split component) can meet no Voronoi edge at all: Del_S(E) has no facet there,
+//! so neither the refinement of section 6.1 nor the manifold patch sees it. The grid edges of
+//! the image do: each edge between nodes of strictly opposite signs holds an exact point of S
+//! (the level set is linear along it; marching cubes' vertex,
+//! [`verify::level_set::LevelSet::edge_crossings`]). A crossing farther than
+//! `tau(x) = h + sigma(x)` from every vertex of Del_S(E) (h the resolution) is a part of S the
+//! mesh does not reach; such crossings, thinned to a net of spacing `tau / 2` (shrinking 4x a
+//! round), are inserted and the refinement resumes, for at most [`COVER_ROUNDS`] rounds.
+//!
+//! Invariant kept: when a round finds no such crossing, every crossing is within its `tau` of
+//! a vertex of Del_S(E), hence of the mesh (the S -> mesh bound of the image regress suite).
+//! The repair and the component decisions that follow may still change the mesh.
+
+use crate::error::MeshError;
+use crate::state::Mesher;
+use delaunay3::VertexId;
+use glam::DVec3;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+use std::time::Instant;
+
+/// Rounds of coverage per run.
+pub(crate) const COVER_ROUNDS: usize = 6;
+
+impl Mesher<'_> {
+    /// One round of coverage (see the module docs) when the surface is an image and a
+    /// resolution is set; returns whether a point was inserted.
+    pub(crate) fn cover_crossings(&mut self) -> Result<bool, MeshError> {
+        let (Some(h), Some(img)) = (self.opts.resolution, self.s.as_image()) else {
+            return Ok(false);
+        };
+        if self.stats.cover_rounds >= COVER_ROUNDS || self.budget_exceeded() {
+            return Ok(false);
+        }
+        self.resolve_all_lazy()?;
+        let t = Instant::now();
+        let n = self.tri.num_vertices();
+        let mut used = vec![false; n];
+        for (_, k, _) in self.restricted.iter() {
+            k.iter().for_each(|v| used[v.index()] = true);
+        }
+        let coords: Vec<[f64; 3]> = (0..n)
+            .filter(|&v| used[v])
+            .map(|v| self.tri.point(VertexId::from_index(v)).to_array())
+            .collect();
+        let crossings = self.scan_crossings.get_or_insert_with(|| {
+            let w2v = img.world_to_voxel();
+            let mut c = verify::level_set::LevelSet::new(img).edge_crossings();
+            // A node at the iso value is no crossing (on a plateau of them it is no surface of
+            // the regularized solid); only a node's point is integer on all three axes.
+            c.retain(|&p| {
+                let u = w2v.transform_point3(p);
+                (u - u.round()).abs().max_element() > 1e-9
+            });
+            c
+        });
+        let tau = |p: DVec3| h + self.opts.criteria.sigma_at(p).unwrap_or(h);
+        let far: Vec<(DVec3, f64)> = match ImmutableKdTree::<f64, 3>::new_from_slice(&coords) {
+            Ok(tree) if !coords.is_empty() => crossings
+                .par_iter()
+                .filter_map(|&p| {
+                    let d2 = tree
+                        .query(&p.to_array())
+                        .nearest_one::<SquaredEuclidean<f64>>()
+                        .execute()
+                        .distance;
+                    let t = tau(p);
+                    (d2 > t * t).then_some((p, t))
+                })
+                .collect(),
+            _ => crossings.iter().map(|&p| (p, tau(p))).collect(),
+        };
+        let shrink = 0.25f64.powi(self.stats.cover_rounds as i32);
+        let pts = net(&far, shrink);
+        self.t_oracle += t.elapsed();
+        if pts.is_empty() {
+            return Ok(false);
+        }
+        self.stats.cover_rounds += 1;
+        let mut any = false;
+        for p in pts {
+            if self.budget_exceeded() {
+                break;
+            }
+            if self.insert(p, None)? {
+                self.stats.cover_insertions += 1;
+                any = true;
+            }
+        }
+        Ok(any)
+    }
+}
+
+/// A net of `far` (points with their tau), in order: a point is kept when no kept point lies
+/// within `shrink * tau / 2` of it (a hash grid of cells of the least such radius).
+fn net(far: &[(DVec3, f64)], shrink: f64) -> Vec<DVec3> {
+    let Some(g) = far
+        .iter()
+        .map(|x| 0.5 * shrink * x.1)
+        .min_by(f64::total_cmp)
+    else {
+        return Vec::new();
+    };
+    let cell = |p: DVec3| (p / g).floor().as_i64vec3().to_array();
+    let mut grid: FxHashMap<[i64; 3], Vec<DVec3>> = FxHashMap::default();
+    let mut out = Vec::new();
+    for &(p, t) in far {
+        let r = 0.5 * shrink * t;
+        let k = (r / g).ceil() as i64;
+        let c = cell(p);
+        let near = (-k..=k).any(|dz| {
+            (-k..=k).any(|dy| {
+                (-k..=k).any(|dx| {
+                    grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+                        .is_some_and(|v| v.iter().any(|q| q.distance_squared(p) <= r * r))
+                })
+            })
+        });
+        if !near {
+            grid.entry(c).or_default().push(p);
+            out.push(p);
+        }
+    }
+    out
+}
