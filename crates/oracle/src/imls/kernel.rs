@@ -28,7 +28,7 @@ pub(super) struct Sums {
     pub band2: f64,
 }
 
-/// Points kept from the first pass of the robust sums (beyond, the grid is visited again).
+/// Points gathered for the passes of the kernel sums (beyond, each pass visits the grid).
 const KEEP: usize = 256;
 
 /// A placeholder for the unused entries of the kept points.
@@ -163,11 +163,13 @@ impl PointSetSurface {
     /// steps inside a bracket.
     #[inline]
     pub(super) fn sums_impl<const GRAD: bool>(&self, x: DVec3) -> Sums {
+        // The points whose support contains x, gathered once for every pass.
+        let mut buf: [&Item; KEEP + 1] = [&NO_ITEM; KEEP + 1];
+        let kept = self.grid.gather(x, &mut buf);
         if self.robust == 0 {
-            return self.pass::<GRAD>(x, None, None).0;
+            return self.sums_over::<GRAD>(x, None, &buf, kept);
         }
-        let mut buf: [&Item; KEEP] = [&NO_ITEM; KEEP];
-        let (s, kept) = self.pass::<true>(x, None, Some(&mut buf));
+        let s = self.sums_over::<true>(x, None, &buf, kept);
         if s.den <= 0.0 {
             return s;
         }
@@ -178,9 +180,9 @@ impl PointSetSurface {
             // The last pass's gradient only when asked for (its value is the same bit for
             // bit: `add` computes the sums by the same operations either way).
             let r = if GRAD || pass + 1 < self.robust {
-                self.reweighted::<true>(x, normal, &buf, kept)
+                self.sums_over::<true>(x, normal, &buf, kept)
             } else {
-                self.reweighted::<false>(x, normal, &buf, kept)
+                self.sums_over::<false>(x, normal, &buf, kept)
             };
             // α_i ≥ exp(−4 / σ_n²) > 0, so r.den > 0 where s.den > 0 (unless it underflows).
             if r.den.is_nan() || r.den <= 0.0 {
@@ -197,58 +199,33 @@ impl PointSetSurface {
         }
     }
 
-    /// A reweighted pass at `x` over the `kept` points of the first pass (`buf`), or over
-    /// the grid when they overflowed it: the same points in the same order as the grid
-    /// would give (bit-identical sums).
+    /// A pass of kernel sums at `x` over the `kept` points gathered in `buf` (those whose
+    /// support contains `x`, in the grid's order), or over the grid when they overflowed it:
+    /// the same points in the same order either way (bit-identical sums). With `normal =
+    /// Some(g)`, each point's weight is multiplied by `exp(−|n_i − g|² / σ_n²)` (see
+    /// [`Self::sums_impl`]).
     #[inline]
-    fn reweighted<const GRAD: bool>(
+    fn sums_over<const GRAD: bool>(
         &self,
         x: DVec3,
         normal: Option<DVec3>,
-        buf: &[&Item; KEEP],
+        buf: &[&Item; KEEP + 1],
         kept: usize,
     ) -> Sums {
-        if kept > KEEP {
-            return self.pass::<GRAD>(x, normal, None).0;
-        }
         let mut r = Sums {
             band2: if self.banded { f64::INFINITY } else { 0.0 },
             ..Default::default()
         };
+        if kept > KEEP {
+            self.grid.for_each_near(x, |it| {
+                self.add::<GRAD>(&mut r, x, it, normal);
+            });
+            return r;
+        }
         for it in &buf[..kept] {
             self.add::<GRAD>(&mut r, x, it, normal);
         }
         r
-    }
-
-    /// One pass of kernel sums at `x`; with `normal = Some(g)`, each point's weight is
-    /// multiplied by `exp(−|n_i − g|² / σ_n²)` (see [`Self::sums_impl`]). With `keep`, the
-    /// points within their support are also kept, in the order visited (up to the buffer's
-    /// length; the count is returned, beyond the length when it overflowed), so that a
-    /// further pass visits exactly them, in the same order, without the grid.
-    #[inline]
-    fn pass<'a, const GRAD: bool>(
-        &'a self,
-        x: DVec3,
-        normal: Option<DVec3>,
-        mut keep: Option<&mut [&'a Item; KEEP]>,
-    ) -> (Sums, usize) {
-        let mut s = Sums {
-            band2: if self.banded { f64::INFINITY } else { 0.0 },
-            ..Default::default()
-        };
-        let mut kept = 0;
-        self.grid.for_each_near(x, |it| {
-            if self.add::<GRAD>(&mut s, x, it, normal) {
-                if let Some(buf) = keep.as_deref_mut()
-                    && kept < KEEP
-                {
-                    buf[kept] = it;
-                }
-                kept += 1;
-            }
-        });
-        (s, kept)
     }
 
     /// Add point `it` to the sums at `x` if `x` is within its support (and say whether).
