@@ -105,6 +105,38 @@ impl Grid {
     /// Visit every item within `r` of `x` (and possibly a few more: callers test `r2`).
     #[inline]
     pub fn for_each_near<'a>(&'a self, x: DVec3, r: f64, mut f: impl FnMut(&'a Item)) {
+        self.for_each_row(x, r, |row| {
+            for it in row {
+                f(it);
+            }
+        });
+    }
+
+    /// Append to `buf`, in visiting order, every item whose support contains `x` (`|x −
+    /// p|² < r2` is not false: the test of `add`); `r` bounds the support radii. `kept`
+    /// counts them all; past the buffer's end they are not stored (the last slot is
+    /// overwritten). Without a branch per item: the items are written unconditionally and
+    /// the count advances by the test, so a hit costs no misprediction.
+    // `!(d2 >= r2)`, not `d2 < r2`: the test of `add`, which keeps a NaN distance.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    #[inline]
+    pub fn gather<'a>(&'a self, x: DVec3, r: f64, buf: &mut [&'a Item], kept: &mut usize) {
+        let last = buf.len() - 1;
+        self.for_each_row(x, r, |row| {
+            let mut k = *kept;
+            for it in row {
+                let d2 = (x - it.p).length_squared();
+                buf[k.min(last)] = it;
+                k += usize::from(!(d2 >= it.r2));
+            }
+            *kept = k;
+        });
+    }
+
+    /// The rows of items (contiguous runs of cells along x) of the grid cells that meet the
+    /// cube of half-side `r` about `x`.
+    #[inline(always)]
+    fn for_each_row<'a>(&'a self, x: DVec3, r: f64, mut f: impl FnMut(&'a [Item])) {
         let a = x - DVec3::splat(r);
         let b = x + DVec3::splat(r);
         let hi = self.lo
@@ -125,9 +157,7 @@ impl Grid {
                 // Cells i0..=i1 of a row are contiguous in `items`.
                 let s = self.start[row + i0] as usize;
                 let e = self.start[row + i1 + 1] as usize;
-                for it in &self.items[s..e] {
-                    f(it);
-                }
+                f(&self.items[s..e]);
             }
         }
     }
@@ -184,6 +214,20 @@ impl Levels {
             g.for_each_near(x, *r, &mut f);
         }
     }
+
+    /// [`Grid::gather`] over the levels in order: the items whose support contains `x`, in
+    /// the order [`Self::for_each_near`] visits them; returns their count (beyond the
+    /// buffer's length when it overflowed).
+    // `!(d2 >= r2)`, not `d2 < r2`: the test of `add`, which keeps a NaN distance.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    #[inline]
+    pub fn gather<'a>(&'a self, x: DVec3, buf: &mut [&'a Item]) -> usize {
+        let mut kept = 0;
+        for (g, r) in &self.levels {
+            g.gather(x, *r, buf, &mut kept);
+        }
+        kept
+    }
 }
 
 #[cfg(test)]
@@ -214,5 +258,47 @@ mod tests {
                 assert_eq!(seen, want, "{x}");
             }
         }
+    }
+
+    /// `gather` keeps, in visiting order, exactly the visited items whose support contains
+    /// the query, and counts them past a short buffer (the stored prefix still right).
+    #[test]
+    fn gather_keeps_the_supporting_items_in_order() {
+        let mut rng = SplitMix64(5);
+        let pts: Vec<DVec3> = (0..3000).map(|_| rng.unit_vector()).collect();
+        let nrm = vec![DVec3::Z; pts.len()];
+        let rad: Vec<f64> = (0..pts.len())
+            .map(|i| 0.05 + 0.2 * (i % 5) as f64 / 5.0)
+            .collect();
+        // Two levels: the radii above 0.1 in a second grid.
+        let lv = Levels::new(&pts, &nrm, &rad, None, 0.1);
+        let dummy = Item {
+            p: DVec3::ZERO,
+            n: DVec3::ZERO,
+            r2: 0.0,
+            b2inv: 0.0,
+        };
+        let (mut short, mut total) = (0, 0);
+        for _ in 0..300 {
+            let x = rng.unit_vector() * (0.8 + 0.4 * rng.next_f64());
+            let mut want: Vec<*const Item> = Vec::new();
+            lv.for_each_near(x, |it| {
+                if (x - it.p).length_squared() < it.r2 {
+                    want.push(it);
+                }
+            });
+            for len in [want.len() + 1, 17] {
+                let mut buf = vec![&dummy; len];
+                let kept = lv.gather(x, &mut buf);
+                assert_eq!(kept, want.len(), "{x}");
+                let stored = kept.min(len - 1);
+                let got: Vec<*const Item> =
+                    buf[..stored].iter().map(|&r| r as *const Item).collect();
+                assert_eq!(got, want[..stored], "{x}");
+                short += usize::from(kept >= len);
+            }
+            total += want.len();
+        }
+        assert!(short > 10 && total > 2000, "{short} {total}");
     }
 }

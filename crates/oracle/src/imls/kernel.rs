@@ -28,8 +28,17 @@ pub(super) struct Sums {
     pub band2: f64,
 }
 
-/// Points kept from the first pass of the robust sums (beyond, the grid is visited again).
+/// Points gathered for the passes of the kernel sums (beyond, each pass visits the grid).
 const KEEP: usize = 256;
+
+/// The kernel terms of the gathered points, kept by the plain pass for the reweighted ones.
+struct Pre {
+    /// `1 − |x − p|² / R²`.
+    u: [f64; KEEP],
+    u2: [f64; KEEP],
+    /// `n · (x − p)`.
+    nd: [f64; KEEP],
+}
 
 /// A placeholder for the unused entries of the kept points.
 static NO_ITEM: Item = Item {
@@ -163,24 +172,35 @@ impl PointSetSurface {
     /// steps inside a bracket.
     #[inline]
     pub(super) fn sums_impl<const GRAD: bool>(&self, x: DVec3) -> Sums {
+        // The points whose support contains x, gathered once for every pass.
+        let mut buf: [&Item; KEEP + 1] = [&NO_ITEM; KEEP + 1];
+        let kept = self.grid.gather(x, &mut buf);
         if self.robust == 0 {
-            return self.pass::<GRAD>(x, None, None).0;
+            return self.sums_over::<GRAD>(x, None, &buf, kept);
         }
-        let mut buf: [&Item; KEEP] = [&NO_ITEM; KEEP];
-        let (s, kept) = self.pass::<true>(x, None, Some(&mut buf));
+        if kept > KEEP {
+            return self.robust_over_grid::<GRAD>(x);
+        }
+        // The plain pass keeps each point's kernel terms for the reweighted passes.
+        let mut pre = Pre {
+            u: [0.0; KEEP],
+            u2: [0.0; KEEP],
+            nd: [0.0; KEEP],
+        };
+        let s = self.plain_pass(x, &buf[..kept], &mut pre);
         if s.den <= 0.0 {
             return s;
         }
         let mut f = s.num / s.den;
         let mut g = (s.dnum - f * s.dden) / s.den;
         for pass in 0..self.robust {
-            let normal = Some(g.normalize_or_zero());
+            let normal = g.normalize_or_zero();
             // The last pass's gradient only when asked for (its value is the same bit for
-            // bit: `add` computes the sums by the same operations either way).
+            // bit: the sums are computed by the same operations either way).
             let r = if GRAD || pass + 1 < self.robust {
-                self.reweighted::<true>(x, normal, &buf, kept)
+                self.reweighted_pass::<true>(x, normal, &buf[..kept], &pre)
             } else {
-                self.reweighted::<false>(x, normal, &buf, kept)
+                self.reweighted_pass::<false>(x, normal, &buf[..kept], &pre)
             };
             // α_i ≥ exp(−4 / σ_n²) > 0, so r.den > 0 where s.den > 0 (unless it underflows).
             if r.den.is_nan() || r.den <= 0.0 {
@@ -197,58 +217,124 @@ impl PointSetSurface {
         }
     }
 
-    /// A reweighted pass at `x` over the `kept` points of the first pass (`buf`), or over
-    /// the grid when they overflowed it: the same points in the same order as the grid
-    /// would give (bit-identical sums).
-    #[inline]
-    fn reweighted<const GRAD: bool>(
-        &self,
-        x: DVec3,
-        normal: Option<DVec3>,
-        buf: &[&Item; KEEP],
-        kept: usize,
-    ) -> Sums {
-        if kept > KEEP {
-            return self.pass::<GRAD>(x, normal, None).0;
+    /// [`Self::sums_impl`] with the robust passes when the gathered points overflowed the
+    /// buffer: every pass visits the grid (the same sums, bit for bit).
+    #[cold]
+    fn robust_over_grid<const GRAD: bool>(&self, x: DVec3) -> Sums {
+        let none = [&NO_ITEM; KEEP + 1];
+        let s = self.sums_over::<true>(x, None, &none, KEEP + 1);
+        if s.den <= 0.0 {
+            return s;
         }
-        let mut r = Sums {
-            band2: if self.banded { f64::INFINITY } else { 0.0 },
-            ..Default::default()
-        };
-        for it in &buf[..kept] {
-            self.add::<GRAD>(&mut r, x, it, normal);
+        let mut f = s.num / s.den;
+        let mut g = (s.dnum - f * s.dden) / s.den;
+        for pass in 0..self.robust {
+            let normal = Some(g.normalize_or_zero());
+            let r = if GRAD || pass + 1 < self.robust {
+                self.sums_over::<true>(x, normal, &none, KEEP + 1)
+            } else {
+                self.sums_over::<false>(x, normal, &none, KEEP + 1)
+            };
+            if r.den.is_nan() || r.den <= 0.0 {
+                break;
+            }
+            f = r.num / r.den;
+            g = (r.dnum - f * r.dden) / r.den;
         }
-        r
+        Sums {
+            num: f * s.den,
+            dnum: if GRAD { g * s.den } else { DVec3::ZERO },
+            dden: DVec3::ZERO,
+            ..s
+        }
     }
 
-    /// One pass of kernel sums at `x`; with `normal = Some(g)`, each point's weight is
-    /// multiplied by `exp(−|n_i − g|² / σ_n²)` (see [`Self::sums_impl`]). With `keep`, the
-    /// points within their support are also kept, in the order visited (up to the buffer's
-    /// length; the count is returned, beyond the length when it overflowed), so that a
-    /// further pass visits exactly them, in the same order, without the grid.
+    /// The plain pass (with gradients) over the gathered points `its` (all within their
+    /// support): the operations of [`Self::add`] without a normal, keeping each point's `u`,
+    /// `u²` and `n·(x − p)` in `pre`.
     #[inline]
-    fn pass<'a, const GRAD: bool>(
-        &'a self,
-        x: DVec3,
-        normal: Option<DVec3>,
-        mut keep: Option<&mut [&'a Item; KEEP]>,
-    ) -> (Sums, usize) {
+    fn plain_pass(&self, x: DVec3, its: &[&Item], pre: &mut Pre) -> Sums {
         let mut s = Sums {
             band2: if self.banded { f64::INFINITY } else { 0.0 },
             ..Default::default()
         };
-        let mut kept = 0;
-        self.grid.for_each_near(x, |it| {
-            if self.add::<GRAD>(&mut s, x, it, normal) {
-                if let Some(buf) = keep.as_deref_mut()
-                    && kept < KEEP
-                {
-                    buf[kept] = it;
-                }
-                kept += 1;
+        for (i, it) in its.iter().enumerate() {
+            let d = x - it.p;
+            let d2 = d.length_squared();
+            if self.banded {
+                s.band2 = s.band2.min(d2 * it.b2inv);
             }
-        });
-        (s, kept)
+            let u = 1.0 - d2 / it.r2;
+            let u2 = u * u;
+            // `add`'s `alpha * u2 * u2` and `-8 alpha u2 u / R²` with alpha = 1 (exact).
+            let w = u2 * u2;
+            let nd = it.n.dot(d);
+            s.num += w * nd;
+            s.den += w;
+            s.nsum += w * it.n;
+            let gw = d * (-8.0 * u2 * u / it.r2);
+            s.dnum += gw * nd + w * it.n;
+            s.dden += gw;
+            (pre.u[i], pre.u2[i], pre.nd[i]) = (u, u2, nd);
+        }
+        s
+    }
+
+    /// A reweighted pass over the gathered points `its` with the kernel terms `pre` of the
+    /// plain pass: the operations of [`Self::add`] with `normal`, computing only what
+    /// [`Self::sums_impl`] reads of it (`num`, `den` and, if `GRAD`, `dnum` and `dden`).
+    #[inline]
+    fn reweighted_pass<const GRAD: bool>(
+        &self,
+        x: DVec3,
+        normal: DVec3,
+        its: &[&Item],
+        pre: &Pre,
+    ) -> Sums {
+        let mut s = Sums::default();
+        for (i, it) in its.iter().enumerate() {
+            let (u, u2, nd) = (pre.u[i], pre.u2[i], pre.nd[i]);
+            let alpha = (-(it.n - normal).length_squared() * self.robust_inv_sn2).exp();
+            let w = alpha * u2 * u2;
+            s.num += w * nd;
+            s.den += w;
+            if GRAD {
+                let d = x - it.p;
+                let gw = d * (-8.0 * alpha * u2 * u / it.r2);
+                s.dnum += gw * nd + w * it.n;
+                s.dden += gw;
+            }
+        }
+        s
+    }
+
+    /// A pass of kernel sums at `x` over the `kept` points gathered in `buf` (those whose
+    /// support contains `x`, in the grid's order), or over the grid when they overflowed it:
+    /// the same points in the same order either way (bit-identical sums). With `normal =
+    /// Some(g)`, each point's weight is multiplied by `exp(−|n_i − g|² / σ_n²)` (see
+    /// [`Self::sums_impl`]).
+    #[inline]
+    fn sums_over<const GRAD: bool>(
+        &self,
+        x: DVec3,
+        normal: Option<DVec3>,
+        buf: &[&Item; KEEP + 1],
+        kept: usize,
+    ) -> Sums {
+        let mut r = Sums {
+            band2: if self.banded { f64::INFINITY } else { 0.0 },
+            ..Default::default()
+        };
+        if kept > KEEP {
+            self.grid.for_each_near(x, |it| {
+                self.add::<GRAD>(&mut r, x, it, normal);
+            });
+            return r;
+        }
+        for it in &buf[..kept] {
+            self.add::<GRAD>(&mut r, x, it, normal);
+        }
+        r
     }
 
     /// Add point `it` to the sums at `x` if `x` is within its support (and say whether).
@@ -352,5 +438,46 @@ impl PointSetSurface {
     /// outside; meaningful at distances above the spacing).
     pub fn winding_number(&self, x: DVec3) -> f64 {
         self.gwn.winding_number(x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::imls::PointSetParams;
+    use crate::roots::SplitMix64;
+
+    /// The robust sums over the gathered points (with the plain pass's kernel terms kept)
+    /// are bit-identical to the passes over the grid that an overflowing gather falls back
+    /// to, with and without gradients.
+    #[test]
+    fn gathered_sums_equal_the_grid_passes() {
+        let mut rng = SplitMix64(9);
+        let pts: Vec<DVec3> = (0..4000)
+            .map(|_| {
+                let u = rng.unit_vector();
+                u * (1.0 + 0.1 * (3.0 * u.x).sin()) + rng.unit_vector() * 0.01 * rng.next_f64()
+            })
+            .collect();
+        let s = PointSetSurface::new(&pts, None, &PointSetParams::scan()).unwrap();
+        let bits = |v: &Sums| {
+            [v.num, v.den, v.band2]
+                .into_iter()
+                .chain(v.nsum.to_array())
+                .chain(v.dnum.to_array())
+                .chain(v.dden.to_array())
+                .map(f64::to_bits)
+                .collect::<Vec<u64>>()
+        };
+        let mut near = 0;
+        for _ in 0..500 {
+            let x = rng.unit_vector() * (0.85 + 0.3 * rng.next_f64());
+            let a = s.sums_impl::<true>(x);
+            assert_eq!(bits(&a), bits(&s.robust_over_grid::<true>(x)), "{x}");
+            let b = s.sums_impl::<false>(x);
+            assert_eq!(bits(&b), bits(&s.robust_over_grid::<false>(x)), "{x}");
+            near += usize::from(a.den > 0.0);
+        }
+        assert!(near > 100, "{near}");
     }
 }
