@@ -118,10 +118,15 @@ impl PointSetSurface {
         if w < 1.0 {
             // Out of the data's band: the far field (flood-filled sign, else the winding
             // number), blended with the IMLS value near the band's edge.
-            let far = match self.far_cache.get(x) {
-                1 => self.max_radius,
-                -1 => -self.max_radius,
-                _ => self.far_value_uncached(x, s.den),
+            // The winding-number sign at x, when computed here, is reused by the blend below
+            // (the same call with the same arguments).
+            let (far, uncached) = match self.far_cache.get(x) {
+                1 => (self.max_radius, None),
+                -1 => (-self.max_radius, None),
+                _ => {
+                    let v = self.far_value_uncached(x, s.den);
+                    (v, Some(v))
+                }
             };
             if w == 0.0 {
                 return (far, false);
@@ -129,7 +134,11 @@ impl PointSetSurface {
             let near = if s.den >= MIN_WEIGHT {
                 s.num / s.den
             } else {
-                blend(s.num, s.den, self.far_value(x, s.num, s.den, s.nsum))
+                blend(
+                    s.num,
+                    s.den,
+                    self.far_value_known(x, s.num, s.den, s.nsum, uncached),
+                )
             };
             return (w * near + (1.0 - w) * far, false);
         }
@@ -400,6 +409,19 @@ impl PointSetSurface {
     ///   number and keeps the blend free of spurious zeros;
     /// - otherwise the point-cloud winding number at `x` (above 1/2: inside).
     pub(super) fn far_value(&self, x: DVec3, num: f64, den: f64, nsum: DVec3) -> f64 {
+        self.far_value_known(x, num, den, nsum, None)
+    }
+
+    /// [`Self::far_value`], with `uncached` the value of `far_value_uncached(x, den)` when
+    /// already known.
+    fn far_value_known(
+        &self,
+        x: DVec3,
+        num: f64,
+        den: f64,
+        nsum: DVec3,
+        uncached: Option<f64>,
+    ) -> f64 {
         let r = self.max_radius;
         if den < FRINGE_WEIGHT {
             match self.far_cache.get(x) {
@@ -413,7 +435,7 @@ impl PointSetSurface {
                 return if f < 0.0 { -r } else { r };
             }
         }
-        self.far_value_uncached(x, den)
+        uncached.unwrap_or_else(|| self.far_value_uncached(x, den))
     }
 
     /// The far field signed by the winding number alone (the coarse tree first where no kernel
