@@ -222,13 +222,19 @@ fn bridge(
             else {
                 continue;
             };
-            let mut vertices = out.mesh.vertices.clone();
-            vertices.extend(&ring_pts);
+            let n = out.mesh.vertices.len() as u32;
+            let pos = |v: u32| {
+                if v < n {
+                    out.mesh.vertices[v as usize]
+                } else {
+                    ring_pts[(v - n) as usize]
+                }
+            };
             // Within the size bound, as a restricted facet would be (the loose epsilon-sample
             // certificate measures every triangle's ball).
             let balls: Vec<_> = tube
                 .iter()
-                .map(|t| super::repair::circumball(t.map(|v| vertices[v as usize])))
+                .map(|t| super::repair::circumball(t.map(pos)))
                 .collect();
             if balls
                 .iter()
@@ -236,19 +242,15 @@ fn bridge(
             {
                 continue;
             }
-            // The mesh with the two triangles replaced by the tube, checked for intersections.
-            let mut trial = meshio::TriMesh {
-                vertices,
-                triangles: out.mesh.triangles.clone(),
-            };
-            let (hi, lo) = (ta.max(tb), ta.min(tb));
-            trial.triangles.swap_remove(hi);
-            trial.triangles.swap_remove(lo);
-            let first_new = trial.triangles.len();
-            trial.triangles.extend(&tube);
-            if !super::repair::intersecting_vertices(&trial, first_new).is_empty() {
+            if tube_crosses(&out.mesh, &ring_pts, [ta, tb], &tube) {
                 continue;
             }
+            let (hi, lo) = (ta.max(tb), ta.min(tb));
+            let mut trial = std::mem::take(&mut out.mesh);
+            trial.vertices.extend(&ring_pts);
+            trial.triangles.swap_remove(hi);
+            trial.triangles.swap_remove(lo);
+            trial.triangles.extend(&tube);
             out.balls.swap_remove(hi);
             out.balls.swap_remove(lo);
             out.balls.extend(balls);
@@ -327,27 +329,94 @@ fn tube_with_rings(
     // with the loops `superimposed` (`p` moved onto `q`'s centroid): along a tube longer than
     // its loops are wide, the raw lengths can favour one loop's steps and twist the tube into
     // itself (the tests' octahedra).
+    // The zipper runs on a local table of the loops' vertices (no copy of the mesh's).
+    let mut local: Vec<u32> = fa.to_vec();
+    loops.iter().for_each(|l| local.extend(l));
+    local.sort_unstable();
+    local.dedup();
+    let pos = |v: u32| {
+        let n = mesh.vertices.len() as u32;
+        if v < n {
+            mesh.vertices[v as usize]
+        } else {
+            pts[(v - n) as usize]
+        }
+    };
+    let id = |v: u32| local.binary_search(&v).expect("a loop vertex") as u32;
+    let centroid = |l: &[u32]| l.iter().map(|&v| pos(v)).sum::<DVec3>() / 3.0;
     let mut edges = std::collections::HashSet::new();
-    let mut all = mesh.vertices.clone();
-    all.extend(&pts);
-    let centroid =
-        |l: &[u32], all: &[DVec3]| l.iter().map(|&v| all[v as usize]).sum::<DVec3>() / 3.0;
     let mut tube = Vec::new();
     let mut p: Vec<u32> = fa.to_vec();
     for q in loops.iter().rev() {
         let shift = if superimposed {
-            centroid(q, &all) - centroid(&p, &all)
+            centroid(q) - centroid(&p)
         } else {
             DVec3::ZERO
         };
-        let mut moved = all.clone();
-        for &v in &p {
-            moved[v as usize] += shift;
-        }
-        tube.extend(super::repair::tube(&p, q, &moved, &mut edges));
+        let moved: Vec<DVec3> = local
+            .iter()
+            .map(|&v| pos(v) + if p.contains(&v) { shift } else { DVec3::ZERO })
+            .collect();
+        let (lp, lq): (Vec<u32>, Vec<u32>) = (
+            p.iter().map(|&v| id(v)).collect(),
+            q.iter().map(|&v| id(v)).collect(),
+        );
+        let t = super::repair::tube(&lp, &lq, &moved, &mut edges);
+        tube.extend(t.into_iter().map(|t| t.map(|v| local[v as usize])));
         p = q.iter().rev().copied().collect();
     }
     Some((tube, pts))
+}
+
+/// Whether the tube (on `mesh`'s vertices and then `extra`) intersects itself or a triangle of
+/// `mesh` other than `removed` (exact tests, on the triangles whose boxes meet the tube's).
+fn tube_crosses(
+    mesh: &meshio::TriMesh,
+    extra: &[DVec3],
+    removed: [usize; 2],
+    tube: &[[u32; 3]],
+) -> bool {
+    let n = mesh.vertices.len() as u32;
+    let pos = |v: u32| {
+        if v < n {
+            mesh.vertices[v as usize]
+        } else {
+            extra[(v - n) as usize]
+        }
+    };
+    let (lo, hi) = tube
+        .iter()
+        .flatten()
+        .map(|&v| pos(v))
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
+            (l.min(p), h.max(p))
+        });
+    let near: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| !removed.contains(k))
+        .filter(|(_, t)| {
+            let (a, b) = t
+                .iter()
+                .map(|&v| pos(v))
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
+                    (l.min(p), h.max(p))
+                });
+            a.cmple(hi).all() && b.cmpge(lo).all()
+        })
+        .map(|(_, t)| *t)
+        .collect();
+    // A local mesh of those and the tube, vertices renumbered (shared vertices stay shared).
+    let mut ids: Vec<u32> = near.iter().chain(tube).flatten().copied().collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let id = |v: u32| ids.binary_search(&v).expect("a listed vertex") as u32;
+    let local = meshio::TriMesh {
+        vertices: ids.iter().map(|&v| pos(v)).collect(),
+        triangles: near.iter().chain(tube).map(|t| t.map(id)).collect(),
+    };
+    !super::repair::intersecting_vertices(&local, near.len()).is_empty()
 }
 
 /// The root of piece `i` in the merge forest `m` (each entry points to a smaller index).

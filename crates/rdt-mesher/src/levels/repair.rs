@@ -21,7 +21,9 @@
 //!    trilinear saddle it is a tube, whichever side of it the inside is): the two loops are
 //!    joined by a tube (the zipper of the two loops, shortest diagonal first) rather than
 //!    closed apart, so the component stays one piece (`join_neck` decisions). A tube that
-//!    intersects another triangle is cut again in the next round like any closing.
+//!    intersects another triangle is cut again in the next round like any closing. Of the two
+//!    zippers (raw positions, or the loops superimposed), the first whose circumballs are all
+//!    within sigma is taken, else the raw one (the certificate reports its ball).
 //! 4. **Drop a small component** (`--min-component`): closed components enclosing less than
 //!    the given volume are removed.
 //!
@@ -118,6 +120,7 @@ pub(crate) fn repair(
     min_volume: Option<f64>,
     separate: &[u32],
     labels: &[Option<usize>],
+    criteria: Option<&crate::Criteria>,
 ) -> Vec<TopologyDecision> {
     let mut decisions = Vec::new();
     let mut forced: Vec<u32> = separate.to_vec();
@@ -133,7 +136,7 @@ pub(crate) fn repair(
         if closed && forced.is_empty() {
             break;
         }
-        let (d, first_new) = cut_and_close(mesh, balls, &forced, &sep, labels);
+        let (d, first_new) = cut_and_close(mesh, balls, &forced, &sep, labels, criteria);
         sep.iter_mut().for_each(|b| *b = false);
         decisions.extend(d);
         forced = intersecting_vertices(mesh, first_new);
@@ -182,6 +185,7 @@ fn cut_and_close(
     forced: &[u32],
     sep: &[bool],
     labels: &[Option<usize>],
+    criteria: Option<&crate::Criteria>,
 ) -> (Vec<TopologyDecision>, usize) {
     let n = mesh.vertices.len();
     let mut live = vec![true; mesh.triangles.len()];
@@ -240,9 +244,11 @@ fn cut_and_close(
     // Rule 3': the pairs of loops to join by a tube (image labels only).
     let pairs = neck_pairs(&mesh.triangles, &cut, &kept, &traced, labels, n);
     let mut partner = vec![usize::MAX; traced.len()];
+    let mut tubes: Vec<Vec<[u32; 3]>> = vec![Vec::new(); traced.len()];
     for &(a, b) in &pairs {
         partner[a] = b;
         partner[b] = a;
+        tubes[a.min(b)] = tube_within(&traced[a.min(b)], &traced[a.max(b)], mesh, criteria);
     }
     let mut loops: Vec<(Vec<u32>, Vec<[u32; 3]>)> = Vec::new();
     let mut joined = vec![false; traced.len()];
@@ -252,7 +258,9 @@ fn cut_and_close(
             j if j > k => {
                 joined[k] = true;
                 joined[j] = true;
-                tube(lp, &traced[j], &mesh.vertices, &mut edges)
+                let t = std::mem::take(&mut tubes[k]);
+                add_edges(&t, &mut edges);
+                t
             }
             _ => Vec::new(),
         };
@@ -474,7 +482,14 @@ pub(crate) fn apply(
 ) {
     let t = std::time::Instant::now();
     let decisions = match (opts.resolution, opts.min_component) {
-        (Some(_), m) => repair(&mut out.mesh, &mut out.balls, m, separate, labels),
+        (Some(_), m) => repair(
+            &mut out.mesh,
+            &mut out.balls,
+            m,
+            separate,
+            labels,
+            Some(&opts.criteria),
+        ),
         (None, Some(m)) => {
             let d = drop_small(&mut out.mesh, &mut out.balls, m);
             if !d.is_empty() {
@@ -605,6 +620,55 @@ fn neck_pairs(
         }
     }
     out
+}
+
+/// The tube of the loops `p` and `q` ([`tube`]) of the zipper on the positions as they are or
+/// with `p` moved onto `q`'s centroid (along a tube longer than its loops are wide the raw
+/// lengths can twist it): the first whose triangles' circumballs are all within the size bound
+/// of `criteria`, else the raw one (the neck is joined either way; the loose epsilon-sample
+/// certificate then reports the triangle over the bound).
+fn tube_within(
+    p: &[u32],
+    q: &[u32],
+    mesh: &TriMesh,
+    criteria: Option<&crate::Criteria>,
+) -> Vec<[u32; 3]> {
+    let at = |v: &u32| mesh.vertices[*v as usize];
+    let centroid = |l: &[u32]| l.iter().map(at).sum::<DVec3>() / l.len() as f64;
+    let shift = centroid(q) - centroid(p);
+    let mut raw = None;
+    for superimposed in [false, true] {
+        let mut moved;
+        let pts = if superimposed {
+            moved = mesh.vertices.clone();
+            p.iter().for_each(|&v| moved[v as usize] += shift);
+            &moved
+        } else {
+            &mesh.vertices
+        };
+        let t = tube(p, q, pts, &mut HashSet::new());
+        let over = |t: &[u32; 3]| {
+            let b = circumball(t.map(|v| mesh.vertices[v as usize]));
+            criteria
+                .and_then(|c| c.sigma_at(b.center))
+                .is_some_and(|s| b.radius > s)
+        };
+        if !t.iter().any(over) {
+            return t;
+        }
+        raw.get_or_insert(t);
+    }
+    raw.expect("the raw zipper was tried")
+}
+
+/// Add the edges of `tris` to `edges`.
+fn add_edges(tris: &[[u32; 3]], edges: &mut HashSet<[u32; 2]>) {
+    for t in tris {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edges.insert([a.min(b), a.max(b)]);
+        }
+    }
 }
 
 /// The tube joining the loops `p` and `q` (each in the order whose consecutive pairs the new

@@ -17,7 +17,7 @@ fn closed_oriented(m: &TriMesh) -> bool {
 
 fn run(mut m: TriMesh, min_volume: Option<f64>) -> (TriMesh, Vec<TopologyDecision>) {
     let mut balls = unit_balls(m.triangles.len());
-    let d = repair(&mut m, &mut balls, min_volume, &[], &[]);
+    let d = repair(&mut m, &mut balls, min_volume, &[], &[], None);
     assert_eq!(balls.len(), m.triangles.len());
     (m, d)
 }
@@ -140,7 +140,7 @@ fn run_labelled(
         triangles,
     };
     let mut balls = unit_balls(m.triangles.len());
-    let d = repair(&mut m, &mut balls, None, &[], labels);
+    let d = repair(&mut m, &mut balls, None, &[], labels, None);
     assert_eq!(balls.len(), m.triangles.len());
     assert!(closed_oriented(&m), "{d:?}");
     (m, d)
@@ -216,9 +216,9 @@ fn rule_0_cuts_the_stars_of_the_separated_vertices_and_closes_them() {
     };
     let mut balls = unit_balls(m.triangles.len());
     // Without rule 0 the closed octahedron is left alone.
-    let d = repair(&mut m.clone(), &mut balls.clone(), None, &[], &[]);
+    let d = repair(&mut m.clone(), &mut balls.clone(), None, &[], &[], None);
     assert!(d.is_empty());
-    let d = repair(&mut m, &mut balls, None, &[4], &[]);
+    let d = repair(&mut m, &mut balls, None, &[4], &[], None);
     assert!(closed_oriented(&m), "{d:?}");
     assert_eq!(d.len(), 1, "{d:?}");
     assert_eq!(d[0].kind, DecisionKind::Separate { loops: 1 });
