@@ -95,26 +95,22 @@ fn min_component_drops_specks_and_reports_them() {
     assert!(some.mesh.triangles.len() < all.mesh.triangles.len());
 }
 
-/// Two balls of radius 3 voxels joined by a cylinder of radius `w` voxels (value: the largest
-/// signed distance), 24^3 voxels of 1 mm, at iso 0.
-fn dumbbell(w: f64) -> ImageSurface {
-    use glam::{DAffine3, DVec3};
-    let n = 24;
-    let (a, b) = (DVec3::new(7.0, 11.0, 11.0), DVec3::new(16.0, 11.0, 11.0));
+/// An `n`^3 volume of 1-mm voxels valued `f(voxel index position)`, at iso 0.
+fn generated(n: usize, f: impl Fn(glam::DVec3) -> f64) -> ImageSurface {
     let mut d = Vec::new();
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
-                let p = DVec3::new(i as f64, j as f64, k as f64);
-                let ball = (3.0 - p.distance(a)).max(3.0 - p.distance(b));
-                let t = (p - a).x.clamp(0.0, (b - a).x);
-                let neck = w - p.distance(a + DVec3::X * t);
-                d.push(ball.max(neck) as f32);
+                d.push(f(glam::DVec3::new(i as f64, j as f64, k as f64)) as f32);
             }
         }
     }
-    let vol = oracle::image::Volume::new([n; 3], oracle::image::Voxels::F32(d), DAffine3::IDENTITY)
-        .unwrap();
+    let vol = oracle::image::Volume::new(
+        [n; 3],
+        oracle::image::Voxels::F32(d),
+        glam::DAffine3::IDENTITY,
+    )
+    .unwrap();
     let opts = ImageOptions {
         iso: Some(0.0),
         ..Default::default()
@@ -122,6 +118,19 @@ fn dumbbell(w: f64) -> ImageSurface {
     ImageSurface::new(vol, &opts)
         .unwrap()
         .with_seed_budget(None)
+}
+
+/// Two balls of radius 3 voxels joined by a cylinder of radius `w` voxels (value: the largest
+/// signed distance), 24^3 voxels of 1 mm, at iso 0.
+fn dumbbell(w: f64) -> ImageSurface {
+    use glam::DVec3;
+    let (a, b) = (DVec3::new(7.0, 11.0, 11.0), DVec3::new(16.0, 11.0, 11.0));
+    generated(24, |p| {
+        let ball = (3.0 - p.distance(a)).max(3.0 - p.distance(b));
+        let t = (p - a).x.clamp(0.0, (b - a).x);
+        let neck = w - p.distance(a + DVec3::X * t);
+        ball.max(neck)
+    })
 }
 
 /// The piece (component by shared vertices) of each vertex used by a triangle, as a root
@@ -288,30 +297,15 @@ fn component_decisions_account_for_every_scan_component() {
 /// A curved sheet 0.7 voxel thick over a disk of radius 11 voxels (the regress suite's
 /// `sheet`, one of its strips), 28^3 voxels of 1 mm, at iso 0.
 fn sheet() -> ImageSurface {
-    use glam::{DAffine3, DVec3};
-    let n = 28;
+    use glam::DVec3;
     let nrm = DVec3::new(0.3, 0.5, 1.0).normalize();
     let c = DVec3::splat(13.5);
-    let mut d = Vec::new();
-    for k in 0..n {
-        for j in 0..n {
-            for i in 0..n {
-                let q = DVec3::new(i as f64, j as f64, k as f64) - c;
-                let h = q.dot(nrm) - 0.02 * q.length_squared();
-                let r = (q - nrm * q.dot(nrm)).length();
-                d.push(if r > 11.0 { 0.0 } else { 1.0 - h.abs() / 0.35 } as f32);
-            }
-        }
-    }
-    let vol = oracle::image::Volume::new([n; 3], oracle::image::Voxels::F32(d), DAffine3::IDENTITY)
-        .unwrap();
-    let opts = ImageOptions {
-        iso: Some(0.0),
-        ..Default::default()
-    };
-    ImageSurface::new(vol, &opts)
-        .unwrap()
-        .with_seed_budget(None)
+    generated(28, |p| {
+        let q = p - c;
+        let h = q.dot(nrm) - 0.02 * q.length_squared();
+        let r = (q - nrm * q.dot(nrm)).length();
+        if r > 11.0 { 0.0 } else { 1.0 - h.abs() / 0.35 }
+    })
 }
 
 /// The voxel-edge crossings of S (marching cubes' vertices; nodes at the iso value left out)
