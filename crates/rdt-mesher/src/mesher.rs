@@ -28,12 +28,34 @@ pub fn mesh_with_progress(
         let mut r = Mesher::new(surface, opts);
         r.run(progress)?;
         let mut out = r.finish()?;
-        let sep = crate::levels::components::separation(&out, surface, opts);
-        crate::levels::repair::apply(&mut out, opts, &sep.vertices, &sep.labels);
-        crate::levels::bridges::apply(&mut out, surface, opts);
-        crate::levels::components::apply(&mut out, surface, opts);
+        after_refinement(&mut out, surface, opts);
         Ok(out)
     })
+}
+
+/// What runs on the output once the refinement has ended (on images with a resolution; the
+/// rule 4 drop with `min_component` elsewhere): the separation of touching components and
+/// the topological repair, the bridges, the component decisions (`crate::levels`). Each
+/// phase's wall time goes to its own figure and to the run's total ("everything else").
+fn after_refinement(out: &mut MeshResult, surface: &dyn Surface, opts: &MeshOptions) {
+    use std::time::Instant;
+    let t = Instant::now();
+    let sep = crate::levels::components::separation(out, surface, opts);
+    crate::levels::repair::apply(out, opts, &sep.vertices, &sep.labels);
+    let t_repair = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    crate::levels::bridges::apply(out, surface, opts);
+    let t_bridges = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    crate::levels::components::apply(out, surface, opts);
+    let t_components = t.elapsed().as_secs_f64();
+    let st = &mut out.stats;
+    st.time_repair_s = t_repair;
+    st.time_bridges_s = t_bridges;
+    st.time_components_s = t_components;
+    let dt = t_repair + t_bridges + t_components;
+    st.time_total_s += dt;
+    st.time_queue_s += dt;
 }
 
 /// What [`mesh_in_rounds`] shows its callback between two rounds.
@@ -89,10 +111,7 @@ pub(crate) fn mesh_in_rounds(
             r.refine_loop(progress)?;
         }
         let mut out = r.finish()?;
-        let sep = crate::levels::components::separation(&out, surface, opts);
-        crate::levels::repair::apply(&mut out, opts, &sep.vertices, &sep.labels);
-        crate::levels::bridges::apply(&mut out, surface, opts);
-        crate::levels::components::apply(&mut out, surface, opts);
+        after_refinement(&mut out, surface, opts);
         Ok(out)
     })
 }
@@ -141,11 +160,17 @@ impl Mesher<'_> {
                 continue;
             }
             // Images: parts of S the sample does not reach (ours, `crate::levels::coverage`).
-            if self.cover_crossings()? {
+            let t = std::time::Instant::now();
+            let covered = self.cover_crossings()?;
+            self.stats.time_coverage_s += t.elapsed().as_secs_f64();
+            if covered {
                 continue;
             }
             // Images: necks thinner than the sample (ours, `crate::levels::necks`).
-            if self.reseed_necks()? {
+            let t = std::time::Instant::now();
+            let reseeded = self.reseed_necks()?;
+            self.stats.time_necks_s += t.elapsed().as_secs_f64();
+            if reseeded {
                 continue;
             }
             // Section 6.6.1: the manifold patch.

@@ -94,9 +94,8 @@ pub(crate) struct Mesher<'a> {
     pub lazy_balls: bool,
     /// `opts.criteria.two_sin_min_angle()`.
     pub two_sin: f64,
-    /// Images: the voxel-edge crossings of S, computed by the first coverage round
-    /// (`crate::levels::coverage`).
-    pub scan_crossings: Option<Vec<glam::DVec3>>,
+    /// Images: what the coverage and neck rounds keep between rounds (`crate::levels`).
+    pub scan: crate::levels::ScanCache,
 }
 
 impl<'a> Mesher<'a> {
@@ -131,7 +130,7 @@ impl<'a> Mesher<'a> {
             crossing_calls: 0,
             lazy_balls: true,
             two_sin: opts.criteria.two_sin_min_angle(),
-            scan_crossings: None,
+            scan: Default::default(),
         }
     }
 

@@ -242,6 +242,17 @@ pub struct Stats {
     pub time_oracle_s: f64,
     /// Everything else: circumcenters, restricted-facet tests and bookkeeping, criteria, queue.
     pub time_queue_s: f64,
+    /// Of the total (across the three above), on images with a resolution (`crate::levels`;
+    /// 0 elsewhere): the coverage rounds of the scan's crossings, insertions included.
+    pub time_coverage_s: f64,
+    /// The neck and bridge rounds, insertions included.
+    pub time_necks_s: f64,
+    /// The separation of components that touch, then the topological repair.
+    pub time_repair_s: f64,
+    /// The bridges between the pieces of split components.
+    pub time_bridges_s: f64,
+    /// The fragment drops and the component decisions.
+    pub time_components_s: f64,
     /// max over the output facets of r / sigma(c) (<= 1 when the size criterion holds).
     pub max_r_over_sigma: Option<f64>,
     /// Smallest facet angle of the output, degrees.

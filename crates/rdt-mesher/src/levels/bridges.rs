@@ -50,12 +50,8 @@ pub(crate) fn apply(
     let (Some(_), Some(img)) = (opts.resolution, surface.as_image()) else {
         return;
     };
-    let t = std::time::Instant::now();
     let d = bridge_splits(out, img, &opts.criteria);
     super::components::record(out, opts, d);
-    let dt = t.elapsed().as_secs_f64();
-    out.stats.time_total_s += dt;
-    out.stats.time_queue_s += dt;
 }
 
 /// Bridge every piece but the largest of each split scan component to another piece of it,

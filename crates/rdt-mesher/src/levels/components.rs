@@ -360,15 +360,11 @@ pub(crate) fn apply(
     let (Some(_), Some(img)) = (opts.resolution, surface.as_image()) else {
         return;
     };
-    let t = std::time::Instant::now();
     if let Some(h) = opts.resolution {
         let d = drop_fragments(out, img, h);
         record(out, opts, d);
     }
     out.stats.component_decisions = decide(out, img);
-    let dt = t.elapsed().as_secs_f64();
-    out.stats.time_total_s += dt;
-    out.stats.time_queue_s += dt;
 }
 
 /// Record the decisions `d` that changed a run's mesh after the repair (bridges, dropped

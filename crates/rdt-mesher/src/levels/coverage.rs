@@ -43,11 +43,7 @@ impl Mesher<'_> {
         for (_, k, _) in self.restricted.iter() {
             k.iter().for_each(|v| used[v.index()] = true);
         }
-        let coords: Vec<[f64; 3]> = (0..n)
-            .filter(|&v| used[v])
-            .map(|v| self.tri.point(VertexId::from_index(v)).to_array())
-            .collect();
-        let crossings = self.scan_crossings.get_or_insert_with(|| {
+        let crossings: &Vec<DVec3> = self.scan.crossings.get_or_insert_with(|| {
             let w2v = img.world_to_voxel();
             let mut c = verify::level_set::LevelSet::new(img).edge_crossings();
             // A node at the iso value is no crossing (on a plateau of them it is no surface of
@@ -58,21 +54,64 @@ impl Mesher<'_> {
             });
             c
         });
+        let nearest = &mut self.scan.nearest;
+        if nearest.len() != crossings.len() {
+            *nearest = vec![u32::MAX; crossings.len()];
+        }
         let tau = |p: DVec3| h + self.opts.criteria.sigma_at(p).unwrap_or(h);
-        let far: Vec<(DVec3, f64)> = match ImmutableKdTree::<f64, 3>::new_from_slice(&coords) {
-            Ok(tree) if !coords.is_empty() => crossings
-                .par_iter()
-                .filter_map(|&p| {
-                    let d2 = tree
-                        .query(&p.to_array())
-                        .nearest_one::<SquaredEuclidean<f64>>()
-                        .execute()
-                        .distance;
+        let tri = &self.tri;
+        // A crossing within tau of the vertex found nearest to it last time, if that vertex
+        // is still on Del_S(E), is covered (vertices do not move); the others are looked up
+        // again among the vertices of Del_S(E). The far set is the same as with every
+        // crossing looked up.
+        let unsure: Vec<usize> = (0..crossings.len())
+            .into_par_iter()
+            .filter(|&i| {
+                let v = nearest[i];
+                let p = crossings[i];
+                let t = tau(p);
+                v == u32::MAX
+                    || !used[v as usize]
+                    || tri
+                        .point(VertexId::from_index(v as usize))
+                        .distance_squared(p)
+                        > t * t
+            })
+            .collect();
+        let ids: Vec<u32> = (0..n as u32).filter(|&v| used[v as usize]).collect();
+        let coords: Vec<[f64; 3]> = ids
+            .iter()
+            .map(|&v| tri.point(VertexId::from_index(v as usize)).to_array())
+            .collect();
+        let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords);
+        let far: Vec<(DVec3, f64)> = match tree {
+            _ if unsure.is_empty() => Vec::new(),
+            Ok(tree) if !coords.is_empty() => {
+                let found: Vec<(usize, u32, f64)> = unsure
+                    .par_iter()
+                    .map(|&i| {
+                        let r = tree
+                            .query(&crossings[i].to_array())
+                            .nearest_one::<SquaredEuclidean<f64>>()
+                            .execute();
+                        (i, ids[r.item as usize], r.distance)
+                    })
+                    .collect();
+                let mut far = Vec::new();
+                for (i, v, d2) in found {
+                    nearest[i] = v;
+                    let p = crossings[i];
                     let t = tau(p);
-                    (d2 > t * t).then_some((p, t))
-                })
+                    if d2 > t * t {
+                        far.push((p, t));
+                    }
+                }
+                far
+            }
+            _ => unsure
+                .iter()
+                .map(|&i| (crossings[i], tau(crossings[i])))
                 .collect(),
-            _ => crossings.iter().map(|&p| (p, tau(p))).collect(),
         };
         let shrink = 0.25f64.powi(self.stats.cover_rounds as i32);
         let pts = net(&far, shrink);

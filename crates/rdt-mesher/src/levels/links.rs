@@ -59,21 +59,28 @@ fn classify(l: &[[u32; 2]]) -> Link {
     }
     let next =
         |x: u32| -> Option<u32> { l.binary_search_by(|e| e[0].cmp(&x)).ok().map(|i| l[i][1]) };
-    // In-degree <= 1.
-    let mut targets: Vec<u32> = l.iter().map(|e| e[1]).collect();
+    // In-degree <= 1 (the targets sorted: on the stack for the usual short links).
+    let mut stack = [0u32; 32];
+    let mut heap = Vec::new();
+    let targets: &mut [u32] = if l.len() <= stack.len() {
+        &mut stack[..l.len()]
+    } else {
+        heap.resize(l.len(), 0);
+        &mut heap
+    };
+    targets.iter_mut().zip(l).for_each(|(t, e)| *t = e[1]);
     targets.sort_unstable();
     if targets.windows(2).any(|w| w[0] == w[1]) {
         return Link::Bad;
     }
     // Sources that are nobody's target start paths: at most one.
-    let starts: Vec<u32> = l
+    let mut starts = l
         .iter()
         .map(|e| e[0])
-        .filter(|s| targets.binary_search(s).is_err())
-        .collect();
-    let (first, path) = match starts.as_slice() {
-        [] => (l[0][0], false),
-        [s] => (*s, true),
+        .filter(|s| targets.binary_search(s).is_err());
+    let (first, path) = match (starts.next(), starts.next()) {
+        (None, _) => (l[0][0], false),
+        (Some(s), None) => (s, true),
         _ => return Link::Bad,
     };
     // Walk from `first`: every edge must be reached (one piece).

@@ -21,8 +21,34 @@ pub(crate) mod scaffold;
 use crate::error::MeshError;
 use crate::state::Mesher;
 use delaunay3::{Insertion, Triangulation, VertexId};
+use glam::DVec3;
 use std::sync::Arc;
 use std::time::Instant;
+
+/// What the rounds on images keep between them (each a function of the image and of
+/// vertices' points only, so keeping it changes no result).
+///
+/// Invariant: the vertex-indexed entries refer to the vertices of the current Del(E); they
+/// are cleared when Del(E) is rebuilt ([`Mesher::drop_scaffold`]).
+#[derive(Default)]
+pub(crate) struct ScanCache {
+    /// The voxel-edge crossings of S, computed by the first coverage round (`coverage`).
+    pub crossings: Option<Vec<DVec3>>,
+    /// Per crossing, the vertex of Del_S(E) found nearest to it by the last coverage round
+    /// that looked for one (`u32::MAX`: none yet).
+    pub nearest: Vec<u32>,
+    /// Per vertex of Del(E), its scan component once computed (`necks`): `None` not yet,
+    /// `Some(None)` on no component.
+    pub labels: Vec<Option<Option<usize>>>,
+}
+
+impl ScanCache {
+    /// Forget what refers to vertex indices (Del(E) is rebuilt).
+    fn clear_vertex_data(&mut self) {
+        self.nearest.clear();
+        self.labels.clear();
+    }
+}
 
 impl Mesher<'_> {
     /// Rebuild Del(E) from the samples alone (the scaffold dropped) and re-scan it: the
@@ -46,6 +72,7 @@ impl Mesher<'_> {
             *c = new_id[(*c).index()];
         }
         self.scaffold.clear();
+        self.scan.clear_vertex_data();
         self.stats.scaffold_rebuilds += 1;
         self.voronoi.clear();
         self.restricted.clear();

@@ -23,6 +23,7 @@ use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oracle::Surface;
 use oracle::image::{ImageSurface, Join};
+use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -109,23 +110,29 @@ impl Mesher<'_> {
     }
 
     /// The scan component of every vertex of a restricted facet (`None` for the others and
-    /// where the scan gives none), computed in parallel (each independently: the result does
-    /// not depend on the thread count).
-    fn vertex_labels(&self, img: &ImageSurface) -> Vec<Option<usize>> {
+    /// where the scan gives none). Each vertex's is computed once, in parallel (each
+    /// independently: the result does not depend on the thread count), and kept in
+    /// [`crate::levels::ScanCache::labels`].
+    fn vertex_labels(&mut self, img: &ImageSurface) -> Vec<Option<usize>> {
         use rayon::prelude::*;
         let n = self.tri.num_vertices();
         let mut used = vec![false; n];
         for (_, k, _) in self.restricted.iter() {
             k.iter().for_each(|v| used[v.index()] = true);
         }
+        let cache = &mut self.scan.labels;
+        cache.resize(n, None);
+        let todo: Vec<usize> = (0..n).filter(|&v| used[v] && cache[v].is_none()).collect();
         let tri = &self.tri;
+        let found: Vec<Option<usize>> = todo
+            .par_iter()
+            .map(|&v| img.component_of(tri.point(delaunay3::VertexId::from_index(v))))
+            .collect();
+        for (v, l) in todo.into_iter().zip(found) {
+            cache[v] = Some(l);
+        }
         (0..n)
-            .into_par_iter()
-            .map(|v| {
-                used[v]
-                    .then(|| img.component_of(tri.point(delaunay3::VertexId::from_index(v))))
-                    .flatten()
-            })
+            .map(|v| if used[v] { cache[v].flatten() } else { None })
             .collect()
     }
 
@@ -192,13 +199,19 @@ fn ring_points(img: &ImageSurface, label: usize, pieces: &Split, round: usize) -
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
         return Vec::new();
     };
-    // The piece of the vertex nearest `p`, and the distance to it.
-    let piece_of = |p: DVec3| {
-        let r = tree
-            .query(&p.to_array())
-            .nearest_one::<SquaredEuclidean<f64>>()
-            .execute();
-        (owner[r.item as usize], r.distance.sqrt())
+    // The piece of the vertex nearest `p`, and the distance to it; a node is shared by up to
+    // 18 joins, so each node's is looked up once.
+    let mut seen: FxHashMap<[u64; 3], (usize, f64)> = FxHashMap::default();
+    let mut piece_of = |p: DVec3| {
+        *seen
+            .entry(p.to_array().map(f64::to_bits))
+            .or_insert_with(|| {
+                let r = tree
+                    .query(&p.to_array())
+                    .nearest_one::<SquaredEuclidean<f64>>()
+                    .execute();
+                (owner[r.item as usize], r.distance.sqrt())
+            })
     };
     let margin = 1.5 * img.volume().spacing().max_element() * f64::from(1u32 << round.min(3));
     let mut joins: Vec<Join> = Vec::new();

