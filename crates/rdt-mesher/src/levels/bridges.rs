@@ -209,6 +209,22 @@ fn bridge(
         }
     }
     pairs.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+    // The candidate tubes lie near the two sets of triangles and the join (their rings within
+    // three tube lengths of the axis): the triangles that may cross them, listed once.
+    let region = {
+        let (mut lo, mut hi) = (j.via, j.via);
+        let mut reach = 0.0f64;
+        for &(_, k) in na.iter().chain(&nb) {
+            for &v in &mesh.triangles[k] {
+                lo = lo.min(mesh.vertices[v as usize]);
+                hi = hi.max(mesh.vertices[v as usize]);
+            }
+        }
+        for &(d2, _, _) in &pairs {
+            reach = reach.max(3.0 * d2.sqrt());
+        }
+        Region::new(mesh, lo - DVec3::splat(reach), hi + DVec3::splat(reach))
+    };
     for (_, ta, tb) in pairs {
         let (fa, fb) = (out.mesh.triangles[ta], out.mesh.triangles[tb]);
         let variants = (0..=MAX_RINGS).flat_map(|r| [(r, false), (r, true)]);
@@ -238,7 +254,7 @@ fn bridge(
             {
                 continue;
             }
-            if tube_crosses(&out.mesh, &ring_pts, [ta, tb], &tube) {
+            if tube_crosses(&out.mesh, &ring_pts, [ta, tb], &tube, &region) {
                 continue;
             }
             let (hi, lo) = (ta.max(tb), ta.min(tb));
@@ -366,11 +382,15 @@ fn tube_with_rings(
 
 /// Whether the tube (on `mesh`'s vertices and then `extra`) intersects itself or a triangle of
 /// `mesh` other than `removed` (exact tests, on the triangles whose boxes meet the tube's).
+///
+/// `region`: a box and the triangles whose boxes meet it, listed in mesh order; used instead
+/// of a scan of the whole mesh when it holds the tube's box (the same triangles then).
 fn tube_crosses(
     mesh: &meshio::TriMesh,
     extra: &[DVec3],
     removed: [usize; 2],
     tube: &[[u32; 3]],
+    region: &Region,
 ) -> bool {
     let n = mesh.vertices.len() as u32;
     let pos = |v: u32| {
@@ -387,22 +407,32 @@ fn tube_crosses(
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
             (l.min(p), h.max(p))
         });
-    let near: Vec<[u32; 3]> = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| !removed.contains(k))
-        .filter(|(_, t)| {
-            let (a, b) = t
-                .iter()
-                .map(|&v| pos(v))
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
-                    (l.min(p), h.max(p))
-                });
-            a.cmple(hi).all() && b.cmpge(lo).all()
-        })
-        .map(|(_, t)| *t)
-        .collect();
+    let meets = |t: &[u32; 3]| {
+        let (a, b) = t
+            .iter()
+            .map(|&v| pos(v))
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
+                (l.min(p), h.max(p))
+            });
+        a.cmple(hi).all() && b.cmpge(lo).all()
+    };
+    let inside = region.lo.cmple(lo).all() && hi.cmple(region.hi).all();
+    let near: Vec<[u32; 3]> = if inside {
+        region
+            .tris
+            .iter()
+            .filter(|k| !removed.contains(k))
+            .map(|&k| mesh.triangles[k])
+            .filter(meets)
+            .collect()
+    } else {
+        mesh.triangles
+            .iter()
+            .enumerate()
+            .filter(|(k, t)| !removed.contains(k) && meets(t))
+            .map(|(_, t)| *t)
+            .collect()
+    };
     // A local mesh of those and the tube, vertices renumbered (shared vertices stay shared).
     let mut ids: Vec<u32> = near.iter().chain(tube).flatten().copied().collect();
     ids.sort_unstable();
@@ -413,6 +443,30 @@ fn tube_crosses(
         triangles: near.iter().chain(tube).map(|t| t.map(id)).collect(),
     };
     !super::repair::intersecting_vertices(&local, near.len()).is_empty()
+}
+
+/// A box and the triangles of a mesh whose boxes meet it (closed boxes), in mesh order.
+struct Region {
+    lo: DVec3,
+    hi: DVec3,
+    tris: Vec<usize>,
+}
+
+impl Region {
+    fn new(mesh: &meshio::TriMesh, lo: DVec3, hi: DVec3) -> Region {
+        let tris = (0..mesh.triangles.len())
+            .filter(|&k| {
+                let (a, b) = mesh.triangles[k]
+                    .iter()
+                    .map(|&v| mesh.vertices[v as usize])
+                    .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
+                        (l.min(p), h.max(p))
+                    });
+                a.cmple(hi).all() && b.cmpge(lo).all()
+            })
+            .collect();
+        Region { lo, hi, tris }
+    }
 }
 
 /// The root of piece `i` in the merge forest `m` (each entry points to a smaller index).

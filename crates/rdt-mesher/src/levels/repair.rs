@@ -343,13 +343,14 @@ fn drop_slivers(mesh: &TriMesh, live: &mut [bool]) -> Vec<Vec<usize>> {
     let which: Vec<usize> = (0..live.len()).filter(|&i| live[i]).collect();
     let kept = live_tris(&mesh.triangles, live);
     let links = Links::new(&kept, n);
+    let kinds: Vec<Link> = (0..n as u32).map(|v| links.kind(v)).collect();
     let mut out = Vec::new();
     for comp in components(&mesh.triangles, &which, n) {
         let verts = comp.iter().flat_map(|&i| mesh.triangles[i]);
-        let interior = verts.clone().any(|v| links.kind(v) == Link::Cycle);
+        let interior = verts.clone().any(|v| kinds[v as usize] == Link::Cycle);
         let boundary = verts
             .clone()
-            .any(|v| matches!(links.kind(v), Link::Path { .. }));
+            .any(|v| matches!(kinds[v as usize], Link::Path { .. }));
         if boundary && !interior {
             for &i in &comp {
                 live[i] = false;

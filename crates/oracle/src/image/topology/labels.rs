@@ -43,23 +43,28 @@ impl Labels {
             return None;
         }
         let c = v.floor();
-        let mut ins: Vec<(f64, u32)> = Vec::new();
-        let mut outs: Vec<(f64, u32)> = Vec::new();
+        // The corners by side, on the stack (8 in all).
+        let mut ins = [(0.0f64, 0u32); 8];
+        let mut outs = [(0.0f64, 0u32); 8];
+        let (mut ni, mut no) = (0, 0);
         for k in 0..8 {
             let o = DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, (k >> 2) as f64);
             let p = c + o;
             let (root, inside) = self.region([p.x as i64, p.y as i64, p.z as i64]);
             let d = p.distance_squared(v);
             if inside {
-                ins.push((d, root))
+                ins[ni] = (d, root);
+                ni += 1;
             } else {
-                outs.push((d, root))
+                outs[no] = (d, root);
+                no += 1;
             }
         }
+        let (ins, outs) = (&mut ins[..ni], &mut outs[..no]);
         ins.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         outs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for &(_, a) in &ins {
-            for &(_, b) in &outs {
+        for &(_, a) in ins.iter() {
+            for &(_, b) in outs.iter() {
                 if let Ok(i) = self.pairs.binary_search(&(a, b)) {
                     return Some(i);
                 }
