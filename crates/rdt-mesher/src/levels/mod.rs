@@ -40,6 +40,9 @@ pub(crate) struct ScanCache {
     /// Per vertex of Del(E), its scan component once computed (`necks`): `None` not yet,
     /// `Some(None)` on no component.
     pub labels: Vec<Option<Option<usize>>>,
+    /// Per scan component, the margin level and the pieces (points, largest first) of the
+    /// last neck round that looked for its rings (`necks`).
+    pub rings_seen: std::collections::BTreeMap<usize, (u32, Vec<Vec<DVec3>>)>,
 }
 
 impl ScanCache {

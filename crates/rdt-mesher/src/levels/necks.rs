@@ -75,8 +75,17 @@ impl Mesher<'_> {
             self.stats.neck_rounds += 1;
         }
         let mut pts: Vec<DVec3> = Vec::new();
-        for (label, pieces) in &splits {
-            pts.extend(ring_points(img, *label, pieces, self.stats.neck_rounds));
+        for (label, pieces) in splits {
+            // The rings are a function of the pieces and the margin: when both are those of
+            // the last round that looked at this component, its rings are in E already (each
+            // would be a duplicate insertion), so they are not looked for again.
+            let margin = margin_level(self.stats.neck_rounds);
+            let last = self.scan.rings_seen.get(&label);
+            if last.is_some_and(|(m, p)| *m == margin && *p == pieces) {
+                continue;
+            }
+            pts.extend(ring_points(img, label, &pieces, self.stats.neck_rounds));
+            self.scan.rings_seen.insert(label, (margin, pieces));
         }
         self.t_oracle += t.elapsed();
         let mut any = bridges > 0;
@@ -213,7 +222,8 @@ fn ring_points(img: &ImageSurface, label: usize, pieces: &Split, round: usize) -
                 (owner[r.item as usize], r.distance.sqrt())
             })
     };
-    let margin = 1.5 * img.volume().spacing().max_element() * f64::from(1u32 << round.min(3));
+    let margin =
+        1.5 * img.volume().spacing().max_element() * f64::from(1u32 << margin_level(round));
     let mut joins: Vec<Join> = Vec::new();
     for piece in &pieces[1..] {
         let lo = piece.iter().fold(DVec3::INFINITY, |a, &p| a.min(p)) - DVec3::splat(margin);
@@ -245,6 +255,11 @@ fn ring_points(img: &ImageSurface, label: usize, pieces: &Split, round: usize) -
         ring(img, &joins[*i], &mut out);
     }
     out
+}
+
+/// The margin of a round's boxes is 1.5 voxels times 2 to this power.
+fn margin_level(round: usize) -> u32 {
+    round.min(3) as u32
 }
 
 /// The first crossings of S of [`RING_RAYS`] rays perpendicular to the join, from points of
