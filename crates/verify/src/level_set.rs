@@ -142,8 +142,7 @@ impl<'a> LevelSet<'a> {
 
     /// Signed value of node `(i, j, k)` (background outside the grid).
     fn node(&self, i: i64, j: i64, k: i64) -> f64 {
-        self.img
-            .value_voxel(DVec3::new(i as f64, j as f64, k as f64))
+        self.img.grid_value([i, j, k])
     }
 
     fn build_pyramid(&mut self) {

@@ -334,6 +334,18 @@ impl ImageSurface {
         }
     }
 
+    /// Signed value of grid node `(i, j, k)`, the background's outside the grid: the value
+    /// of [`ImageSurface::value_voxel`] at that integer point (the trilinear weights of the
+    /// other corners are 0), read directly.
+    pub fn grid_value(&self, [i, j, k]: [i64; 3]) -> f64 {
+        let [nx, ny, nz] = self.n.map(|x| x as i64);
+        if i >= 0 && j >= 0 && k >= 0 && i < nx && j < ny && k < nz {
+            self.node_value((i + nx * (j + ny * k)) as usize)
+        } else {
+            self.background_value()
+        }
+    }
+
     /// Signed value of grid node `i` (linear index).
     #[inline]
     pub(crate) fn node_value(&self, i: usize) -> f64 {
@@ -624,6 +636,21 @@ mod tests {
                         let got = s.cell_corners(DVec3::new(i as f64, j as f64, k as f64));
                         let want = expected(dims, [i, j, k]).map(|raw| s.map_raw(raw));
                         assert_eq!(got, want, "{dims:?} cell ({i},{j},{k})");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn grid_value_is_the_interpolated_value_at_nodes() {
+        for dims in [[1, 3, 4], [2, 2, 2], [5, 3, 2]] {
+            let s = ramp(dims);
+            for i in -2i64..=6 {
+                for j in -2i64..=4 {
+                    for k in -2i64..=5 {
+                        let p = DVec3::new(i as f64, j as f64, k as f64);
+                        assert_eq!(s.grid_value([i, j, k]), s.value_voxel(p), "{dims:?} {p}");
                     }
                 }
             }
