@@ -48,8 +48,14 @@ impl Links {
     }
 }
 
+/// The directed link edge of triangle `t` at its vertex `v` (b -> c for (v, b, c)).
+pub(crate) fn link_edge(t: [u32; 3], v: u32) -> [u32; 2] {
+    let i = t.iter().position(|&x| x == v).expect("v is a vertex of t");
+    [t[(i + 1) % 3], t[(i + 2) % 3]]
+}
+
 /// [`Link`] of a sorted list of directed link edges.
-fn classify(l: &[[u32; 2]]) -> Link {
+pub(crate) fn classify(l: &[[u32; 2]]) -> Link {
     if l.is_empty() {
         return Link::Bad;
     }

@@ -208,25 +208,42 @@ fn cut_and_close(
 ) -> (Vec<TopologyDecision>, usize) {
     let n = mesh.vertices.len();
     let mut live = vec![true; mesh.triangles.len()];
-    // Rule 1: remove stars of bad vertices until none is left.
-    let mut first = true;
-    loop {
-        let kept: Vec<[u32; 3]> = live_tris(&mesh.triangles, &live);
-        let links = Links::new(&kept, n);
-        let mut bad: Vec<bool> = (0..n as u32)
-            .map(|v| links.used(v) && links.kind(v) == Link::Bad)
-            .collect();
-        if std::mem::take(&mut first) {
-            forced.iter().for_each(|&v| bad[v as usize] = true);
-        }
-        if !bad.iter().any(|&b| b) {
-            break;
-        }
-        for (t, l) in mesh.triangles.iter().zip(live.iter_mut()) {
-            if *l && t.iter().any(|&v| bad[v as usize]) {
-                *l = false;
+    // Rule 1: remove stars of bad vertices until none is left. Only the vertices of removed
+    // triangles change links, so after the first classification only they are looked at
+    // again (a bad vertex loses its whole star: it is unused, hence not bad, afterwards).
+    let star = stars(&mesh.triangles, n);
+    let links = Links::new(&mesh.triangles, n);
+    let mut bad: Vec<u32> = (0..n as u32)
+        .filter(|&v| links.used(v) && links.kind(v) == Link::Bad)
+        .collect();
+    bad.extend(forced);
+    bad.sort_unstable();
+    bad.dedup();
+    let mut link: Vec<[u32; 2]> = Vec::new();
+    while !bad.is_empty() {
+        let mut touched: Vec<u32> = Vec::new();
+        for &v in &bad {
+            for &t in star.of(v) {
+                if std::mem::replace(&mut live[t as usize], false) {
+                    touched.extend(mesh.triangles[t as usize]);
+                }
             }
         }
+        touched.sort_unstable();
+        touched.dedup();
+        bad = touched
+            .into_iter()
+            .filter(|&v| {
+                link.clear();
+                for &t in star.of(v) {
+                    if live[t as usize] {
+                        link.push(super::links::link_edge(mesh.triangles[t as usize], v));
+                    }
+                }
+                link.sort_unstable();
+                !link.is_empty() && super::links::classify(&link) == Link::Bad
+            })
+            .collect();
     }
     let cut: Vec<usize> = (0..live.len()).filter(|&i| !live[i]).collect();
     // Rule 2: pieces with boundary and no interior vertex.
@@ -308,6 +325,40 @@ fn cut_and_close(
 }
 
 /// The triangles still live.
+/// The triangles at each vertex (compressed rows, ascending triangle order).
+struct Stars {
+    start: Vec<u32>,
+    tris: Vec<u32>,
+}
+
+impl Stars {
+    fn of(&self, v: u32) -> &[u32] {
+        &self.tris[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+/// [`Stars`] of `tris` over vertices `0..n`.
+fn stars(tris: &[[u32; 3]], n: usize) -> Stars {
+    let mut start = vec![0u32; n + 1];
+    for t in tris {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut out = vec![0u32; start[n] as usize];
+    for (k, t) in tris.iter().enumerate() {
+        for &v in t {
+            out[fill[v as usize] as usize] = k as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    Stars { start, tris: out }
+}
+
 fn live_tris(tris: &[[u32; 3]], live: &[bool]) -> Vec<[u32; 3]> {
     tris.iter()
         .zip(live)
