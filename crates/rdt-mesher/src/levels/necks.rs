@@ -23,7 +23,7 @@ use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oracle::Surface;
 use oracle::image::{ImageSurface, Join};
-use rustc_hash::FxHashMap;
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -123,7 +123,6 @@ impl Mesher<'_> {
     /// independently: the result does not depend on the thread count), and kept in
     /// [`crate::levels::ScanCache::labels`].
     fn vertex_labels(&mut self, img: &ImageSurface) -> Vec<Option<usize>> {
-        use rayon::prelude::*;
         let n = self.tri.num_vertices();
         let mut used = vec![false; n];
         for (_, k, _) in self.restricted.iter() {
@@ -208,34 +207,42 @@ fn ring_points(img: &ImageSurface, label: usize, pieces: &Split, round: usize) -
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
         return Vec::new();
     };
-    // The piece of the vertex nearest `p`, and the distance to it; a node is shared by up to
-    // 18 joins, so each node's is looked up once.
-    let mut seen: FxHashMap<[u64; 3], (usize, f64)> = FxHashMap::default();
-    let mut piece_of = |p: DVec3| {
-        *seen
-            .entry(p.to_array().map(f64::to_bits))
-            .or_insert_with(|| {
-                let r = tree
-                    .query(&p.to_array())
-                    .nearest_one::<SquaredEuclidean<f64>>()
-                    .execute();
-                (owner[r.item as usize], r.distance.sqrt())
-            })
-    };
     let margin =
         1.5 * img.volume().spacing().max_element() * f64::from(1u32 << margin_level(round));
-    let mut joins: Vec<Join> = Vec::new();
-    for piece in &pieces[1..] {
-        let lo = piece.iter().fold(DVec3::INFINITY, |a, &p| a.min(p)) - DVec3::splat(margin);
-        let hi = piece.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p)) + DVec3::splat(margin);
-        joins.extend(img.neck_joins(label, lo, hi));
-    }
-    joins.sort_by(|x, y| {
+    // The joins in the boxes around the pieces but the largest (each box's in parallel, in
+    // piece order), sorted by their nodes without repeats (equal nodes: the same join).
+    let mut joins: Vec<Join> = pieces[1..]
+        .par_iter()
+        .flat_map_iter(|piece| {
+            let lo = piece.iter().fold(DVec3::INFINITY, |a, &p| a.min(p)) - DVec3::splat(margin);
+            let hi =
+                piece.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p)) + DVec3::splat(margin);
+            img.neck_joins(label, lo, hi)
+        })
+        .collect();
+    joins.par_sort_unstable_by(|x, y| {
         (x.a.to_array(), x.b.to_array())
             .partial_cmp(&(y.a.to_array(), y.b.to_array()))
             .unwrap()
     });
     joins.dedup();
+    // The piece of the vertex nearest each node, and the distance to it: a node is shared by
+    // up to 18 joins, so each node's is looked up once (in parallel: each independently).
+    let key = |p: DVec3| p.to_array().map(f64::to_bits);
+    let mut nodes: Vec<[u64; 3]> = joins.iter().flat_map(|j| [key(j.a), key(j.b)]).collect();
+    nodes.par_sort_unstable();
+    nodes.dedup();
+    let found: Vec<(usize, f64)> = nodes
+        .par_iter()
+        .map(|k| {
+            let r = tree
+                .query(&k.map(f64::from_bits))
+                .nearest_one::<SquaredEuclidean<f64>>()
+                .execute();
+            (owner[r.item as usize], r.distance.sqrt())
+        })
+        .collect();
+    let piece_of = |p: DVec3| found[nodes.binary_search(&key(p)).expect("a node of a join")];
     // Per pair of pieces, the join whose nodes are nearest to them (ties: node order).
     let mut best: BTreeMap<(usize, usize), (f64, usize)> = BTreeMap::new();
     for (i, j) in joins.iter().enumerate() {
