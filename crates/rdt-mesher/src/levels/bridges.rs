@@ -37,6 +37,11 @@ const ROUNDS: u32 = 6;
 /// Triangles of each piece tried, nearest the join first.
 const NEAR: usize = 8;
 
+/// When no candidate tube is within sigma, the least oversized one that crosses nothing is
+/// taken if its largest circumradius is at most this many times sigma (a split component is
+/// a wrong topology; an oversized tube is a size bound missed, reported as such).
+const MAX_OVERSIZE: f64 = 3.0;
+
 /// Intermediate rings of points of S tried in a tube (0 first).
 const MAX_RINGS: usize = 2;
 
@@ -225,6 +230,8 @@ fn bridge(
         }
         Region::new(mesh, lo - DVec3::splat(reach), hi + DVec3::splat(reach))
     };
+    // The least oversized tube that crosses nothing, for when no tube is within sigma.
+    let mut oversized: Option<(f64, Candidate)> = None;
     for (_, ta, tb) in pairs {
         let (fa, fb) = (out.mesh.triangles[ta], out.mesh.triangles[tb]);
         let variants = (0..=MAX_RINGS).flat_map(|r| [(r, false), (r, true)]);
@@ -252,38 +259,83 @@ fn bridge(
                 .iter()
                 .any(|b| criteria.sigma_at(b.center).is_some_and(|s| b.radius > s))
             {
+                let over = balls
+                    .iter()
+                    .filter_map(|b| criteria.sigma_at(b.center).map(|s| b.radius / s))
+                    .fold(0.0f64, f64::max);
+                if over <= MAX_OVERSIZE
+                    && oversized.as_ref().is_none_or(|o| over < o.0)
+                    && !tube_crosses(&out.mesh, &ring_pts, [ta, tb], &tube, &region)
+                {
+                    let c = Candidate {
+                        removed: [ta, tb],
+                        tube,
+                        ring_pts,
+                        balls,
+                    };
+                    oversized = Some((over, c));
+                }
                 continue;
             }
             if tube_crosses(&out.mesh, &ring_pts, [ta, tb], &tube, &region) {
                 continue;
             }
-            let (hi, lo) = (ta.max(tb), ta.min(tb));
-            let mut trial = std::mem::take(&mut out.mesh);
-            trial.vertices.extend(&ring_pts);
-            trial.triangles.swap_remove(hi);
-            trial.triangles.swap_remove(lo);
-            trial.triangles.extend(&tube);
-            out.balls.swap_remove(hi);
-            out.balls.swap_remove(lo);
-            out.balls.extend(balls);
-            let (lo_p, hi_p) = tube
-                .iter()
-                .flatten()
-                .map(|&v| trial.vertices[v as usize])
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
-                    (l.min(p), h.max(p))
-                });
-            out.mesh = trial;
-            return Some(TopologyDecision {
-                kind: DecisionKind::Bridge,
-                center: 0.5 * (lo_p + hi_p),
-                size: lo_p.distance(hi_p),
-                facets_removed: 2,
-                facets_added: tube.len(),
-            });
+            let c = Candidate {
+                removed: [ta, tb],
+                tube,
+                ring_pts,
+                balls,
+            };
+            return Some(c.apply(out, DecisionKind::Bridge));
         }
     }
-    None
+    let (over, c) = oversized?;
+    Some(c.apply(
+        out,
+        DecisionKind::BridgeOverSize {
+            max_r_over_sigma: over,
+        },
+    ))
+}
+
+/// A tube that replaces two triangles of the mesh: the new points (numbered from the mesh's
+/// vertex count), the tube's triangles and their circumballs.
+struct Candidate {
+    removed: [usize; 2],
+    tube: Vec<[u32; 3]>,
+    ring_pts: Vec<DVec3>,
+    balls: Vec<crate::stats::SurfaceBall>,
+}
+
+impl Candidate {
+    /// Put the tube in the mesh (and its balls in the result's); the decision taken.
+    fn apply(self, out: &mut MeshResult, kind: DecisionKind) -> TopologyDecision {
+        let [ta, tb] = self.removed;
+        let (hi, lo) = (ta.max(tb), ta.min(tb));
+        let mesh = &mut out.mesh;
+        mesh.vertices.extend(&self.ring_pts);
+        mesh.triangles.swap_remove(hi);
+        mesh.triangles.swap_remove(lo);
+        mesh.triangles.extend(&self.tube);
+        out.balls.swap_remove(hi);
+        out.balls.swap_remove(lo);
+        out.balls.extend(self.balls);
+        let (lo_p, hi_p) = self
+            .tube
+            .iter()
+            .flatten()
+            .map(|&v| mesh.vertices[v as usize])
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
+                (l.min(p), h.max(p))
+            });
+        TopologyDecision {
+            kind,
+            center: 0.5 * (lo_p + hi_p),
+            size: lo_p.distance(hi_p),
+            facets_removed: 2,
+            facets_added: self.tube.len(),
+        }
+    }
 }
 
 /// The tube from triangle `fa` to triangle `fb` through `rings` intermediate rings of three
@@ -572,5 +624,80 @@ mod tests {
             assert_eq!(v - f / 2, 2, "rings {rings}");
             assert_eq!(tube.len(), 6 * (rings + 1));
         }
+    }
+
+    #[test]
+    fn a_split_is_bridged_within_sigma_else_oversized_up_to_the_cap_else_left() {
+        let img = cylinder();
+        let join = Join {
+            a: DVec3::new(9.0, 12.0, 12.0),
+            b: DVec3::new(10.0, 12.0, 12.0),
+            via: DVec3::new(9.5, 12.0, 12.0),
+            diagonal: false,
+        };
+        let (mut within, mut over, mut none) = (0, 0, 0);
+        for k in 0..40 {
+            let sigma = 20.0 * 0.8f64.powi(k);
+            let mesh = octahedra(&[5.0, 15.0]);
+            let balls = mesh
+                .triangles
+                .iter()
+                .map(|t| super::super::repair::circumball(t.map(|v| mesh.vertices[v as usize])))
+                .collect();
+            let mut out = MeshResult {
+                mesh,
+                balls,
+                sample: Vec::new(),
+                stats: Default::default(),
+            };
+            let (a, b): (Vec<u32>, Vec<u32>) = ((0..6).collect(), (6..12).collect());
+            let criteria = crate::Criteria::uniform(sigma);
+            let Some(d) = bridge(&mut out, &img, &a, &b, &join, &criteria) else {
+                // Left split only when every tube is over the cap.
+                none += 1;
+                assert!(
+                    over > 0,
+                    "sigma {sigma}: no tube, yet none oversized before"
+                );
+                continue;
+            };
+            // Whatever the kind: one closed sphere, no self-intersection, balls per triangle.
+            let m = &out.mesh;
+            let rep = verify::check(m, &verify::Options::default());
+            for name in verify::CLOSED_MANIFOLD_CHECKS {
+                assert_eq!(
+                    rep.status(name),
+                    Some(verify::Status::Pass),
+                    "sigma {sigma}: {name}"
+                );
+            }
+            assert_eq!(out.balls.len(), m.triangles.len());
+            let (v, f) = (m.vertices.len() as i64, m.triangles.len() as i64);
+            assert_eq!(v - f / 2, 2, "sigma {sigma}");
+            // The tube's balls follow the 14 triangles kept.
+            let worst = out.balls[14..]
+                .iter()
+                .map(|b| b.radius / sigma)
+                .fold(0.0f64, f64::max);
+            match d.kind {
+                DecisionKind::Bridge => {
+                    within += 1;
+                    assert_eq!(
+                        over + none,
+                        0,
+                        "sigma {sigma}: within after a smaller sigma failed"
+                    );
+                    assert!(worst <= 1.0, "sigma {sigma}: {worst}");
+                }
+                DecisionKind::BridgeOverSize { max_r_over_sigma } => {
+                    over += 1;
+                    assert_eq!(none, 0);
+                    assert!(max_r_over_sigma > 1.0 && max_r_over_sigma <= MAX_OVERSIZE);
+                    assert!((worst - max_r_over_sigma).abs() < 1e-9 * worst, "{worst}");
+                }
+                k => panic!("{k:?}"),
+            }
+        }
+        assert!(within > 0 && over > 0 && none > 0, "{within} {over} {none}");
     }
 }

@@ -69,6 +69,13 @@ pub enum DecisionKind {
     /// Two pieces of one split scan component joined by a tube at the scan's join between
     /// them, one triangle of each replaced (`crate::levels::bridges`).
     Bridge,
+    /// As [`DecisionKind::Bridge`], with a tube over the size bound: no candidate tube was
+    /// within sigma, and this one, the least oversized that crosses nothing, was taken
+    /// (`crate::levels::bridges`, at most 3 sigma).
+    BridgeOverSize {
+        /// The largest circumradius of its triangles over sigma there.
+        max_r_over_sigma: f64,
+    },
     /// Triangles joining two components of the voxel scan removed (rule 0) and the `loops`
     /// boundary loops left closed.
     Separate {
@@ -600,9 +607,11 @@ pub(crate) fn apply(
     }
 }
 
-/// The smallest angle of a run's mesh measured again after triangles that are not restricted
-/// facets were added (closings, tubes), and `unmet: angle` brought up to date with it.
+/// The smallest angle and the largest r / sigma of a run's mesh measured again after
+/// triangles that are not restricted facets were added (closings, tubes), and `unmet: angle`
+/// and `unmet: size` brought up to date with them.
 pub(super) fn measure_angles(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
+    measure_sizes(out, opts);
     let min_angle = out
         .mesh
         .triangles
@@ -627,6 +636,34 @@ pub(super) fn measure_angles(out: &mut crate::MeshResult, opts: &crate::MeshOpti
             min_angle_deg: min_angle,
             bound_deg: bound,
         });
+    }
+}
+
+/// The largest r / sigma over the balls of the mesh's triangles (circumballs for the
+/// triangles the repair and the bridges added), into the figures and `unmet: size`.
+fn measure_sizes(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
+    if out.balls.len() != out.mesh.triangles.len() {
+        return;
+    }
+    let Some(m) = out
+        .balls
+        .iter()
+        .filter_map(|b| opts.criteria.sigma_at(b.center).map(|s| b.radius / s))
+        .reduce(f64::max)
+    else {
+        return;
+    };
+    let st = &mut out.stats;
+    st.max_r_over_sigma = Some(m);
+    st.unmet.retain(|u| !matches!(u, crate::Unmet::Size { .. }));
+    if m > 1.0 {
+        st.unmet.insert(
+            0,
+            crate::Unmet::Size {
+                max_r_over_sigma: m,
+            },
+        );
+        st.criteria_met = false;
     }
 }
 
