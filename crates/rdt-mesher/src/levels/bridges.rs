@@ -12,7 +12,11 @@
 //! measures every triangle). A tube is six triangles, or runs through up to [`MAX_RINGS`]
 //! rings of three new points of S (projected from the tube's axis onto the neck's wall), six
 //! triangles per stage: shorter stages have smaller circumballs. When no pair gives one, the
-//! piece stays split and is reported as such.
+//! pairs among the [`NEAR_WIDE`] nearest triangles of each side are tried; when none of those
+//! does either, the least oversized tube that crosses nothing is taken if its circumballs are
+//! within [`MAX_OVERSIZE`] sigma (`bridge_over_size`, with its r / sigma: a size bound
+//! missed and reported, rather than a wrong topology); otherwise the piece stays split and is
+//! reported as such.
 //!
 //! The pieces are taken largest first and bridging repeats until no bridge is added: a piece
 //! whose nearest join led to a smaller piece is bridged again, as part of their group,
@@ -34,8 +38,12 @@ use std::collections::BTreeMap;
 /// Doublings of the search box's margin.
 const ROUNDS: u32 = 6;
 
-/// Triangles of each piece tried, nearest the join first.
+/// Triangles of each piece tried first, nearest the join first.
 const NEAR: usize = 8;
+
+/// Triangles of each piece tried when no pair of the first [`NEAR`] gives a tube within
+/// sigma (before an oversized tube is taken).
+const NEAR_WIDE: usize = 20;
 
 /// When no candidate tube is within sigma, the least oversized one that crosses nothing is
 /// taken if its largest circumradius is at most this many times sigma (a split component is
@@ -202,18 +210,30 @@ fn bridge(
             .map(|(k, t)| (centroid(t).distance_squared(j.via), k))
             .collect();
         v.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-        v.truncate(NEAR);
+        v.truncate(NEAR_WIDE);
         v
     };
     let (na, nb) = (near(&in_a), near(&in_b));
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-    for &(_, ta) in &na {
-        for &(_, tb) in &nb {
+    // The pairs among the [`NEAR`] nearest of each side first, then the others among the
+    // [`NEAR_WIDE`] nearest, each group by increasing distance between their centroids.
+    let (mut pairs, mut wide): (Vec<(f64, usize, usize)>, Vec<(f64, usize, usize)>) =
+        Default::default();
+    for (ia, &(_, ta)) in na.iter().enumerate() {
+        for (ib, &(_, tb)) in nb.iter().enumerate() {
             let d = centroid(&mesh.triangles[ta]).distance_squared(centroid(&mesh.triangles[tb]));
-            pairs.push((d, ta, tb));
+            if ia < NEAR && ib < NEAR {
+                pairs.push((d, ta, tb));
+            } else {
+                wide.push((d, ta, tb));
+            }
         }
     }
-    pairs.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+    let by_distance = |x: &(f64, usize, usize), y: &(f64, usize, usize)| {
+        x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2)))
+    };
+    pairs.sort_by(by_distance);
+    wide.sort_by(by_distance);
+    pairs.extend(wide);
     // The candidate tubes lie near the two sets of triangles and the join (their rings within
     // three tube lengths of the axis): the triangles that may cross them, listed once.
     let region = {
