@@ -426,10 +426,11 @@ impl Plan<'_, '_> {
 }
 
 /// Point-set and mesh inputs: the `data-support` check of the output against the input's
-/// data (the band at least `sigma / 2` for a mesh's exact samples), listing the components `dropped` from the raw output
-/// before (the rule of `pipeline::unsupported`; empty for a mesh not the mesher's); and a
-/// closed input mesh: the `input-topology` check (components and genera as the input's, or
-/// why not at `sigma`).
+/// data (the band at least `sigma / 2` for a mesh's exact samples, whose output chords lie
+/// up to about that far from them at sharp edges), listing the components `dropped` from
+/// the raw output before it (the rule of `pipeline::unsupported`; empty for a mesh that is
+/// not the mesher's raw output); and a closed input mesh: the `input-topology` check
+/// (components and genera as the input's, or why not at `sigma`).
 pub fn data_support(
     report: &mut verify::Report,
     input: &Input,

@@ -36,15 +36,16 @@ pub struct Droppable {
 /// are taken one at a time, smallest area first, each kept out when adding it would break
 /// condition 2 (so the main surface stays, even when unsupported itself, e.g. a sheet
 /// bridging a hole with little agreement). At most [`MAX_DROP_TRIES`] are tried one at a
-/// time. Empty when the data has fewer than 2 points or the mesh no triangles.
-/// Deterministic.
+/// time. Empty, and nothing measured, when the mesh has fewer than 2 components; empty when
+/// the data has fewer than 2 points. Deterministic.
 pub fn droppable_components(
     mesh: &TriMesh,
     data: &[DVec3],
     normals: Option<&[DVec3]>,
     opts: &SupportOptions,
 ) -> Vec<Droppable> {
-    if mesh.triangles.is_empty() {
+    // One component (or none) can never go: nothing to measure (the common case, free).
+    if crate::topology::vertex_components(mesh).len() < 2 {
         return Vec::new();
     }
     let Some(band) = DataBand::new(data, opts) else {
