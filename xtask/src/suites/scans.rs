@@ -7,12 +7,14 @@
 //! 0.1, 0.3 and 0.5% of the diagonal, uniform or 10:1 density between the halves, with or
 //! without the exact normals, seeds 0..2; and a missing patch (radius 5% of the diagonal)
 //! per model. Each is meshed at `--size` 0.6% of the diagonal (angle 30, bipolar oracle,
-//! seed 0) and verified (with the `data-support` check against the points). A row passes
-//! when the mesh is a closed manifold with one component of the source's genus, `verify`
-//! passes, and the two-sided Hausdorff distance to the source mesh is within 0.75% of the
-//! diagonal (noise <= 0.3%) or 1.25% (noise 0.5%); a missing-patch row instead needs the
-//! hole reported as an unsupported region (its centroid within the hole's radius); its
-//! Hausdorff distance is listed, not bounded (the bridge has no data to follow).
+//! seed 0; the components the data does not support dropped, as `mesh` does, unless
+//! `--keep-unsupported`) and verified (with the `data-support` check against the points),
+//! each dropped component listed (its triangles). A row passes when the mesh is a closed
+//! manifold with one component of the source's genus, `verify` passes, and the two-sided
+//! Hausdorff distance to the source mesh is within 0.75% of the diagonal (noise <= 0.3%) or
+//! 1.25% (noise 0.5%); a missing-patch row instead needs the hole reported as an unsupported
+//! region (its centroid within the hole's radius); its Hausdorff distance is listed, not
+//! bounded (the bridge has no data to follow).
 //!
 //! Deterministic: the same table (but the times) on any machine and thread count.
 
