@@ -120,6 +120,7 @@ def _params(
     verify: bool = True,
     certify_epsilon: Optional[float] = None,
     min_component: Optional[float] = None,
+    keep_unsupported: bool = False,
     threads: Optional[int] = None,
     **aliased: Any,
 ) -> Dict[str, Any]:
@@ -140,6 +141,7 @@ def _params(
         verify=verify,
         certify_epsilon=certify_epsilon,
         min_component=min_component,
+        keep_unsupported=bool(keep_unsupported),
         threads=threads,
     )
     for k, v in aliased.items():

@@ -176,6 +176,7 @@ struct Params {
     verify: bool,
     certify_epsilon: Option<f64>,
     min_component: Option<f64>,
+    keep_unsupported: bool,
     threads: Option<usize>,
 }
 
@@ -230,6 +231,7 @@ impl Params {
             verify: self.verify,
             certify_epsilon: self.certify_epsilon,
             min_component: self.min_component,
+            keep_unsupported: self.keep_unsupported,
             cancel: None,
         })
     }

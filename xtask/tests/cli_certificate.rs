@@ -1,6 +1,7 @@
 //! The certificate's messages on the command line (issue 15): the verify line never says a
 //! bare PASS beside an unmet criterion, the SKIP hint names each command's flag, the
-//! certificate says "no guarantee" above epsilon_1, and image Hausdorff figures are measured.
+//! certificate says "no guarantee" above epsilon_1, and image Hausdorff figures are measured;
+//! components a point set does not support are dropped and said (issue 16).
 use std::path::PathBuf;
 
 mod common;
@@ -93,4 +94,59 @@ fn image_hausdorff_is_measured_exactly() {
         .and_then(|x| x.parse().ok())
         .unwrap();
     assert!((0.9 * 6.109..=1.1 * 6.109).contains(&two_sided), "{line}");
+}
+
+/// Issue 16: a simulated scan whose IMLS surface has a bubble. `mesh` drops it, prints it,
+/// and the certificate (on the mesh written) says so; `--keep-unsupported` writes it, and
+/// `verify --against` the points FAILs that mesh (and PASSes the other).
+#[test]
+fn unsupported_components_are_dropped_and_said() {
+    use verify::scan_sim::{ScanSpec, diagonal, simulate};
+    let d = scratch("bubble");
+    let m = meshio::read(root().join("fixtures/models/bunny.ply")).unwrap();
+    let spec = ScanSpec {
+        points: 20_000,
+        noise: 0.005,
+        normals: false,
+        seed: 1,
+        ..Default::default()
+    };
+    let text: String = (simulate(&m, &spec).points.iter())
+        .map(|p| format!("{:.17e} {:.17e} {:.17e}\n", p.x, p.y, p.z))
+        .collect();
+    std::fs::write(d.join("scan.xyz"), text).unwrap();
+    let size = format!("{:.17e}", 0.008 * diagonal(&m));
+    let mesh = |extra: &[&str]| {
+        let mut a = vec!["mesh", "-q", "scan.xyz", "--size", &size];
+        a.extend(extra);
+        stdout(&xtask(&d, &a))
+    };
+    let s = mesh(&["-o", "rule.ply", "--report", "r.json"]);
+    has(
+        &s,
+        &[
+            "closed manifold; genus [",
+            "dropped 1 component(s) the data does not support (--keep-unsupported keeps them",
+            "PASS data-support: ",
+            "1 unsupported components dropped from the output before this check (",
+        ],
+    );
+    let r = json(&d.join("r.json"));
+    let dropped = r["verify"]["data_support"]["dropped_components"]
+        .as_array()
+        .unwrap();
+    assert_eq!(dropped.len(), 1, "{r}");
+    let dec = &r["stats"]["topology_decisions"][0];
+    assert_eq!(dec["kind"], "drop_unsupported_component", "{dec}");
+    assert_eq!(dec["triangles"], dropped[0]["triangles"]);
+    let s = mesh(&["--keep-unsupported", "-o", "raw.ply"]);
+    has(&s, &["2 components", "FAIL data-support: "]);
+    lacks(&s, &["dropped"]);
+    let v = stdout(&xtask(&d, &["verify", "raw.ply", "--against", "scan.xyz"]));
+    has(
+        line_starting(&v, "FAIL data-support"),
+        &["1 mesh components below 50% support"],
+    );
+    let v = stdout(&xtask(&d, &["verify", "rule.ply", "--against", "scan.xyz"]));
+    line_starting(&v, "PASS data-support");
 }

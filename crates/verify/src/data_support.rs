@@ -27,6 +27,11 @@
 //!   *unsupported regions*: where the mesh bridges a hole in the data. They are reported
 //!   (area, size, location) but fail nothing by themselves.
 //!
+//! - The mesher drops the unsupported components that no data needs
+//!   ([`droppable_components`], the rule of `rdt_mesher::pipeline`'s `unsupported` module);
+//!   the check then runs on the mesh written and lists them
+//!   ([`DataSupport::dropped_components`]).
+//!
 //! Invariants: deterministic (parallel maps collected in order, sequential reductions); the
 //! check FAILs iff some mesh component is unsupported or some data component is uncovered.
 
@@ -38,6 +43,9 @@ use serde::Serialize;
 
 use crate::distance::{MeshDistance, triangle_samples};
 use crate::topology::{Dsu, vertex_components};
+
+mod drop_rule;
+pub use drop_rule::{Droppable, MAX_DROP_TRIES, droppable_components};
 
 /// Parameters of the data-support check.
 #[derive(Clone, Debug, PartialEq)]
@@ -148,6 +156,11 @@ pub struct DataSupport {
     pub min_share: f64,
     /// The least orientation agreement asked (when the data has normals).
     pub min_agreement: Option<f64>,
+    /// Components of the mesher's raw output that the mesher dropped as unsupported before
+    /// this check ran (see [`droppable_components`]; empty when none was, or the mesh was
+    /// not the mesher's). The check is on the mesh without them; they are listed so that
+    /// the change is not silent.
+    pub dropped_components: Vec<ComponentSupport>,
 }
 
 impl DataSupport {
@@ -208,6 +221,29 @@ impl DataSupport {
                     Some(a) => format!(" or {a:.2} orientation agreement"),
                     None => String::new(),
                 }
+            );
+        }
+        if !self.dropped_components.is_empty() {
+            let list: Vec<String> = self
+                .dropped_components
+                .iter()
+                .map(|c| {
+                    format!(
+                        "{} triangles, area {:.3e}, {:.3e} across, at {}, {:.1}% supported{}",
+                        c.triangles,
+                        c.area,
+                        c.extent,
+                        fmt_p(c.centroid),
+                        100.0 * c.supported_share,
+                        c.agreement
+                            .map_or(String::new(), |a| format!(", agreement {a:.2}"))
+                    )
+                })
+                .collect();
+            s += &format!(
+                "; {} unsupported components dropped from the output before this check ({})",
+                self.dropped_components.len(),
+                list.join("; ")
             );
         }
         s += &format!("; {} data components", self.data_components_total);
@@ -410,60 +446,15 @@ pub fn data_support_oriented(
     }
     let band = DataBand::new(data, opts)?;
     let normals = normals.filter(|n| n.len() == data.len());
-    let v = &mesh.vertices;
-    let (per_tri, agree) = per_triangle(mesh, &band, normals);
+    let (components, _, per_tri) = component_measures(mesh, &band, normals);
     let total_area: f64 = per_tri.iter().map(|x| x.0).sum();
     let supported_area: f64 = per_tri.iter().map(|x| x.0 * x.1).sum();
-    // Mesh components (vertex-connected).
-    let comps = vertex_components(mesh);
-    let mut comp_of = vec![usize::MAX; v.len()];
-    for (k, c) in comps.iter().enumerate() {
-        for &i in c {
-            comp_of[i] = k;
-        }
-    }
-    let mut acc = vec![(0usize, usize::MAX, 0.0f64, 0.0f64, 0.0f64); comps.len()];
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        let k = comp_of[tri[0] as usize];
-        let e = &mut acc[k];
-        e.0 += 1;
-        e.1 = e.1.min(t);
-        e.2 += per_tri[t].0;
-        e.3 += per_tri[t].0 * per_tri[t].1;
-        e.4 += agree.as_ref().map_or(0.0, |a| a[t]);
-    }
-    let components: Vec<ComponentSupport> = comps
-        .iter()
-        .zip(&acc)
-        .map(|(c, &(triangles, first, area, sup, ag))| {
-            let (centroid, extent) = centroid_extent(c.iter().map(|&i| (v[i], 1.0)));
-            ComponentSupport {
-                first_triangle: first,
-                triangles,
-                area,
-                supported_share: if area > 0.0 { sup / area } else { 1.0 },
-                centroid,
-                extent,
-                agreement: agree
-                    .is_some()
-                    .then_some(if area > 0.0 { ag / area } else { 1.0 }),
-            }
-        })
-        .collect();
     let unsupported_components = components
         .iter()
         .filter(|c| !c.supported(opts.min_share, opts.min_agreement))
         .count();
     // Data coverage.
-    let bvh = crate::intersect::triangle_bvh(mesh);
-    let dist = MeshDistance::new(mesh, &bvh);
-    let covered: Vec<bool> = (0..data.len())
-        .into_par_iter()
-        .map(|i| {
-            dist.nearest(data[i])
-                .is_some_and(|(_, d)| d <= band.band[i].max(2.0 * band.spacing[i]))
-        })
-        .collect();
+    let covered = covered_points(mesh, &band);
     let mut data_components = data_components(&band, &covered, opts.min_data_component);
     data_components.sort_by_key(|d| std::cmp::Reverse(d.points));
     let uncovered_data_components = data_components
@@ -501,12 +492,80 @@ pub fn data_support_oriented(
         unsupported_components,
         uncovered_data_components,
         min_share: opts.min_share,
-        min_agreement: agree.is_some().then_some(opts.min_agreement),
+        min_agreement: normals.is_some().then_some(opts.min_agreement),
+        dropped_components: Vec::new(),
     })
 }
 
-/// Components of the data's kNN graph with at least `min_points` points.
-fn data_components(band: &DataBand, covered: &[bool], min_points: usize) -> Vec<DataComponent> {
+/// Every component of `mesh` (in the order of [`vertex_components`]) with its support, the
+/// component of each triangle, and each triangle's (area, supported share).
+#[allow(clippy::type_complexity)]
+fn component_measures(
+    mesh: &TriMesh,
+    band: &DataBand,
+    normals: Option<&[DVec3]>,
+) -> (Vec<ComponentSupport>, Vec<usize>, Vec<(f64, f64)>) {
+    let v = &mesh.vertices;
+    let (per_tri, agree) = per_triangle(mesh, band, normals);
+    // Mesh components (vertex-connected).
+    let comps = vertex_components(mesh);
+    let mut comp_of = vec![usize::MAX; v.len()];
+    for (k, c) in comps.iter().enumerate() {
+        for &i in c {
+            comp_of[i] = k;
+        }
+    }
+    let comp_of_triangle: Vec<usize> = mesh
+        .triangles
+        .iter()
+        .map(|t| comp_of[t[0] as usize])
+        .collect();
+    let mut acc = vec![(0usize, usize::MAX, 0.0f64, 0.0f64, 0.0f64); comps.len()];
+    for (t, &k) in comp_of_triangle.iter().enumerate() {
+        let e = &mut acc[k];
+        e.0 += 1;
+        e.1 = e.1.min(t);
+        e.2 += per_tri[t].0;
+        e.3 += per_tri[t].0 * per_tri[t].1;
+        e.4 += agree.as_ref().map_or(0.0, |a| a[t]);
+    }
+    let components = comps
+        .iter()
+        .zip(&acc)
+        .map(|(c, &(triangles, first, area, sup, ag))| {
+            let (centroid, extent) = centroid_extent(c.iter().map(|&i| (v[i], 1.0)));
+            ComponentSupport {
+                first_triangle: first,
+                triangles,
+                area,
+                supported_share: if area > 0.0 { sup / area } else { 1.0 },
+                centroid,
+                extent,
+                agreement: agree
+                    .is_some()
+                    .then_some(if area > 0.0 { ag / area } else { 1.0 }),
+            }
+        })
+        .collect();
+    (components, comp_of_triangle, per_tri)
+}
+
+/// Which data points the mesh covers: within their band of it (or twice their spacing,
+/// whichever is larger).
+fn covered_points(mesh: &TriMesh, band: &DataBand) -> Vec<bool> {
+    let bvh = crate::intersect::triangle_bvh(mesh);
+    let dist = MeshDistance::new(mesh, &bvh);
+    (0..band.points.len())
+        .into_par_iter()
+        .map(|i| {
+            dist.nearest(band.points[i])
+                .is_some_and(|(_, d)| d <= band.band[i].max(2.0 * band.spacing[i]))
+        })
+        .collect()
+}
+
+/// The points of each component of the data's kNN graph with at least `min_points` points.
+fn data_groups(band: &DataBand, min_points: usize) -> Vec<Vec<usize>> {
     let n = band.points.len();
     let mut dsu = Dsu::new(n);
     for (i, nb) in band.knn.iter().enumerate() {
@@ -524,9 +583,14 @@ fn data_components(band: &DataBand, covered: &[bool], min_points: usize) -> Vec<
         }
         groups[index[r]].push(i);
     }
+    groups.retain(|g| g.len() >= min_points.max(1));
     groups
+}
+
+/// Components of the data's kNN graph with at least `min_points` points.
+fn data_components(band: &DataBand, covered: &[bool], min_points: usize) -> Vec<DataComponent> {
+    data_groups(band, min_points)
         .into_iter()
-        .filter(|g| g.len() >= min_points.max(1))
         .map(|g| {
             let cov = g.iter().filter(|&&i| covered[i]).count();
             let (centroid, extent) = centroid_extent(g.iter().map(|&i| (band.points[i], 1.0)));
@@ -622,22 +686,26 @@ pub fn mesh_samples(mesh: &TriMesh, target: usize) -> Vec<DVec3> {
 
 /// Add the `data-support` check (and section) to `report`; SKIP if the check could not run.
 pub fn add_check(r: &mut crate::Report, mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) {
-    add_check_oriented(r, mesh, data, None, opts);
+    add_check_oriented(r, mesh, data, None, &[], opts);
 }
 
-/// [`add_check`] with the data's oriented normals (see [`data_support_oriented`]).
+/// [`add_check`] with the data's oriented normals (see [`data_support_oriented`]) and the
+/// components the mesher dropped from its raw output before (see [`droppable_components`]):
+/// the check is on `mesh`, and its detail and section list them.
 pub fn add_check_oriented(
     r: &mut crate::Report,
     mesh: &TriMesh,
     data: &[DVec3],
     normals: Option<&[DVec3]>,
+    dropped: &[ComponentSupport],
     opts: &SupportOptions,
 ) {
     if r.input_error.is_some() {
         return;
     }
     match data_support_oriented(mesh, data, normals, opts) {
-        Some(ds) => {
+        Some(mut ds) => {
+            ds.dropped_components = dropped.to_vec();
             let status = crate::pass_fail(ds.passed());
             r.push("data-support", status, ds.detail());
             r.data_support = Some(ds);

@@ -4,7 +4,9 @@
 
 use glam::DVec3;
 use meshio::TriMesh;
-use verify::data_support::{data_support, data_support_oriented, mesh_samples};
+use verify::data_support::{
+    data_support, data_support_oriented, droppable_components, mesh_samples,
+};
 use verify::scan_sim::{ScanSpec, diagonal, simulate};
 use verify::{Status, SupportOptions};
 
@@ -240,4 +242,78 @@ fn a_bubble_within_the_band_fails_on_orientation() {
         "{}",
         r.detail()
     );
+}
+
+/// The drop rule (`droppable_components`): a planted bubble (off the surface, or within the
+/// band with the wrong orientation) is dropped, the source mesh loses nothing; an unsupported
+/// component that alone covers some data (a second object meshed inside out) stays, and so
+/// does a mesh with one component, however unsupported (offset by 3% of the diagonal).
+#[test]
+fn the_drop_rule_takes_bubbles_and_never_data() {
+    let m = bunny();
+    let d = diagonal(&m);
+    let spec = ScanSpec {
+        points: 20_000,
+        noise: 0.002,
+        seed: 7,
+        ..Default::default()
+    };
+    let s = simulate(&m, &spec);
+    let normals = s.normals.clone().expect("the scan's exact normals");
+    let opts = SupportOptions::default();
+    assert!(droppable_components(&m, &s.points, Some(&normals), &opts).is_empty());
+    let top = m
+        .vertices
+        .iter()
+        .copied()
+        .max_by(|a, b| a.z.total_cmp(&b.z))
+        .unwrap();
+    // Two bubbles: one 2.2% of the diagonal above the top (outside the band), one on the
+    // surface (inside the band, agreement near 0).
+    let mut bubbled = m.clone();
+    let n0 = m.triangles.len();
+    for (c, r) in [(top + DVec3::Z * 0.0295 * d, 0.0075 * d), (top, 0.005 * d)] {
+        let (bv, bt) = octahedron(c, r, bubbled.vertices.len() as u32);
+        bubbled.vertices.extend(bv);
+        bubbled.triangles.extend(bt);
+    }
+    let drops = droppable_components(&bubbled, &s.points, Some(&normals), &opts);
+    assert_eq!(drops.len(), 2, "{drops:?}");
+    for (k, x) in drops.iter().enumerate() {
+        assert_eq!(x.triangles.len(), 8);
+        assert!(x.triangles.iter().all(|&t| t >= n0), "{x:?}");
+        assert_eq!(x.support.triangles, 8);
+        assert!(!x.support.supported(opts.min_share, opts.min_agreement));
+        assert!(x.support.area > 0.0 && x.support.extent > 0.0, "{k}: {x:?}");
+    }
+    // The same figures as the check's own components.
+    let r = data_support_oriented(&bubbled, &s.points, Some(&normals), &opts).unwrap();
+    for x in &drops {
+        assert!(r.components.contains(&x.support), "{x:?}");
+    }
+    // A second object, scanned and meshed inside out: unsupported (agreement near -1), but
+    // the only cover of its data: it stays.
+    let shift = DVec3::X * 2.0 * d;
+    let mut two = m.clone();
+    let base = two.vertices.len() as u32;
+    two.vertices.extend(m.vertices.iter().map(|v| *v + shift));
+    two.triangles.extend(
+        m.triangles
+            .iter()
+            .map(|t| [t[0] + base, t[2] + base, t[1] + base]),
+    );
+    let mut pts = s.points.clone();
+    pts.extend(s.points.iter().map(|p| *p + shift));
+    let mut nrm = normals.clone();
+    nrm.extend(normals.iter().copied());
+    let r = data_support_oriented(&two, &pts, Some(&nrm), &opts).unwrap();
+    assert_eq!(r.unsupported_components, 1, "{}", r.detail());
+    assert!(droppable_components(&two, &pts, Some(&nrm), &opts).is_empty());
+    // One component offset by 3%: unsupported, never dropped (nothing would be left).
+    let vn = vertex_normals(&m);
+    let mut off = m.clone();
+    for (v, n) in off.vertices.iter_mut().zip(&vn) {
+        *v += *n * 0.03 * d;
+    }
+    assert!(droppable_components(&off, &s.points, Some(&normals), &opts).is_empty());
 }

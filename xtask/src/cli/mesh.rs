@@ -120,6 +120,12 @@ pub struct MeshArgs {
     /// units cubed, e.g. mm^3), each listed in the report's topology_decisions.
     #[arg(long, value_name = "VOLUME", allow_hyphen_values = true, value_parser = parse_volume)]
     pub min_component: Option<f64>,
+    /// Point sets and meshes: keep the output's components that the input data does not
+    /// support (the raw mesh of the IMLS surface). By default such a component is dropped
+    /// when no data is lost (docs/GUIDE.md, "Point sets and scans"), printed and listed in
+    /// the report's topology_decisions and verify.data_support.dropped_components.
+    #[arg(long)]
+    pub keep_unsupported: bool,
     /// Requested epsilon for the certificate, in (0, 1) (default: sigma / d_M^inf when known).
     #[arg(long, allow_hyphen_values = true, value_parser = epsilon("--certify-epsilon"))]
     pub certify_epsilon: Option<f64>,
@@ -237,6 +243,7 @@ fn request(a: &MeshArgs) -> Result<Request> {
         verify: !a.no_verify,
         certify_epsilon: a.certify_epsilon,
         min_component: a.min_component,
+        keep_unsupported: a.keep_unsupported,
         cancel: None,
     })
 }
@@ -491,6 +498,7 @@ fn print_single(spec: &str, out: &Outcome, out_path: &Path) {
             }
         );
     }
+    print_dropped(out);
     if let Some(line) = out.verify_line() {
         outln!("{line}");
     }
@@ -502,15 +510,53 @@ fn print_single(spec: &str, out: &Outcome, out_path: &Path) {
     }
 }
 
+/// The components dropped as unsupported by the input data (`pipeline`'s rule; kept with
+/// `--keep-unsupported`), one line each.
+fn print_dropped(out: &Outcome) {
+    let dropped: Vec<_> = out
+        .stats
+        .topology_decisions
+        .iter()
+        .filter_map(|d| match &d.kind {
+            rdt_mesher::DecisionKind::DropUnsupportedComponent(c) => Some(c),
+            _ => None,
+        })
+        .collect();
+    if dropped.is_empty() {
+        return;
+    }
+    outln!(
+        "dropped {} component(s) the data does not support (--keep-unsupported keeps them; listed in the report's topology_decisions):",
+        dropped.len()
+    );
+    for c in dropped {
+        let [x, y, z] = c.centroid;
+        outln!(
+            "  {} triangles, area {:.3e}, {:.3e} across, at ({x:.4}, {y:.4}, {z:.4}): {:.1}% of the area within the data's band{}",
+            c.triangles,
+            c.area,
+            c.extent,
+            100.0 * c.supported_share,
+            c.agreement
+                .map_or(String::new(), |a| format!(", orientation agreement {a:.2}"))
+        );
+    }
+}
+
 /// The details of a failed `input-topology` or `data-support` check (why the output's
-/// topology is not the input's; which component the data does not support).
+/// topology is not the input's; which component the data does not support), and of a
+/// `data-support` check that says components were dropped before it.
 fn print_data_failures(out: &Outcome) {
     let Some(r) = &out.report else { return };
+    let dropped = r
+        .data_support
+        .as_ref()
+        .is_some_and(|d| !d.dropped_components.is_empty());
     for name in ["input-topology", "data-support"] {
         if let Some(c) = r.check(name)
-            && c.status == verify::Status::Fail
+            && (c.status == verify::Status::Fail || (name == "data-support" && dropped))
         {
-            outln!("  FAIL {name}: {}", c.detail);
+            outln!("  {} {name}: {}", c.status, c.detail);
         }
     }
 }
@@ -573,6 +619,7 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
             outln!("verify: FAIL: {}", c.failures().join(", "));
         }
     }
+    print_dropped(out);
     print_data_failures(out);
     if let Verdict::Fail(failures) = &out.verdict {
         for f in failures {

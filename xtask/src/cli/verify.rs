@@ -120,7 +120,7 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
             };
             let mut r = verify::check_against(&mesh, opened.surface(), &opts);
             // Point sets and meshes: the data-support check (the mesh's mean edge as sigma).
-            rdt_mesher::pipeline::data_support(&mut r, &opened, &mesh, mean_edge(&mesh));
+            rdt_mesher::pipeline::data_support(&mut r, &opened, &mesh, mean_edge(&mesh), &[]);
             r
         }
         None => verify::check(&mesh, &opts),

@@ -7,12 +7,14 @@
 //! 0.1, 0.3 and 0.5% of the diagonal, uniform or 10:1 density between the halves, with or
 //! without the exact normals, seeds 0..2; and a missing patch (radius 5% of the diagonal)
 //! per model. Each is meshed at `--size` 0.6% of the diagonal (angle 30, bipolar oracle,
-//! seed 0) and verified (with the `data-support` check against the points). A row passes
-//! when the mesh is a closed manifold with one component of the source's genus, `verify`
-//! passes, and the two-sided Hausdorff distance to the source mesh is within 0.75% of the
-//! diagonal (noise <= 0.3%) or 1.25% (noise 0.5%); a missing-patch row instead needs the
-//! hole reported as an unsupported region (its centroid within the hole's radius); its
-//! Hausdorff distance is listed, not bounded (the bridge has no data to follow).
+//! seed 0; the components the data does not support dropped, as `mesh` does, unless
+//! `--keep-unsupported`) and verified (with the `data-support` check against the points),
+//! each dropped component listed (its triangles). A row passes when the mesh is a closed
+//! manifold with one component of the source's genus, `verify` passes, and the two-sided
+//! Hausdorff distance to the source mesh is within 0.75% of the diagonal (noise <= 0.3%) or
+//! 1.25% (noise 0.5%); a missing-patch row instead needs the hole reported as an unsupported
+//! region (its centroid within the hole's radius); its Hausdorff distance is listed, not
+//! bounded (the bridge has no data to follow).
 //!
 //! Deterministic: the same table (but the times) on any machine and thread count.
 
@@ -45,6 +47,10 @@ pub struct ScansArgs {
     /// Only the rows whose name contains this string (e.g. `fandisk`, `hole`).
     #[arg(long)]
     pub filter: Option<String>,
+    /// Keep the output's components that the data does not support (the raw IMLS mesh, as
+    /// `mesh --keep-unsupported`); by default the pipeline drops them when no data is lost.
+    #[arg(long)]
+    pub keep_unsupported: bool,
 }
 
 /// A model of `fixtures/models` and its genus.
@@ -65,6 +71,9 @@ pub struct Row {
     pub seed: u64,
     pub vertices: usize,
     pub components: usize,
+    /// Components dropped as unsupported by the data (the pipeline's rule), with their
+    /// triangle counts.
+    pub dropped: Vec<usize>,
     pub genus: Vec<Option<i64>>,
     pub expected_genus: i64,
     pub closed_manifold: bool,
@@ -169,7 +178,13 @@ pub fn mesh_hausdorff(a: &TriMesh, b: &TriMesh) -> [(f64, Option<[f64; 3]>); 2] 
     [one(a, b), one(b, a)]
 }
 
-fn run_row(model: &'static str, genus: i64, spec: &ScanSpec, size: f64) -> Result<Row> {
+fn run_row(
+    model: &'static str,
+    genus: i64,
+    spec: &ScanSpec,
+    size: f64,
+    keep_unsupported: bool,
+) -> Result<Row> {
     let path = root().join(format!("fixtures/models/{model}.ply"));
     let source = meshio::read(&path).with_context(|| format!("reading {}", path.display()))?;
     let diag = diagonal(&source);
@@ -183,9 +198,22 @@ fn run_row(model: &'static str, genus: i64, spec: &ScanSpec, size: f64) -> Resul
     let input = Input::point_cloud(cloud, &name, name.clone())?;
     let req = Request {
         size: SizeRequest::Size(size * diag),
+        keep_unsupported,
         ..Default::default()
     };
     let out = plan(&input, &req)?.execute(&mut |_| {})?;
+    let dropped = out
+        .stats
+        .topology_decisions
+        .iter()
+        .filter(|d| {
+            matches!(
+                d.kind,
+                rdt_mesher::DecisionKind::DropUnsupportedComponent { .. }
+            )
+        })
+        .map(|d| d.facets_removed)
+        .collect();
     let seconds = t0.elapsed().as_secs_f64();
     let report = out.report.as_ref().context("no verify report")?;
     let topo = report.topology.as_ref().context("no topology")?;
@@ -218,6 +246,7 @@ fn run_row(model: &'static str, genus: i64, spec: &ScanSpec, size: f64) -> Resul
         seed: spec.seed,
         vertices: out.mesh.vertices.len(),
         components: genus_v.len(),
+        dropped,
         genus: genus_v,
         expected_genus: genus,
         closed_manifold: closed,
@@ -247,8 +276,8 @@ fn markdown(rows: &[Row], points: usize, size: f64) -> String {
         "{points} points per scan, `--size` {}% of the diagonal; Hausdorff: two-sided, to the source mesh, % of the diagonal.\n\n",
         size * 100.0
     );
-    s += "| scan | noise % | density | normals | seed | vertices | components | genus (want) | Hausdorff % (bound) | verify | data-support | hole flagged | pass |\n";
-    s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    s += "| scan | noise % | density | normals | seed | vertices | components | dropped (triangles) | genus (want) | Hausdorff % (bound) | verify | data-support | hole flagged | pass |\n";
+    s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         let g: Vec<String> = r
             .genus
@@ -256,7 +285,7 @@ fn markdown(rows: &[Row], points: usize, size: f64) -> String {
             .map(|g| g.map_or("?".into(), |g| g.to_string()))
             .collect();
         s += &format!(
-            "| {} | {} | {}:1 | {} | {} | {} | {} | [{}] ({}) | {:.3} ({:.2}) | {} | {} | {} | {} |\n",
+            "| {} | {} | {}:1 | {} | {} | {} | {} | {} | [{}] ({}) | {:.3} ({:.2}) | {} | {} | {} | {} |\n",
             r.name,
             r.noise * 100.0,
             r.density_ratio,
@@ -264,6 +293,11 @@ fn markdown(rows: &[Row], points: usize, size: f64) -> String {
             r.seed,
             r.vertices,
             r.components,
+            if r.dropped.is_empty() {
+                "-".to_string()
+            } else {
+                format!("{:?}", r.dropped)
+            },
             g.join(", "),
             r.expected_genus,
             100.0 * r.hausdorff,
@@ -296,12 +330,13 @@ pub fn run(a: &ScansArgs) -> Result<()> {
         {
             continue;
         }
-        let r = run_row(model, genus, &spec, a.size)?;
+        let r = run_row(model, genus, &spec, a.size, a.keep_unsupported)?;
         outln!(
-            "{:<34} {:>6} V  comps {}  genus {:?}  H {:.3}% (<= {:.2}%; to {:.3}% at {:?}, from {:.3}% at {:?})  verify {}  {:.1} s  {}",
+            "{:<34} {:>6} V  comps {}  dropped {:?}  genus {:?}  H {:.3}% (<= {:.2}%; to {:.3}% at {:?}, from {:.3}% at {:?})  verify {}  {:.1} s  {}",
             r.name,
             r.vertices,
             r.components,
+            r.dropped,
             r.genus,
             100.0 * r.hausdorff,
             100.0 * r.hausdorff_bound,

@@ -94,6 +94,10 @@ pub enum DecisionKind {
         /// One of its vertices (a point of S: names the component it stood for).
         vertex: DVec3,
     },
+    /// Point sets and meshes: a component the input data does not support, removed
+    /// (`crate::pipeline`'s rule; `--keep-unsupported` keeps it), with the `data-support`
+    /// check's figures on the raw output.
+    DropUnsupportedComponent(verify::data_support::ComponentSupport),
 }
 
 /// One decision of the topological repair, with where it was taken.

@@ -35,6 +35,7 @@ mod plan;
 pub mod report;
 mod request;
 pub mod source_topology;
+mod unsupported;
 
 pub use budget::{
     AUTO_MAX_VERTICES, AUTO_TARGET_VERTICES, Budget, Budgets, DEFAULT_MAX_MEMORY,

@@ -299,6 +299,9 @@ impl Plan<'_, '_> {
         let mut out = Outcome::new(result);
         out.sigma = Some(sigma);
         out.notes = self.notes;
+        if !self.request.keep_unsupported {
+            super::unsupported::drop_unsupported(&mut out, self.input, sigma);
+        }
         if let Some(n) = self
             .forecast
             .and_then(|f| f.overshoot(out.mesh.vertices.len()))
@@ -315,7 +318,8 @@ impl Plan<'_, '_> {
             let epsilon = (self.request.certify_epsilon).or(self.input.dm_inf().map(|d| sigma / d));
             let vopts = verify_options(self.input, self.request, &out, epsilon);
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
-            data_support(&mut report, self.input, &out.mesh, sigma);
+            let dropped = super::unsupported::dropped(&out.stats);
+            data_support(&mut report, self.input, &out.mesh, sigma, &dropped);
             out.report = Some(report);
         }
         Ok(out)
@@ -338,6 +342,9 @@ impl Plan<'_, '_> {
         })?;
         let mut out = Outcome::new(tp.second);
         out.notes = self.notes;
+        if !self.request.keep_unsupported {
+            super::unsupported::drop_unsupported(&mut out, self.input, tp.sigma0);
+        }
         if self.request.verify {
             progress(Event::Verifying);
             let eps = Some(self.request.certify_epsilon.unwrap_or(epsilon));
@@ -347,7 +354,8 @@ impl Plan<'_, '_> {
                 ..verify_options(self.input, self.request, &out, eps)
             };
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
-            data_support(&mut report, self.input, &out.mesh, tp.sigma0);
+            let dropped = super::unsupported::dropped(&out.stats);
+            data_support(&mut report, self.input, &out.mesh, tp.sigma0, &dropped);
             out.report = Some(report);
         }
         out.two_pass = Some(TwoPassOutcome {
@@ -388,6 +396,9 @@ impl Plan<'_, '_> {
         let progress = shared.into_inner().expect("a progress callback panicked");
         let mut out = Outcome::new(a.result);
         out.notes = self.notes;
+        if !self.request.keep_unsupported {
+            super::unsupported::drop_unsupported(&mut out, self.input, a.floor);
+        }
         if self.request.verify {
             progress(Event::Verifying);
             let eps = Some(self.request.certify_epsilon.unwrap_or(epsilon));
@@ -397,7 +408,8 @@ impl Plan<'_, '_> {
                 ..verify_options(self.input, self.request, &out, eps)
             };
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
-            data_support(&mut report, self.input, &out.mesh, a.floor);
+            let dropped = super::unsupported::dropped(&out.stats);
+            data_support(&mut report, self.input, &out.mesh, a.floor, &dropped);
             out.report = Some(report);
         }
         out.adaptive = Some(super::AdaptiveOutcome {
@@ -415,13 +427,16 @@ impl Plan<'_, '_> {
 
 /// Point-set and mesh inputs: the `data-support` check of the output against the input's
 /// data (the band at least `sigma / 2` for a mesh's exact samples, whose output chords lie
-/// up to about that far from them at sharp edges); and a closed input mesh: the
-/// `input-topology` check (components and genera as the input's, or why not at `sigma`).
+/// up to about that far from them at sharp edges), listing the components `dropped` from
+/// the raw output before it (the rule of `pipeline::unsupported`; empty for a mesh that is
+/// not the mesher's raw output); and a closed input mesh: the `input-topology` check
+/// (components and genera as the input's, or why not at `sigma`).
 pub fn data_support(
     report: &mut verify::Report,
     input: &Input,
     mesh: &meshio::TriMesh,
     sigma: f64,
+    dropped: &[verify::data_support::ComponentSupport],
 ) {
     if let Some(src) = &input.source_topology {
         super::source_topology::add_check(report, src, input.surface(), sigma);
@@ -429,17 +444,9 @@ pub fn data_support(
     let Some(data) = &input.support_data else {
         return;
     };
-    let min_band = if input.kind == super::InputKind::Polyhedron {
-        0.5 * sigma
-    } else {
-        0.0
-    };
-    let opts = verify::SupportOptions {
-        min_band,
-        ..Default::default()
-    };
+    let opts = super::unsupported::support_options(input, sigma);
     let normals = input.support_normals.as_deref();
-    verify::data_support::add_check_oriented(report, mesh, data, normals, &opts);
+    verify::data_support::add_check_oriented(report, mesh, data, normals, dropped, &opts);
 }
 
 /// The verifier's options common to both modes: the mesh's surface balls, the certified

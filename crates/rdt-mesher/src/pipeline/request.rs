@@ -90,6 +90,10 @@ pub struct Request {
     pub certify_epsilon: Option<f64>,
     /// Drop closed components enclosing less than this volume (units cubed), each reported.
     pub min_component: Option<f64>,
+    /// Point sets and meshes: keep the output's components that the input data does not
+    /// support (by default they are dropped when no data is lost, each reported; the rule
+    /// of `pipeline::unsupported`, docs/GUIDE.md "Point sets and scans").
+    pub keep_unsupported: bool,
     /// Stop meshing (like a budget) once cancelled; unused, it changes nothing.
     pub cancel: Option<crate::Cancel>,
 }
@@ -112,6 +116,7 @@ impl Default for Request {
             verify: true,
             certify_epsilon: None,
             min_component: None,
+            keep_unsupported: false,
             cancel: None,
         }
     }
