@@ -216,8 +216,8 @@ fn bridge(
     let (na, nb) = (near(&in_a), near(&in_b));
     // The pairs among the [`NEAR`] nearest of each side first, then the others among the
     // [`NEAR_WIDE`] nearest, each group by increasing distance between their centroids.
-    let (mut pairs, mut wide): (Vec<(f64, usize, usize)>, Vec<(f64, usize, usize)>) =
-        Default::default();
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    let mut wide: Vec<(f64, usize, usize)> = Vec::new();
     for (ia, &(_, ta)) in na.iter().enumerate() {
         for (ib, &(_, tb)) in nb.iter().enumerate() {
             let d = centroid(&mesh.triangles[ta]).distance_squared(centroid(&mesh.triangles[tb]));
