@@ -24,6 +24,8 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oracle::Surface;
 use oracle::image::{ImageSurface, Join};
 use rayon::prelude::*;
+use rustc_hash::{FxHashMap, FxHashSet};
+use std::cmp::Ordering;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -210,51 +212,61 @@ fn ring_points(img: &ImageSurface, label: usize, pieces: &Split, round: usize) -
     let margin =
         1.5 * img.volume().spacing().max_element() * f64::from(1u32 << margin_level(round));
     // The joins in the boxes around the pieces but the largest (each box's in parallel, in
-    // piece order), sorted by their nodes without repeats (equal nodes: the same join).
-    let mut joins: Vec<Join> = pieces[1..]
+    // piece order), without repeats (equal nodes: the same join), keyed by their nodes.
+    let key = |p: DVec3| p.to_array().map(f64::to_bits);
+    let found: Vec<Vec<Join>> = pieces[1..]
         .par_iter()
-        .flat_map_iter(|piece| {
+        .map(|piece| {
             let lo = piece.iter().fold(DVec3::INFINITY, |a, &p| a.min(p)) - DVec3::splat(margin);
             let hi =
                 piece.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p)) + DVec3::splat(margin);
             img.neck_joins(label, lo, hi)
         })
         .collect();
-    joins.par_sort_unstable_by(|x, y| {
-        (x.a.to_array(), x.b.to_array())
-            .partial_cmp(&(y.a.to_array(), y.b.to_array()))
-            .unwrap()
-    });
-    joins.dedup();
+    let mut seen: FxHashSet<([u64; 3], [u64; 3])> = FxHashSet::default();
+    let joins: Vec<Join> = found
+        .into_iter()
+        .flatten()
+        .filter(|j| seen.insert((key(j.a), key(j.b))))
+        .collect();
     // The piece of the vertex nearest each node, and the distance to it: a node is shared by
     // up to 18 joins, so each node's is looked up once (in parallel: each independently).
-    let key = |p: DVec3| p.to_array().map(f64::to_bits);
-    let mut nodes: Vec<[u64; 3]> = joins.iter().flat_map(|j| [key(j.a), key(j.b)]).collect();
-    nodes.par_sort_unstable();
-    nodes.dedup();
-    let found: Vec<(usize, f64)> = nodes
+    let mut node_index: FxHashMap<[u64; 3], usize> = FxHashMap::default();
+    let mut nodes: Vec<DVec3> = Vec::new();
+    for j in &joins {
+        for p in [j.a, j.b] {
+            node_index.entry(key(p)).or_insert_with(|| {
+                nodes.push(p);
+                nodes.len() - 1
+            });
+        }
+    }
+    let near: Vec<(usize, f64)> = nodes
         .par_iter()
-        .map(|k| {
+        .map(|p| {
             let r = tree
-                .query(&k.map(f64::from_bits))
+                .query(&p.to_array())
                 .nearest_one::<SquaredEuclidean<f64>>()
                 .execute();
             (owner[r.item as usize], r.distance.sqrt())
         })
         .collect();
-    let piece_of = |p: DVec3| found[nodes.binary_search(&key(p)).expect("a node of a join")];
-    // Per pair of pieces, the join whose nodes are nearest to them (ties: node order).
+    let piece_of = |p: DVec3| near[node_index[&key(p)]];
+    // Per pair of pieces, the join whose nodes are nearest to them (ties: the smaller nodes,
+    // compared as coordinates).
+    let coords = |j: &Join| (j.a.to_array(), j.b.to_array());
     let mut best: BTreeMap<(usize, usize), (f64, usize)> = BTreeMap::new();
     for (i, j) in joins.iter().enumerate() {
         let ((pa, da), (pb, db)) = (piece_of(j.a), piece_of(j.b));
         if pa == pb {
             continue;
         }
-        let e = best
-            .entry((pa.min(pb), pa.max(pb)))
-            .or_insert((f64::INFINITY, i));
-        if da + db < e.0 {
-            *e = (da + db, i);
+        let d = da + db;
+        let e = best.entry((pa.min(pb), pa.max(pb))).or_insert((d, i));
+        let better = d < e.0
+            || (d == e.0 && coords(j).partial_cmp(&coords(&joins[e.1])) == Some(Ordering::Less));
+        if better {
+            *e = (d, i);
         }
     }
     let mut out = Vec::new();
