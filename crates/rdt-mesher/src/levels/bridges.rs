@@ -33,6 +33,7 @@ use crate::stats::MeshResult;
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oracle::image::{ImageSurface, Join};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 /// Doublings of the search box's margin.
@@ -250,66 +251,74 @@ fn bridge(
         }
         Region::new(mesh, lo - DVec3::splat(reach), hi + DVec3::splat(reach))
     };
-    // The least oversized tube that crosses nothing, for when no tube is within sigma.
-    let mut oversized: Option<(f64, Candidate)> = None;
-    for (_, ta, tb) in pairs {
-        let (fa, fb) = (out.mesh.triangles[ta], out.mesh.triangles[tb]);
-        let variants = (0..=MAX_RINGS).flat_map(|r| [(r, false), (r, true)]);
-        for (rings, superimposed) in variants {
-            let Some((tube, ring_pts)) =
-                tube_with_rings(&out.mesh, img, (fa, fb), j.via, rings, superimposed)
-            else {
-                continue;
-            };
-            let n = out.mesh.vertices.len() as u32;
-            let pos = |v: u32| {
-                if v < n {
-                    out.mesh.vertices[v as usize]
-                } else {
-                    ring_pts[(v - n) as usize]
-                }
-            };
-            // Within the size bound, as a restricted facet would be (the loose epsilon-sample
-            // certificate measures every triangle's ball).
-            let balls: Vec<_> = tube
-                .iter()
-                .map(|t| super::repair::circumball(t.map(pos)))
-                .collect();
-            if balls
-                .iter()
-                .any(|b| criteria.sigma_at(b.center).is_some_and(|s| b.radius > s))
-            {
-                let over = balls
+    // The candidates in order (pairs, then variants), evaluated in parallel a chunk at a time
+    // (each independently of the others: the choice below is the sequential one): the first
+    // within sigma that crosses nothing is taken; the oversized ones are kept for later.
+    let variants: Vec<(usize, bool)> = (0..=MAX_RINGS)
+        .flat_map(|r| [(r, false), (r, true)])
+        .collect();
+    let order: Vec<(usize, usize, usize, bool)> = pairs
+        .iter()
+        .flat_map(|&(_, ta, tb)| variants.iter().map(move |&(r, s)| (ta, tb, r, s)))
+        .collect();
+    let mesh = &out.mesh;
+    let evaluate = |&(ta, tb, rings, superimposed): &(usize, usize, usize, bool)| {
+        let (fa, fb) = (mesh.triangles[ta], mesh.triangles[tb]);
+        let (tube, ring_pts) = tube_with_rings(mesh, img, (fa, fb), j.via, rings, superimposed)?;
+        let n = mesh.vertices.len() as u32;
+        let pos = |v: u32| {
+            if v < n {
+                mesh.vertices[v as usize]
+            } else {
+                ring_pts[(v - n) as usize]
+            }
+        };
+        // Within the size bound, as a restricted facet would be (the loose epsilon-sample
+        // certificate measures every triangle's ball).
+        let balls: Vec<_> = tube
+            .iter()
+            .map(|t| super::repair::circumball(t.map(pos)))
+            .collect();
+        let over = balls
+            .iter()
+            .any(|b| criteria.sigma_at(b.center).is_some_and(|s| b.radius > s))
+            .then(|| {
+                balls
                     .iter()
                     .filter_map(|b| criteria.sigma_at(b.center).map(|s| b.radius / s))
-                    .fold(0.0f64, f64::max);
-                if over <= MAX_OVERSIZE
-                    && oversized.as_ref().is_none_or(|o| over < o.0)
-                    && !tube_crosses(&out.mesh, &ring_pts, [ta, tb], &tube, &region)
-                {
-                    let c = Candidate {
-                        removed: [ta, tb],
-                        tube,
-                        ring_pts,
-                        balls,
-                    };
-                    oversized = Some((over, c));
+                    .fold(0.0f64, f64::max)
+            });
+        let crosses = over.is_none() && tube_crosses(mesh, &ring_pts, [ta, tb], &tube, &region);
+        let c = Candidate {
+            removed: [ta, tb],
+            tube,
+            ring_pts,
+            balls,
+        };
+        Some((c, over, crosses))
+    };
+    // Oversized tubes (at most the cap): (r / sigma, order, tube).
+    let mut oversized: Vec<(f64, usize, Candidate)> = Vec::new();
+    const CHUNK: usize = 24;
+    for (k, chunk) in order.chunks(CHUNK).enumerate() {
+        let evals: Vec<_> = chunk.par_iter().map(evaluate).collect();
+        for (m, e) in evals.into_iter().enumerate() {
+            match e {
+                Some((c, None, false)) => return Some(c.apply(out, DecisionKind::Bridge)),
+                Some((c, Some(over), _)) if over <= MAX_OVERSIZE => {
+                    oversized.push((over, k * CHUNK + m, c))
                 }
-                continue;
+                _ => {}
             }
-            if tube_crosses(&out.mesh, &ring_pts, [ta, tb], &tube, &region) {
-                continue;
-            }
-            let c = Candidate {
-                removed: [ta, tb],
-                tube,
-                ring_pts,
-                balls,
-            };
-            return Some(c.apply(out, DecisionKind::Bridge));
         }
     }
-    let (over, c) = oversized?;
+    // None within sigma: the least oversized that crosses nothing (ties: the first in order).
+    oversized.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    let mesh = &out.mesh;
+    let pick = oversized
+        .into_iter()
+        .find(|(_, _, c)| !tube_crosses(mesh, &c.ring_pts, c.removed, &c.tube, &region))?;
+    let (over, _, c) = pick;
     Some(c.apply(
         out,
         DecisionKind::BridgeOverSize {
