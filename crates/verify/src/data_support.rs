@@ -92,7 +92,7 @@ pub struct ComponentSupport {
     pub area: f64,
     /// Share of the area within the band of the data.
     pub supported_share: f64,
-    /// Area-weighted centroid.
+    /// Centroid of its vertices (their mean).
     pub centroid: [f64; 3],
     /// Bounding-box diagonal.
     pub extent: f64,
