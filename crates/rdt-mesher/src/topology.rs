@@ -86,7 +86,7 @@ fn nonmanifold_in_ranges(
 
 /// `start[v]..start[v + 1]`: where vertex v's link edges go in a counting sort of the link
 /// edges of `tris` by vertex (vertices `0..n`).
-fn bucket_starts(tris: &[[VertexId; 3]], n: usize) -> Vec<u32> {
+pub(crate) fn bucket_starts(tris: &[[VertexId; 3]], n: usize) -> Vec<u32> {
     let mut start = vec![0u32; n + 1];
     for t in tris {
         for &v in t {

@@ -265,14 +265,7 @@ fn bridge(
     let evaluate = |&(ta, tb, rings, superimposed): &(usize, usize, usize, bool)| {
         let (fa, fb) = (mesh.triangles[ta], mesh.triangles[tb]);
         let (tube, ring_pts) = tube_with_rings(mesh, img, (fa, fb), j.via, rings, superimposed)?;
-        let n = mesh.vertices.len() as u32;
-        let pos = |v: u32| {
-            if v < n {
-                mesh.vertices[v as usize]
-            } else {
-                ring_pts[(v - n) as usize]
-            }
-        };
+        let pos = |v: u32| position(mesh, &ring_pts, v);
         // Within the size bound, as a restricted facet would be (the loose epsilon-sample
         // certificate measures every triangle's ball).
         let balls: Vec<_> = tube
@@ -473,14 +466,7 @@ fn tube_crosses(
     tube: &[[u32; 3]],
     region: &Region,
 ) -> bool {
-    let n = mesh.vertices.len() as u32;
-    let pos = |v: u32| {
-        if v < n {
-            mesh.vertices[v as usize]
-        } else {
-            extra[(v - n) as usize]
-        }
-    };
+    let pos = |v: u32| position(mesh, extra, v);
     let (lo, hi) = tube
         .iter()
         .flatten()
@@ -524,6 +510,17 @@ fn tube_crosses(
         triangles: near.iter().chain(tube).map(|t| t.map(id)).collect(),
     };
     !super::repair::intersecting_vertices(&local, near.len()).is_empty()
+}
+
+/// The point of vertex `v`: the mesh's, or the new points `extra` numbered after them.
+fn position(mesh: &meshio::TriMesh, extra: &[DVec3], v: u32) -> DVec3 {
+    let n = mesh.vertices.len();
+    let v = v as usize;
+    if v < n {
+        mesh.vertices[v]
+    } else {
+        extra[v - n]
+    }
 }
 
 /// A box and the triangles of a mesh whose boxes meet it (closed boxes), in mesh order.

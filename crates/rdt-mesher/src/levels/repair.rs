@@ -350,15 +350,7 @@ impl Stars {
 
 /// [`Stars`] of `tris` over vertices `0..n`.
 fn stars(tris: &[[u32; 3]], n: usize) -> Stars {
-    let mut start = vec![0u32; n + 1];
-    for t in tris {
-        for &v in t {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
+    let start = crate::topology::bucket_starts(tris, n);
     let mut fill = start.clone();
     let mut out = vec![0u32; start[n] as usize];
     for (k, t) in tris.iter().enumerate() {
