@@ -198,59 +198,7 @@ fn bridge(
     j: &Join,
     criteria: &crate::Criteria,
 ) -> Option<TopologyDecision> {
-    let mesh = &out.mesh;
-    let in_a: std::collections::HashSet<u32> = a.iter().copied().collect();
-    let in_b: std::collections::HashSet<u32> = b.iter().copied().collect();
-    let centroid = |t: &[u32; 3]| t.iter().map(|&v| mesh.vertices[v as usize]).sum::<DVec3>() / 3.0;
-    let near = |set: &std::collections::HashSet<u32>| {
-        let mut v: Vec<(f64, usize)> = mesh
-            .triangles
-            .iter()
-            .enumerate()
-            .filter(|(_, t)| set.contains(&t[0]))
-            .map(|(k, t)| (centroid(t).distance_squared(j.via), k))
-            .collect();
-        v.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-        v.truncate(NEAR_WIDE);
-        v
-    };
-    let (na, nb) = (near(&in_a), near(&in_b));
-    // The pairs among the [`NEAR`] nearest of each side first, then the others among the
-    // [`NEAR_WIDE`] nearest, each group by increasing distance between their centroids.
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-    let mut wide: Vec<(f64, usize, usize)> = Vec::new();
-    for (ia, &(_, ta)) in na.iter().enumerate() {
-        for (ib, &(_, tb)) in nb.iter().enumerate() {
-            let d = centroid(&mesh.triangles[ta]).distance_squared(centroid(&mesh.triangles[tb]));
-            if ia < NEAR && ib < NEAR {
-                pairs.push((d, ta, tb));
-            } else {
-                wide.push((d, ta, tb));
-            }
-        }
-    }
-    let by_distance = |x: &(f64, usize, usize), y: &(f64, usize, usize)| {
-        x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2)))
-    };
-    pairs.sort_by(by_distance);
-    wide.sort_by(by_distance);
-    pairs.extend(wide);
-    // The candidate tubes lie near the two sets of triangles and the join (their rings within
-    // three tube lengths of the axis): the triangles that may cross them, listed once.
-    let region = {
-        let (mut lo, mut hi) = (j.via, j.via);
-        let mut reach = 0.0f64;
-        for &(_, k) in na.iter().chain(&nb) {
-            for &v in &mesh.triangles[k] {
-                lo = lo.min(mesh.vertices[v as usize]);
-                hi = hi.max(mesh.vertices[v as usize]);
-            }
-        }
-        for &(d2, _, _) in &pairs {
-            reach = reach.max(3.0 * d2.sqrt());
-        }
-        Region::new(mesh, lo - DVec3::splat(reach), hi + DVec3::splat(reach))
-    };
+    let (pairs, region) = candidate_pairs(&out.mesh, a, b, j);
     // The candidates in order (pairs, then variants), evaluated in parallel a chunk at a time
     // (each independently of the others: the choice below is the sequential one): the first
     // within sigma that crosses nothing is taken; the oversized ones are kept for later.
@@ -318,6 +266,69 @@ fn bridge(
             max_r_over_sigma: over,
         },
     ))
+}
+
+/// The candidate pairs of triangles (squared distance between centroids, triangle of `a`,
+/// triangle of `b`): those among the [`NEAR`] triangles of each piece nearest the join first,
+/// then the others among the [`NEAR_WIDE`] nearest, each group by increasing distance; and
+/// the region of the triangles that may cross their tubes.
+fn candidate_pairs(
+    mesh: &meshio::TriMesh,
+    a: &[u32],
+    b: &[u32],
+    j: &Join,
+) -> (Vec<(f64, usize, usize)>, Region) {
+    let in_a: std::collections::HashSet<u32> = a.iter().copied().collect();
+    let in_b: std::collections::HashSet<u32> = b.iter().copied().collect();
+    let centroid = |t: &[u32; 3]| t.iter().map(|&v| mesh.vertices[v as usize]).sum::<DVec3>() / 3.0;
+    let near = |set: &std::collections::HashSet<u32>| {
+        let mut v: Vec<(f64, usize)> = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| set.contains(&t[0]))
+            .map(|(k, t)| (centroid(t).distance_squared(j.via), k))
+            .collect();
+        v.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        v.truncate(NEAR_WIDE);
+        v
+    };
+    let (na, nb) = (near(&in_a), near(&in_b));
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    let mut wide: Vec<(f64, usize, usize)> = Vec::new();
+    for (ia, &(_, ta)) in na.iter().enumerate() {
+        for (ib, &(_, tb)) in nb.iter().enumerate() {
+            let d = centroid(&mesh.triangles[ta]).distance_squared(centroid(&mesh.triangles[tb]));
+            if ia < NEAR && ib < NEAR {
+                pairs.push((d, ta, tb));
+            } else {
+                wide.push((d, ta, tb));
+            }
+        }
+    }
+    let by_distance = |x: &(f64, usize, usize), y: &(f64, usize, usize)| {
+        x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2)))
+    };
+    pairs.sort_by(by_distance);
+    wide.sort_by(by_distance);
+    pairs.extend(wide);
+    // The candidate tubes lie near the two sets of triangles and the join (their rings within
+    // three tube lengths of the axis): the triangles that may cross them, listed once.
+    let region = {
+        let (mut lo, mut hi) = (j.via, j.via);
+        let mut reach = 0.0f64;
+        for &(_, k) in na.iter().chain(&nb) {
+            for &v in &mesh.triangles[k] {
+                lo = lo.min(mesh.vertices[v as usize]);
+                hi = hi.max(mesh.vertices[v as usize]);
+            }
+        }
+        for &(d2, _, _) in &pairs {
+            reach = reach.max(3.0 * d2.sqrt());
+        }
+        Region::new(mesh, lo - DVec3::splat(reach), hi + DVec3::splat(reach))
+    };
+    (pairs, region)
 }
 
 /// A tube that replaces two triangles of the mesh: the new points (numbered from the mesh's

@@ -17,6 +17,7 @@ pub(crate) mod manifold;
 pub(crate) mod necks;
 pub(crate) mod repair;
 pub(crate) mod scaffold;
+mod tubes;
 
 use crate::error::MeshError;
 use crate::state::Mesher;
