@@ -119,6 +119,23 @@ pub(crate) fn drop_unsupported(out: &mut Outcome, input: &Input, sigma: f64) {
     if min_angle.is_finite() {
         st.min_angle_deg = min_angle;
     }
+    // At a constant size the largest r / sigma is measured again on what is left (with a
+    // size field, the run's figure, over the mesh before the drop, stays).
+    if let Some(m) = out
+        .sigma
+        .and_then(|s| out.balls.iter().map(|b| b.radius / s).reduce(f64::max))
+    {
+        st.max_r_over_sigma = Some(m);
+        st.unmet.retain(|u| !matches!(u, crate::Unmet::Size { .. }));
+        if m > 1.0 {
+            st.unmet.insert(
+                0,
+                crate::Unmet::Size {
+                    max_r_over_sigma: m,
+                },
+            );
+        }
+    }
     st.topology_decisions.extend(decisions);
 }
 
