@@ -97,7 +97,11 @@ fn a_scan_bubble_is_dropped_reported_and_fails_verify_against_the_points() {
     assert_eq!(out.stats.facets, out.mesh.triangles.len());
     assert_eq!(out.stats.vertices, out.mesh.vertices.len());
     // The largest r / sigma is the mesh's that is written (a constant size here).
-    let rs = out.balls.iter().map(|b| b.radius / sigma).fold(0.0f64, f64::max);
+    let rs = out
+        .balls
+        .iter()
+        .map(|b| b.radius / sigma)
+        .fold(0.0f64, f64::max);
     assert_eq!(out.stats.max_r_over_sigma, Some(rs));
     let raw_ds = rr.data_support.as_ref().unwrap();
     assert!(raw_ds.dropped_components.is_empty());
