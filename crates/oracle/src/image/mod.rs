@@ -83,7 +83,7 @@ pub use stack::{
     LoadOptions, RawOptions, load_volume, read_raw, read_slice_folder, read_tiff_stack,
 };
 pub use surface::{ImageOptions, ImageSurface, trilinear};
-pub use topology::{Join, Topology};
+pub use topology::{Join, Node, Topology};
 pub(crate) use volume::with_voxels;
 pub use volume::{Dtype, Stats, Volume, Voxel, Voxels};
 pub use zarr::read_ome_zarr;

@@ -32,8 +32,9 @@ use super::repair::{DecisionKind, TopologyDecision};
 use crate::stats::MeshResult;
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use oracle::image::{ImageSurface, Join};
+use oracle::image::{ImageSurface, Join, Node};
 use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
 
 /// Doublings of the search box's margin.
@@ -110,6 +111,10 @@ fn bridge_splits(
                 .execute();
             (owner[r.item as usize], r.distance.sqrt())
         };
+        // Each grid node's nearest piece, once (a node is shared by up to 18 joins and by
+        // the boxes of several pieces and rounds).
+        let mut memo: FxHashMap<usize, (usize, f64)> = FxHashMap::default();
+        let mut node_piece = |n: Node| *memo.entry(n.index).or_insert_with(|| nearest(n.at));
         // Which pieces are merged by the bridges built so far (a root per piece).
         let mut merged: Vec<usize> = (0..ps.len()).collect();
         // Passes until no bridge is added: a piece bridged to a smaller one first is bridged
@@ -131,7 +136,8 @@ fn bridge_splits(
                 if bbox.0.distance(bbox.1) < h {
                     continue;
                 }
-                let Some((j, join)) = find_join(img, label, &nearest, i, bbox, &merged, h) else {
+                let Some((j, join)) = find_join(img, label, &mut node_piece, i, bbox, &merged, h)
+                else {
                     continue;
                 };
                 if let Some(d) = bridge(out, img, &ps[i], &ps[j], &join, criteria) {
@@ -152,7 +158,7 @@ fn bridge_splits(
 fn find_join(
     img: &ImageSurface,
     label: usize,
-    nearest: &dyn Fn(DVec3) -> (usize, f64),
+    nearest: &mut dyn FnMut(Node) -> (usize, f64),
     i: usize,
     (lo, hi): (DVec3, DVec3),
     merged: &[usize],
@@ -162,17 +168,27 @@ fn find_join(
     for r in 0..ROUNDS {
         let m = DVec3::splat(1.5 * h * f64::from(1u32 << r));
         let mut best: Option<(f64, usize, Join)> = None;
-        for j in img.neck_joins(label, lo - m, hi + m) {
-            let ((pa, da), (pb, db)) = (nearest(j.a), nearest(j.b));
+        // The other piece of a join between piece i and a piece not merged with it (the
+        // only candidates), and the join's distance to both.
+        let mut other_of = |a: Node, b: Node| {
+            let ((pa, da), (pb, db)) = (nearest(a), nearest(b));
             let other = match (pa == i, pb == i) {
                 (true, false) => pb,
                 (false, true) => pa,
-                _ => continue,
+                _ => return None,
             };
-            if root_of(merged, other) == root {
+            (root_of(merged, other) != root).then_some((other, da + db))
+        };
+        let joins =
+            img.neck_joins_where(label, lo - m, hi + m, &mut |a, b| other_of(a, b).is_some());
+        for j in joins {
+            let end = |k: usize| Node {
+                index: j.nodes[k],
+                at: if k == 0 { j.a } else { j.b },
+            };
+            let Some((other, d)) = other_of(end(0), end(1)) else {
                 continue;
-            }
-            let d = da + db;
+            };
             if best.as_ref().is_none_or(|b| d < b.0) {
                 best = Some((d, other, j));
             }

@@ -22,7 +22,7 @@ use crate::topology::VertexUnion;
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oracle::Surface;
-use oracle::image::{ImageSurface, Join};
+use oracle::image::{ImageSurface, Join, Node};
 use rayon::prelude::*;
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::cmp::Ordering;
@@ -31,6 +31,9 @@ use std::time::Instant;
 
 /// Rounds of neck reseeding per run (and as many rounds of bridges).
 pub(crate) const NECK_ROUNDS: u32 = 6;
+
+/// A join and, for each of its nodes, the nearest piece and the distance to it.
+type NearJoin = (Join, (usize, f64), (usize, f64));
 
 /// Rays per ring.
 const RING_RAYS: usize = 8;
@@ -211,67 +214,71 @@ fn ring_points(img: &ImageSurface, label: usize, pieces: &Split, round: usize) -
     };
     let margin =
         1.5 * img.volume().spacing().max_element() * f64::from(1u32 << margin_level(round));
-    // The joins in the boxes around the pieces but the largest (each box's in parallel, in
-    // piece order), without repeats (equal nodes: the same join), keyed by their nodes.
-    let key = |p: DVec3| p.to_array().map(f64::to_bits);
-    let found: Vec<Vec<Join>> = pieces[1..]
-        .par_iter()
+    // The boxes around the pieces but the largest.
+    let boxes: Vec<(DVec3, DVec3)> = pieces[1..]
+        .iter()
         .map(|piece| {
             let lo = piece.iter().fold(DVec3::INFINITY, |a, &p| a.min(p)) - DVec3::splat(margin);
             let hi =
                 piece.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p)) + DVec3::splat(margin);
-            img.neck_joins(label, lo, hi)
+            (lo, hi)
         })
         .collect();
-    let mut seen: FxHashSet<([u64; 3], [u64; 3])> = FxHashSet::default();
-    let joins: Vec<Join> = found
-        .into_iter()
-        .flatten()
-        .filter(|j| seen.insert((key(j.a), key(j.b))))
-        .collect();
-    // The piece of the vertex nearest each node, and the distance to it: a node is shared by
-    // up to 18 joins, so each node's is looked up once (in parallel: each independently).
-    let mut node_index: FxHashMap<[u64; 3], usize> = FxHashMap::default();
-    let mut nodes: Vec<DVec3> = Vec::new();
-    for j in &joins {
-        for p in [j.a, j.b] {
-            node_index.entry(key(p)).or_insert_with(|| {
-                nodes.push(p);
-                nodes.len() - 1
-            });
-        }
-    }
-    let near: Vec<(usize, f64)> = nodes
+    // The piece of the vertex nearest each node that a join in a box can have, and the
+    // distance to it: each node's once (nodes are shared by boxes and by up to 18 joins), in
+    // parallel (each independently).
+    let mut nodes: Vec<Node> = boxes
         .par_iter()
-        .map(|p| {
+        .flat_map_iter(|&(lo, hi)| img.neck_nodes(label, lo, hi))
+        .collect();
+    nodes.sort_unstable_by_key(|n| n.index);
+    nodes.dedup_by_key(|n| n.index);
+    let near: FxHashMap<usize, (usize, f64)> = nodes
+        .par_iter()
+        .map(|n| {
             let r = tree
-                .query(&p.to_array())
+                .query(&n.at.to_array())
                 .nearest_one::<SquaredEuclidean<f64>>()
                 .execute();
-            (owner[r.item as usize], r.distance.sqrt())
+            (n.index, (owner[r.item as usize], r.distance.sqrt()))
         })
         .collect();
-    let piece_of = |p: DVec3| near[node_index[&key(p)]];
+    // The joins in the boxes (each box's in parallel, in piece order) whose nodes are nearest
+    // to different pieces, without repeats (equal nodes: the same join).
+    let found: Vec<Vec<NearJoin>> = boxes
+        .par_iter()
+        .map(|&(lo, hi)| {
+            img.neck_joins_where(label, lo, hi, &mut |a, b| {
+                near[&a.index].0 != near[&b.index].0
+            })
+            .into_iter()
+            .map(|j| (j, near[&j.nodes[0]], near[&j.nodes[1]]))
+            .collect()
+        })
+        .collect();
+    let key = |p: DVec3| p.to_array().map(f64::to_bits);
+    let mut seen: FxHashSet<([u64; 3], [u64; 3])> = FxHashSet::default();
+    let joins: Vec<NearJoin> = found
+        .into_iter()
+        .flatten()
+        .filter(|(j, _, _)| seen.insert((key(j.a), key(j.b))))
+        .collect();
     // Per pair of pieces, the join whose nodes are nearest to them (ties: the smaller nodes,
     // compared as coordinates).
     let coords = |j: &Join| (j.a.to_array(), j.b.to_array());
     let mut best: BTreeMap<(usize, usize), (f64, usize)> = BTreeMap::new();
-    for (i, j) in joins.iter().enumerate() {
-        let ((pa, da), (pb, db)) = (piece_of(j.a), piece_of(j.b));
-        if pa == pb {
-            continue;
-        }
+    for (i, (j, (pa, da), (pb, db))) in joins.iter().enumerate() {
         let d = da + db;
-        let e = best.entry((pa.min(pb), pa.max(pb))).or_insert((d, i));
+        let e = best.entry((*pa.min(pb), *pa.max(pb))).or_insert((d, i));
         let better = d < e.0
-            || (d == e.0 && coords(j).partial_cmp(&coords(&joins[e.1])) == Some(Ordering::Less));
+            || (d == e.0 && coords(j).partial_cmp(&coords(&joins[e.1].0)) == Some(Ordering::Less));
         if better {
             *e = (d, i);
         }
     }
     let mut out = Vec::new();
     for (_, i) in best.values() {
-        ring(img, &joins[*i], &mut out);
+        ring(img, &joins[*i].0, &mut out);
     }
     out
 }

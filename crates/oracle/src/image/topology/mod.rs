@@ -47,7 +47,7 @@ mod seeds;
 mod tets;
 mod vanishing;
 
-pub use necks::Join;
+pub use necks::{Join, Node};
 #[cfg(test)]
 pub(crate) use reference::compute_reference;
 pub(crate) use scan::compute;

@@ -6,7 +6,7 @@
 
 use super::labels::Labels;
 use crate::image::ImageSurface;
-use glam::DVec3;
+use glam::{DAffine3, DVec3};
 
 /// A join of the voxel scan between two nodes of one region (world space).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,6 +20,8 @@ pub struct Join {
     pub via: DVec3,
     /// Whether `a`-`b` is the diagonal of a face (else a grid edge).
     pub diagonal: bool,
+    /// The indices in the volume of the nodes at `a` and `b` (as [`Node::index`]).
+    pub nodes: [usize; 2],
 }
 
 impl ImageSurface {
@@ -35,7 +37,44 @@ impl ImageSurface {
     /// it is bounded (a cavity, whose wall the component is: a neck of the wall can be a
     /// tunnel of the outside), not the unbounded one.
     pub fn neck_joins(&self, component: usize, lo: DVec3, hi: DVec3) -> Vec<Join> {
-        let mut out = self.joins(component, true, lo, hi);
+        self.neck_joins_where(component, lo, hi, &mut |_, _| true)
+    }
+
+    /// The joins of [`ImageSurface::neck_joins`] whose two nodes `keep` accepts (asked
+    /// before anything else is computed for the join: world positions, saddles), in the same
+    /// order.
+    pub fn neck_joins_where(
+        &self,
+        component: usize,
+        lo: DVec3,
+        hi: DVec3,
+        keep: &mut dyn FnMut(Node, Node) -> bool,
+    ) -> Vec<Join> {
+        let mut out = Vec::new();
+        for side in self.neck_sides(component) {
+            if let Some(mask) = RegionMask::new(self, component, side, lo, hi) {
+                mask.joins(self, keep, &mut out);
+            }
+        }
+        out
+    }
+
+    /// Every node of the regions of [`ImageSurface::neck_joins`] that a join in the box can
+    /// have (the box's nodes and their neighbours), in node order per region: the nodes whose
+    /// data a [`ImageSurface::neck_joins_where`] filter may want first.
+    pub fn neck_nodes(&self, component: usize, lo: DVec3, hi: DVec3) -> Vec<Node> {
+        let mut out = Vec::new();
+        for side in self.neck_sides(component) {
+            if let Some(mask) = RegionMask::new(self, component, side, lo, hi) {
+                mask.nodes(&mut out);
+            }
+        }
+        out
+    }
+
+    /// The sides whose regions carry the component's necks: inside, and outside when that
+    /// region is bounded.
+    fn neck_sides(&self, component: usize) -> Vec<bool> {
         let topo = self.topology();
         let bounded = topo.labels.as_deref().is_some_and(|l| {
             l.pairs
@@ -43,44 +82,166 @@ impl ImageSurface {
                 .is_some_and(|&(_, o)| o != l.exterior)
         });
         if bounded {
-            out.extend(self.joins(component, false, lo, hi));
+            vec![true, false]
+        } else {
+            vec![true]
         }
-        out
     }
 
     /// The joins of the component's inside (`inside`) or outside region in the box.
     fn joins(&self, component: usize, inside: bool, lo: DVec3, hi: DVec3) -> Vec<Join> {
-        let topo = self.topology();
-        let Some(labels) = topo.labels.as_deref() else {
-            return Vec::new();
-        };
-        let Some(&(ins, outs)) = labels.pairs.get(component) else {
-            return Vec::new();
-        };
-        let root = if inside { ins } else { outs };
-        let (vlo, vhi) = voxel_box(self, lo, hi);
-        let to_world = self.inv.inverse();
-        let dims = labels.dims.map(|d| d as i64);
-        let side = inside;
-        let inside = |p: [i64; 3]| labels.region(p) == (root, side);
         let mut out = Vec::new();
+        if let Some(mask) = RegionMask::new(self, component, inside, lo, hi) {
+            mask.joins(self, &mut |_, _| true, &mut out);
+        }
+        out
+    }
+}
+
+/// A grid node of a join: its index in the volume (`i + nx (j + ny k)`) and its world
+/// position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Node {
+    /// Index of the node in the volume.
+    pub index: usize,
+    /// World position.
+    pub at: DVec3,
+}
+
+/// Which nodes of a box (the voxel box of a world box, one node wider on every side: the
+/// nodes a join from the box can reach) belong to one region of the scan. Filled row by row
+/// from the scan's runs, so each membership test is one read.
+struct RegionMask {
+    /// The box's nodes: first node, then the last.
+    lo: [i64; 3],
+    hi: [i64; 3],
+    /// Node range whose joins are listed (the voxel box).
+    inner: ([i64; 3], [i64; 3]),
+    /// Membership of each node of `lo..=hi`, x fastest.
+    inside: Vec<bool>,
+    dims: [i64; 3],
+    side: bool,
+    /// Voxel to world.
+    to_world: DAffine3,
+}
+
+impl RegionMask {
+    fn new(s: &ImageSurface, component: usize, side: bool, lo: DVec3, hi: DVec3) -> Option<Self> {
+        let topo = s.topology();
+        let labels = topo.labels.as_deref()?;
+        let &(ins, outs) = labels.pairs.get(component)?;
+        let root = if side { ins } else { outs };
+        let (vlo, vhi) = voxel_box(s, lo, hi);
+        if (0..3).any(|a| vlo[a] > vhi[a]) {
+            return None;
+        }
+        let dims = labels.dims.map(|d| d as i64);
+        let blo = vlo.map(|x| x - 1);
+        let bhi = vhi.map(|x| x + 1);
+        let size = (0..3).map(|a| (bhi[a] - blo[a] + 1) as usize);
+        let mut inside = vec![false; size.product()];
+        let (sx, sy) = (
+            (bhi[0] - blo[0] + 1) as usize,
+            (bhi[1] - blo[1] + 1) as usize,
+        );
+        for k in blo[2].max(0)..=bhi[2].min(dims[2] - 1) {
+            for j in blo[1].max(0)..=bhi[1].min(dims[1] - 1) {
+                let r = (j + dims[1] * k) as usize;
+                let base = sx * ((j - blo[1]) as usize + sy * (k - blo[2]) as usize);
+                let (x0, x1) = (blo[0].max(0), bhi[0].min(dims[0] - 1));
+                // The runs of row r meeting [x0, x1]: run t covers run_x[t]..run_x[t + 1].
+                let (first, last) = (labels.row_first[r], labels.row_first[r + 1]);
+                let xs = &labels.run_x[first..last];
+                let mut t = first + xs.partition_point(|&x| x as i64 <= x0) - 1;
+                while t < last && labels.run_x[t] as i64 <= x1 {
+                    let end = if t + 1 < last {
+                        labels.run_x[t + 1] as i64 - 1
+                    } else {
+                        dims[0] - 1
+                    };
+                    if labels.run_root[t] == root && labels.run_ins[t] == side {
+                        let (a, b) = (x0.max(labels.run_x[t] as i64), x1.min(end));
+                        for x in a..=b {
+                            inside[base + (x - blo[0]) as usize] = true;
+                        }
+                    }
+                    t += 1;
+                }
+            }
+        }
+        Some(Self {
+            lo: blo,
+            hi: bhi,
+            inner: (vlo, vhi),
+            inside,
+            dims,
+            side,
+            to_world: s.inv.inverse(),
+        })
+    }
+
+    /// Whether node `p` (within `lo..=hi`) is in the region.
+    #[inline]
+    fn has(&self, p: [i64; 3]) -> bool {
+        let sx = self.hi[0] - self.lo[0] + 1;
+        let sy = self.hi[1] - self.lo[1] + 1;
+        let (x, y, z) = (p[0] - self.lo[0], p[1] - self.lo[1], p[2] - self.lo[2]);
+        self.inside[(x + sx * (y + sy * z)) as usize]
+    }
+
+    fn node(&self, p: [i64; 3]) -> Node {
+        Node {
+            index: (p[0] + self.dims[0] * (p[1] + self.dims[1] * p[2])) as usize,
+            at: self.to_world.transform_point3(node(p)),
+        }
+    }
+
+    /// The region's nodes in the box (all of `lo..=hi`), in node order.
+    fn nodes(&self, out: &mut Vec<Node>) {
+        for k in self.lo[2]..=self.hi[2] {
+            for j in self.lo[1]..=self.hi[1] {
+                for i in self.lo[0]..=self.hi[0] {
+                    if self.has([i, j, k]) {
+                        out.push(self.node([i, j, k]));
+                    }
+                }
+            }
+        }
+    }
+
+    /// The joins from the nodes of the voxel box, in node order (per node: the three grid
+    /// edges, then the face diagonals), that `keep` accepts.
+    fn joins(
+        &self,
+        s: &ImageSurface,
+        keep: &mut dyn FnMut(Node, Node) -> bool,
+        out: &mut Vec<Join>,
+    ) {
+        let topo = s.topology();
+        let Some(labels) = topo.labels.as_deref() else {
+            return;
+        };
+        let to_world = self.to_world;
+        let (vlo, vhi) = self.inner;
         for k in vlo[2]..=vhi[2] {
             for j in vlo[1]..=vhi[1] {
                 for i in vlo[0]..=vhi[0] {
                     let p = [i, j, k];
-                    if !inside(p) {
+                    if !self.has(p) {
                         continue;
                     }
                     for axis in 0..3 {
                         let mut q = p;
                         q[axis] += 1;
-                        if inside(q) {
+                        let (np, nq) = (self.node(p), self.node(q));
+                        if self.has(q) && keep(np, nq) {
                             let (a, b) = (node(p), node(q));
                             out.push(Join {
-                                a: to_world.transform_point3(a),
-                                b: to_world.transform_point3(b),
+                                a: np.at,
+                                b: nq.at,
                                 via: to_world.transform_point3(0.5 * (a + b)),
                                 diagonal: false,
+                                nodes: [np.index, nq.index],
                             });
                         }
                     }
@@ -88,18 +249,23 @@ impl ImageSurface {
                         for (du, dv) in [(1i64, 1i64), (1, -1)] {
                             let q = offset(p, u, du, v, dv);
                             let side_nodes = [offset(p, u, du, v, 0), offset(p, u, 0, v, dv)];
-                            if !in_grid(q, dims)
-                                || !inside(q)
-                                || side_nodes.iter().any(|&s| inside(s))
+                            if !in_grid(q, self.dims)
+                                || !self.has(q)
+                                || side_nodes.iter().any(|&n| self.has(n))
                             {
                                 continue;
                             }
-                            if let Some(s) = saddle(self, labels, p, q, side_nodes, side) {
+                            let (np, nq) = (self.node(p), self.node(q));
+                            if !keep(np, nq) {
+                                continue;
+                            }
+                            if let Some(x) = saddle(s, labels, p, q, side_nodes, self.side) {
                                 out.push(Join {
-                                    a: to_world.transform_point3(node(p)),
-                                    b: to_world.transform_point3(node(q)),
-                                    via: to_world.transform_point3(s),
+                                    a: np.at,
+                                    b: nq.at,
+                                    via: to_world.transform_point3(x),
                                     diagonal: true,
+                                    nodes: [np.index, nq.index],
                                 });
                             }
                         }
@@ -107,7 +273,6 @@ impl ImageSurface {
                 }
             }
         }
-        out
     }
 }
 
