@@ -536,7 +536,43 @@ fn tube_crosses(
         vertices: ids.iter().map(|&v| pos(v)).collect(),
         triangles: near.iter().chain(tube).map(|t| t.map(id)).collect(),
     };
-    !super::repair::intersecting_vertices(&local, near.len()).is_empty()
+    any_intersection(&local, near.len())
+}
+
+/// Whether a triangle from `first_new` on is degenerate or intersects another triangle of
+/// `mesh`: [`super::repair::intersecting_vertices`] is not empty, decided at the first such
+/// triangle (one thread: the candidate tubes are already evaluated in parallel).
+fn any_intersection(mesh: &meshio::TriMesh, first_new: usize) -> bool {
+    use geom::bvh::{Aabb, Bvh};
+    use verify::intersect::{corners, pair_intersects};
+    let mut queried: Vec<u32> = Vec::new();
+    for i in first_new..mesh.triangles.len() {
+        let c = corners(mesh, i);
+        if geom::predicates::collinear(c[0], c[1], c[2]) {
+            return true;
+        }
+        queried.push(i as u32);
+    }
+    if queried.is_empty() {
+        return false;
+    }
+    let boxes = queried
+        .iter()
+        .map(|&i| Aabb::from_points(&corners(mesh, i as usize)))
+        .collect();
+    let bvh = Bvh::new(boxes);
+    let mut hit = false;
+    for j in 0..mesh.triangles.len() {
+        let b = Aabb::from_points(&corners(mesh, j));
+        bvh.for_each_overlap(&b, |k| {
+            let i = queried[k as usize] as usize;
+            hit = hit || (j != i && pair_intersects(mesh, i, j));
+        });
+        if hit {
+            return true;
+        }
+    }
+    false
 }
 
 /// The point of vertex `v`: the mesh's, or the new points `extra` numbered after them.
