@@ -23,6 +23,8 @@ pub(super) struct Sums {
     /// ∇ of `num` and `den` (when asked for).
     pub dnum: DVec3,
     pub dden: DVec3,
+    /// Σ φ (x − p) (robust passes only).
+    pub dsum: DVec3,
     /// Smallest `|x − p_i|² / b_i²` over the points whose support contains `x` (the squared
     /// distance in band radii; `∞` if none, 0 without the support band).
     pub band2: f64,
@@ -156,6 +158,18 @@ impl PointSetSurface {
         )
     }
 
+    /// Diagnostics: at `x`, the total plain kernel weight `Σ φ_i(x)` (below 1 the value
+    /// blends into the far field), the smallest distance to a point in band radii, squared
+    /// (`∞` if none; 0 without the band), and the number of points whose support contains `x`.
+    pub fn kernel_weight(&self, x: DVec3) -> (f64, f64, usize) {
+        let s = self.sums_impl::<false>(x);
+        let mut c = 0;
+        self.grid.for_each_near(x, |it| {
+            c += usize::from((x - it.p).length_squared() < it.r2)
+        });
+        (s.den, s.band2, c)
+    }
+
     /// The input point nearest to `x` and its squared distance.
     pub(super) fn nearest(&self, x: DVec3) -> (usize, f64) {
         let r = self
@@ -220,7 +234,7 @@ impl PointSetSurface {
             if r.den.is_nan() || r.den <= 0.0 {
                 break;
             }
-            f = r.num / r.den;
+            f = self.pass_value(&r, normal);
             g = (r.dnum - f * r.dden) / r.den;
         }
         Sums {
@@ -228,6 +242,17 @@ impl PointSetSurface {
             dnum: if GRAD { g * s.den } else { DVec3::ZERO },
             dden: DVec3::ZERO,
             ..s
+        }
+    }
+
+    /// A robust pass's value: `Σ w n_i·(x − p_i) / Σ w`, or with midpoint normals
+    /// `Σ w ½(n_i + n)·(x − p_i) / Σ w` (`n` the pass's normal at `x`).
+    #[inline]
+    fn pass_value(&self, r: &Sums, normal: DVec3) -> f64 {
+        if self.midpoint {
+            0.5 * (r.num + normal.dot(r.dsum)) / r.den
+        } else {
+            r.num / r.den
         }
     }
 
@@ -243,7 +268,8 @@ impl PointSetSurface {
         let mut f = s.num / s.den;
         let mut g = (s.dnum - f * s.dden) / s.den;
         for pass in 0..self.robust {
-            let normal = Some(g.normalize_or_zero());
+            let nrm = g.normalize_or_zero();
+            let normal = Some(nrm);
             let r = if GRAD || pass + 1 < self.robust {
                 self.sums_over::<true>(x, normal, &none, KEEP + 1)
             } else {
@@ -252,7 +278,7 @@ impl PointSetSurface {
             if r.den.is_nan() || r.den <= 0.0 {
                 break;
             }
-            f = r.num / r.den;
+            f = self.pass_value(&r, nrm);
             g = (r.dnum - f * r.dden) / r.den;
         }
         Sums {
@@ -320,6 +346,9 @@ impl PointSetSurface {
             let w = alpha * u2 * u2;
             s.num += w * nd;
             s.den += w;
+            if self.midpoint {
+                s.dsum += w * (x - it.p);
+            }
             if GRAD {
                 let d = x - it.p;
                 let gw = d * (-8.0 * alpha * u2 * u / it.r2);
@@ -387,6 +416,9 @@ impl PointSetSurface {
         s.num += w * nd;
         s.den += w;
         s.nsum += w * it.n;
+        if self.midpoint && normal.is_some() {
+            s.dsum += w * d;
+        }
         if GRAD {
             // ∇φ = 4u³ ∇u, ∇u = −2 (x − p) / R².
             let gw = d * (-8.0 * alpha * u2 * u / it.r2);
