@@ -723,6 +723,7 @@ mod tests {
             b: DVec3::new(10.0, 12.0, 12.0),
             via: DVec3::new(9.5, 12.0, 12.0),
             diagonal: false,
+            nodes: [usize::MAX; 2],
         };
         let (mut within, mut over, mut none) = (0, 0, 0);
         for k in 0..40 {
