@@ -93,6 +93,7 @@ mod insert;
 mod locate;
 pub mod poles;
 pub mod predicates;
+mod semi_static;
 mod sort;
 mod tds;
 mod triangulation;

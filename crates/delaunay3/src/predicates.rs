@@ -67,32 +67,35 @@ fn six_pairs<P: Copy, T>([a, b, c, d]: [P; 4], m: impl Fn(P, P) -> T) -> (T, T, 
 
 /// Exact in-sphere test; requires `orient3d(a, b, c, d) == Positive`. Positive: `e` inside.
 ///
-/// Three stages: Shewchuk's static f64 filter, a double-double evaluation with a rigorous
-/// error bound (decides nearly-cospherical inputs, e.g. rounded sphere samples, ~20x faster
-/// than the adaptive expansions), then `robust::insphere` (exact).
+/// Four stages: the semi-static filter of [`crate::semi_static`] (an error bound from the
+/// largest coordinate differences), then in [`insphere_slow`] Shewchuk's tighter static
+/// filter on the permanent, a double-double evaluation with a rigorous error bound (decides
+/// nearly-cospherical inputs, e.g. rounded sphere samples, ~20x faster than the adaptive
+/// expansions), an exact `i128` stage for grid-like inputs, and `robust::insphere` (exact).
 #[inline(always)]
 pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
+    use crate::semi_static::{insphere_det, insphere_eps};
     let (ae, be, ce, de) = (a - e, b - e, c - e, d - e);
-    let ab = ae.x * be.y - be.x * ae.y;
-    let bc = be.x * ce.y - ce.x * be.y;
-    let cd = ce.x * de.y - de.x * ce.y;
-    let da = de.x * ae.y - ae.x * de.y;
-    let ac = ae.x * ce.y - ce.x * ae.y;
-    let bd = be.x * de.y - de.x * be.y;
-    let abc = ae.z * bc - be.z * ac + ce.z * ab;
-    let bcd = be.z * cd - ce.z * bd + de.z * bc;
-    let cda = ce.z * da + de.z * ac + ae.z * cd;
-    let dab = de.z * ab + ae.z * bd + be.z * da;
+    let det = insphere_det(ae, be, ce, de);
+    let eps = insphere_eps(ae, be, ce, de);
+    if det > eps || -det > eps {
+        return Sign::of(det);
+    }
+    insphere_slow(a, b, c, d, e, det)
+}
+
+/// Shewchuk's static filter: `det` within `ISPERRBOUND_A` times the permanent of the
+/// minors (his `insphere` fast path) is undecided; returns the permanent then.
+fn insphere_static(ae: DVec3, be: DVec3, ce: DVec3, de: DVec3, det: f64) -> Result<Sign, f64> {
+    let m = |p: DVec3, q: DVec3| (p.x * q.y).abs() + (q.x * p.y).abs();
+    let (pab, pbc, pcd, pda, pac, pbd) = six_pairs([ae, be, ce, de], m);
+    let (az, bz, cz, dz) = (ae.z.abs(), be.z.abs(), ce.z.abs(), de.z.abs());
     let (al, bl, cl, dl) = (
         ae.length_squared(),
         be.length_squared(),
         ce.length_squared(),
         de.length_squared(),
     );
-    let det = (dl * abc - cl * dab) + (bl * cda - al * bcd);
-    let m = |p: DVec3, q: DVec3| (p.x * q.y).abs() + (q.x * p.y).abs();
-    let (pab, pbc, pcd, pda, pac, pbd) = six_pairs([ae, be, ce, de], m);
-    let (az, bz, cz, dz) = (ae.z.abs(), be.z.abs(), ce.z.abs(), de.z.abs());
     let permanent = (pcd * bz + pbd * cz + pbc * dz) * al
         + (pda * cz + pac * dz + pcd * az) * bl
         + (pab * dz + pbd * az + pda * bz) * cl
@@ -100,13 +103,19 @@ pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
     const ISPERRBOUND_A: f64 = (16.0 + 224.0 * f64::EPSILON / 2.0) * f64::EPSILON / 2.0;
     let errbound = ISPERRBOUND_A * permanent;
     if det > errbound || -det > errbound {
-        return Sign::of(det);
+        return Ok(Sign::of(det));
     }
-    insphere_slow(a, b, c, d, e, permanent)
+    Err(permanent)
 }
 
+/// The stages after the semi-static filter (`det`: the f64 determinant, from the same
+/// evaluation as Shewchuk's).
 #[inline(never)]
-fn insphere_slow(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3, permanent: f64) -> Sign {
+fn insphere_slow(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3, det: f64) -> Sign {
+    let permanent = match insphere_static(a - e, b - e, c - e, d - e, det) {
+        Ok(s) => return s,
+        Err(p) => p,
+    };
     if let Some(s) = insphere_int(a, b, c, d, e) {
         return s;
     }
