@@ -22,8 +22,7 @@ impl Triangulation {
         self.tds.cells.reserve(pts.len() * 7);
         let order = sort::brio_order(pts, 0x5eed_0000_0000_0000 ^ pts.len() as u64);
         let mut ids = vec![VertexId(0); pts.len()];
-        for &i in &order {
-            let p = pts[i as usize];
+        for &(p, i) in &order {
             let r = if self.built {
                 let start = self.start_cell(None);
                 self.insert_3d(p, None, start, None)

@@ -95,6 +95,7 @@ pub mod poles;
 pub mod predicates;
 mod semi_static;
 mod sort;
+mod star;
 mod tds;
 mod triangulation;
 mod validate;

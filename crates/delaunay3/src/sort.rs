@@ -100,7 +100,8 @@ pub(crate) fn hilbert_sort(pts: &[DVec3], idx: &mut [u32]) {
 
 /// BRIO order of `0..pts.len()`: a seeded shuffle, then rounds of geometrically growing size
 /// (ratio 1/4, first round at most 1024 points), each round Hilbert-sorted. Deterministic.
-pub(crate) fn brio_order(pts: &[DVec3], seed: u64) -> Vec<u32> {
+/// Returns each index with its point (read in this order: contiguous, not gathered).
+pub(crate) fn brio_order(pts: &[DVec3], seed: u64) -> Vec<(DVec3, u32)> {
     let mut idx: Vec<u32> = (0..pts.len() as u32).collect();
     let mut rng = Rng(seed);
     for i in (1..idx.len()).rev() {
@@ -109,7 +110,7 @@ pub(crate) fn brio_order(pts: &[DVec3], seed: u64) -> Vec<u32> {
     }
     let mut recs = records(pts, &idx);
     multiscale(&mut recs);
-    recs.iter().map(|r| r.i).collect()
+    recs.iter().map(|r| (DVec3::from_array(r.p), r.i)).collect()
 }
 
 fn multiscale(recs: &mut [Rec]) {
@@ -137,11 +138,16 @@ mod tests {
                 )
             })
             .collect();
-        let ord = brio_order(&pts, 1);
+        let ord: Vec<u32> = brio_order(&pts, 1).iter().map(|r| r.1).collect();
         let mut s = ord.clone();
         s.sort_unstable();
         assert_eq!(s, (0..5000).collect::<Vec<u32>>());
-        assert_eq!(ord, brio_order(&pts, 1));
+        assert!(
+            brio_order(&pts, 1)
+                .iter()
+                .map(|r| r.1)
+                .eq(ord.iter().copied())
+        );
         // The last round (3750 points) is Hilbert-ordered: consecutive points are close.
         let tail = &ord[1250..];
         let mean: f64 = tail
