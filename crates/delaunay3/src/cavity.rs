@@ -22,15 +22,29 @@ use crate::hash::SeenCells;
 use crate::ids::{CellId, Facet, VertexId};
 use crate::locate::{Location, Walk};
 use crate::predicates::{self, Sign, incircle_facet_perturbed, insphere_perturbed, orient3d};
+use crate::semi_static;
 use crate::sort::Rng;
 use crate::tds::{Boundary, Cell, FACET, boundary_facet, mirror_index};
 use crate::triangulation::{Error, Triangulation, check_point};
 
 /// Whether `p` (not a vertex of `c`) is in conflict with the live cell `c` (perturbed): in
 /// its circumball, or for an infinite cell strictly beyond its hull facet, or on the facet's
-/// plane and in the perturbed circumdisk of the facet.
-#[inline]
+/// plane and in the perturbed circumdisk of the facet. The semi-static in-sphere filter
+/// inline, every other case in [`in_conflict_slow`].
+#[inline(always)]
 pub(crate) fn in_conflict(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3) -> bool {
+    let v = cells[c.index()].v.map(|w| w.0);
+    let infinite =
+        (v[0] == u32::MAX) | (v[1] == u32::MAX) | (v[2] == u32::MAX) | (v[3] == u32::MAX);
+    if !infinite && let Some(inside) = semi_static::insphere_decide(points, v, p) {
+        return inside;
+    }
+    in_conflict_slow(cells, points, c, p)
+}
+
+/// [`in_conflict`] for infinite cells and the in-sphere tests the semi-static filter left.
+#[inline(never)]
+fn in_conflict_slow(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3) -> bool {
     let cell = &cells[c.index()];
     let v = cell.v;
     let pt = |w: VertexId| points[w.index()];
@@ -157,6 +171,10 @@ pub(crate) fn search<D: Decided, const DEPTH_FIRST: bool>(
                     let b = in_conflict(d.cells(), points, n, p);
                     d.set(n, b);
                     if b {
+                        // Its neighbors are read when it is popped: start loading them.
+                        for &m in &d.cells()[n.index()].n {
+                            prefetch(d.cells(), m);
+                        }
                         zone.push(n);
                         if DEPTH_FIRST {
                             stack.push(n);
@@ -169,6 +187,20 @@ pub(crate) fn search<D: Decided, const DEPTH_FIRST: bool>(
                 boundary.push(boundary_facet(d.cells(), c, i, n));
             }
         }
+    }
+}
+
+/// Hints the CPU to load cell `c` into the cache (no effect on results).
+#[inline(always)]
+#[allow(unsafe_code)]
+fn prefetch(cells: &[Cell], c: CellId) {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse"))]
+    if let Some(cell) = cells.get(c.index()) {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: `_mm_prefetch` only requires the SSE feature, statically enabled here (the
+        // `cfg` above; it is in the x86_64 baseline). A prefetch is a hint: it never faults
+        // and changes no memory, and the pointer is to a live element of `cells` anyway.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(cell).cast()) };
     }
 }
 

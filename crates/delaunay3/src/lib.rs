@@ -78,8 +78,9 @@
 //! assert!(t.insert(DVec3::new(f64::NAN, 0.0, 0.0)).is_err());
 //! ```
 
-// One `unsafe` (calling a `target_feature` function after detecting the feature, with its
-// proof comment) in `predicates`; everything else is safe.
+// Two `unsafe` blocks, each with its proof comment: calling a `target_feature` function
+// after detecting the feature (`predicates`), and the cache prefetch hint of the conflict
+// search (`cavity`); everything else is safe.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 

@@ -67,6 +67,49 @@ pub(crate) fn insphere_eps(ae: DVec3, be: DVec3, ce: DVec3, de: DVec3) -> f64 {
     INSPHERE_EPS * m.x * m.y * m.z * l
 }
 
+/// The semi-static decision for the in-sphere test of `e` against the points of `v` (all
+/// finite): `Some(true)` if `D > 0` (inside for a positive cell), `Some(false)` if `D < 0`,
+/// `None` if undecided. Scalar code on the coordinates read in place (the same operations as
+/// [`insphere_det`] and [`insphere_eps`], so the bound holds): no vector copies through the
+/// stack in the conflict search's hot loop.
+#[inline(always)]
+pub(crate) fn insphere_decide(points: &[DVec3], v: [u32; 4], e: DVec3) -> Option<bool> {
+    let p = |i: usize| {
+        let q = &points[v[i] as usize];
+        (q.x - e.x, q.y - e.y, q.z - e.z)
+    };
+    let (ax, ay, az) = p(0);
+    let (bx, by, bz) = p(1);
+    let (cx, cy, cz) = p(2);
+    let (dx, dy, dz) = p(3);
+    let ab = ax * by - bx * ay;
+    let bc = bx * cy - cx * by;
+    let cd = cx * dy - dx * cy;
+    let da = dx * ay - ax * dy;
+    let ac = ax * cy - cx * ay;
+    let bd = bx * dy - dx * by;
+    let abc = az * bc - bz * ac + cz * ab;
+    let bcd = bz * cd - cz * bd + dz * bc;
+    let cda = cz * da + dz * ac + az * cd;
+    let dab = dz * ab + az * bd + bz * da;
+    let al = ax * ax + ay * ay + az * az;
+    let bl = bx * bx + by * by + bz * bz;
+    let cl = cx * cx + cy * cy + cz * cz;
+    let dl = dx * dx + dy * dy + dz * dz;
+    let det = (dl * abc - cl * dab) + (bl * cda - al * bcd);
+    let mx = ax.abs().max(bx.abs()).max(cx.abs().max(dx.abs()));
+    let my = ay.abs().max(by.abs()).max(cy.abs().max(dy.abs()));
+    let mz = az.abs().max(bz.abs()).max(cz.abs().max(dz.abs()));
+    let eps = INSPHERE_EPS * mx * my * mz * (mx * mx + my * my + mz * mz);
+    if det > eps {
+        Some(true)
+    } else if -det > eps {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -99,6 +142,11 @@ mod tests {
 
     /// Checks one configuration; returns whether the filter decided it.
     fn check(q: &[DVec3; 5]) -> bool {
+        let scalar = insphere_decide(&q[..4], [0, 1, 2, 3], q[4]);
+        assert_eq!(
+            scalar.map(|b| Sign::of(if b { 1.0 } else { -1.0 })),
+            filtered(q)
+        );
         match filtered(q) {
             Some(s) => {
                 assert_eq!(s, exact(q), "{q:?}");
