@@ -21,7 +21,7 @@ use glam::DVec3;
 use crate::hash::SeenCells;
 use crate::ids::{CellId, Facet, VertexId};
 use crate::locate::{Location, Walk};
-use crate::predicates::{self, Sign, incircle_facet_perturbed, insphere_perturbed, orient3d};
+use crate::predicates::{self, Sign, incircle_facet_perturbed, orient3d};
 use crate::semi_static;
 use crate::sort::Rng;
 use crate::tds::{Boundary, Cell, FACET, boundary_facet, mirror_index};
@@ -62,11 +62,12 @@ fn in_conflict_slow(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3) -> bo
             }
         }
     } else {
+        // The semi-static filter failed (in `in_conflict`): the later stages directly.
         let (a, b, d, e) = (pt(v[0]), pt(v[1]), pt(v[2]), pt(v[3]));
-        match predicates::insphere(a, b, d, e, p) {
+        match predicates::insphere_undecided(a, b, d, e, p) {
             Sign::Positive => true,
             Sign::Negative => false,
-            Sign::Zero => insphere_perturbed(&[a, b, d, e], p),
+            Sign::Zero => predicates::insphere_tie(&[a, b, d, e], p),
         }
     }
 }

@@ -84,6 +84,13 @@ pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
     insphere_slow(a, b, c, d, e, det)
 }
 
+/// [`insphere`] for inputs the semi-static filter did not decide (its check is not repeated).
+#[inline(always)]
+pub(crate) fn insphere_undecided(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
+    let det = crate::semi_static::insphere_det(a - e, b - e, c - e, d - e);
+    insphere_slow(a, b, c, d, e, det)
+}
+
 /// Shewchuk's static filter: `det` within `ISPERRBOUND_A` times the permanent of the
 /// minors (his `insphere` fast path) is undecided; returns the permanent then.
 fn insphere_static(ae: DVec3, be: DVec3, ce: DVec3, de: DVec3, det: f64) -> Result<Sign, f64> {
@@ -251,7 +258,7 @@ pub fn insphere_perturbed(q: &[DVec3; 4], p: DVec3) -> bool {
 
 /// The perturbed decision when `p` is exactly on the circumsphere of `q`.
 #[inline(never)]
-fn insphere_tie(q: &[DVec3; 4], p: DVec3) -> bool {
+pub(crate) fn insphere_tie(q: &[DVec3; 4], p: DVec3) -> bool {
     let mut idx = [0usize, 1, 2, 3, 4];
     sort_lexicographic(&mut idx, q, p);
     // Two iterations suffice (Devillers & Teillaud) since q is not flat.
