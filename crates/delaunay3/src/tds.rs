@@ -58,11 +58,24 @@ pub(crate) fn mirror_index(cells: &[Cell], n: CellId, c: CellId) -> usize {
         .expect("neighbor symmetry")
 }
 
+/// [`mirror_index`] without branches (the conflict search's boundary facets): exactly one
+/// neighbor of `n` is `c` (two cells share at most one facet), so the sum is its index.
+#[inline(always)]
+fn mirror_index_fast(cells: &[Cell], n: CellId, c: CellId) -> usize {
+    let m = cells[n.index()].n;
+    debug_assert_eq!(
+        m.iter().filter(|&&x| x == c).count(),
+        1,
+        "neighbor symmetry"
+    );
+    usize::from(m[1] == c) + 2 * usize::from(m[2] == c) + 3 * usize::from(m[3] == c)
+}
+
 /// The facet of cavity cell `c` opposite its vertex `i`, whose other side `n` is outside.
 #[inline]
 pub(crate) fn boundary_facet(cells: &[Cell], c: CellId, i: usize, n: CellId) -> Boundary {
     let cv = cells[c.index()].v;
-    let j = mirror_index(cells, n, c) as u8;
+    let j = mirror_index_fast(cells, n, c) as u8;
     Boundary {
         v: FACET[i].map(|k| cv[k]),
         out: n,
