@@ -42,6 +42,34 @@ pub(crate) fn in_conflict(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3)
     in_conflict_slow(cells, points, c, p)
 }
 
+/// [`in_conflict`] in a search that counts, in `misses`, the semi-static filter's
+/// consecutive failures: after [`MAX_MISSES`] of them (nearly cospherical input, e.g.
+/// points on a sphere, where it almost never decides) the search goes straight to the later
+/// stages. Exact either way: only the speed depends on `misses`.
+#[inline(always)]
+fn in_conflict_counted(
+    cells: &[Cell],
+    points: &[DVec3],
+    c: CellId,
+    p: DVec3,
+    misses: &mut u32,
+) -> bool {
+    let v = cells[c.index()].v.map(|w| w.0);
+    let infinite =
+        (v[0] == u32::MAX) | (v[1] == u32::MAX) | (v[2] == u32::MAX) | (v[3] == u32::MAX);
+    if !infinite && *misses < MAX_MISSES {
+        if let Some(inside) = semi_static::insphere_decide(points, v, p) {
+            *misses = 0;
+            return inside;
+        }
+        *misses += 1;
+    }
+    in_conflict_slow(cells, points, c, p)
+}
+
+/// See [`in_conflict_counted`].
+const MAX_MISSES: u32 = 4;
+
 /// [`in_conflict`] for infinite cells and the in-sphere tests the semi-static filter left.
 #[inline(never)]
 fn in_conflict_slow(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3) -> bool {
@@ -151,6 +179,7 @@ pub(crate) fn search<D: Decided, const DEPTH_FIRST: bool>(
         stack.push(c0);
     }
     let mut k = 0;
+    let mut misses = 0;
     loop {
         let c = if DEPTH_FIRST {
             match stack.pop() {
@@ -169,7 +198,7 @@ pub(crate) fn search<D: Decided, const DEPTH_FIRST: bool>(
             let inside = match d.get(n) {
                 Some(b) => b,
                 None => {
-                    let b = in_conflict(d.cells(), points, n, p);
+                    let b = in_conflict_counted(d.cells(), points, n, p, &mut misses);
                     d.set(n, b);
                     if b {
                         // Its neighbors are read when it is popped: start loading them.
