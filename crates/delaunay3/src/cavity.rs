@@ -77,7 +77,8 @@ fn in_conflict_slow(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3) -> bo
     let v = cell.v;
     let pt = |w: VertexId| points[w.index()];
     if let Some(k) = v.iter().position(|&w| w == VertexId::INFINITE) {
-        let [a, b, d] = FACET[k].map(|i| pt(v[i]));
+        let f = FACET[k];
+        let (a, b, d) = (pt(v[f[0]]), pt(v[f[1]]), pt(v[f[2]]));
         match orient3d(a, b, d, p) {
             Sign::Positive => true,
             Sign::Negative => false,
