@@ -66,6 +66,8 @@ fn six_pairs<P: Copy, T>([a, b, c, d]: [P; 4], m: impl Fn(P, P) -> T) -> (T, T, 
 }
 
 /// Exact in-sphere test; requires `orient3d(a, b, c, d) == Positive`. Positive: `e` inside.
+/// Exact for coordinates in the range of [`crate::validate_point`] (0 or of magnitude in
+/// `[2^-140, 2^200]`: the filters' bounds assume no overflow and bounded underflow).
 ///
 /// Four stages: the semi-static filter of [`crate::semi_static`] (an error bound from the
 /// largest coordinate differences), then in [`insphere_slow`] Shewchuk's tighter static

@@ -18,8 +18,8 @@
 //! the monomials' absolute values. With `X, Y, Z` the largest `|x~|, |y~|, |z~|` and
 //! `L = X^2 + Y^2 + Z^2`, `A <= 24 X Y Z L / (1 - u)^5` (`|x| <= |x~| / (1 - u)`). Hence
 //! `|fl(D) - D| < 384.1 u X Y Z L`, and the computed `eps = fl(385 u * X * Y * Z * L)`, whose
-//! five roundings lose at most a factor `(1 - u)^5`, exceeds it. If `|fl(D)| > eps`, `D` has
-//! the sign of `fl(D)`.
+//! seven roundings (four products; in `L`, a square and two additions) lose at
+//! most a factor `(1 - u)^7`, exceeds it. If `|fl(D)| > eps`, `D` has the sign of `fl(D)`.
 //!
 //! # Range (no overflow, underflow accounted for)
 //! Points are checked by [`crate::triangulation::check_point`]: coordinates are 0 or of
