@@ -21,16 +21,23 @@ impl Triangulation {
         self.tds.vertex_cell.reserve(pts.len());
         self.tds.cells.reserve(pts.len() * 7);
         let order = sort::brio_order(pts, 0x5eed_0000_0000_0000 ^ pts.len() as u64);
+        // The vertex of each point in insertion order, scattered to input order at the end
+        // (random writes kept out of the insertion loop's cache).
+        let inserted: Vec<VertexId> = order
+            .iter()
+            .map(|&(p, _)| {
+                let r = if self.built {
+                    let start = self.start_cell(None);
+                    self.insert_3d(p, None, start, None)
+                } else {
+                    self.insert_held(p)
+                };
+                r.vertex()
+            })
+            .collect();
         let mut ids = vec![VertexId(0); pts.len()];
-        for &i in &order {
-            let p = pts[i as usize];
-            let r = if self.built {
-                let start = self.start_cell(None);
-                self.insert_3d(p, None, start, None)
-            } else {
-                self.insert_held(p)
-            };
-            ids[i as usize] = r.vertex();
+        for (&(_, i), v) in order.iter().zip(inserted) {
+            ids[i as usize] = v;
         }
         Ok(ids)
     }

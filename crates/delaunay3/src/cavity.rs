@@ -21,21 +21,64 @@ use glam::DVec3;
 use crate::hash::SeenCells;
 use crate::ids::{CellId, Facet, VertexId};
 use crate::locate::{Location, Walk};
-use crate::predicates::{self, Sign, incircle_facet_perturbed, insphere_perturbed, orient3d};
+use crate::predicates::{self, Sign, incircle_facet_perturbed, orient3d};
+use crate::semi_static;
 use crate::sort::Rng;
 use crate::tds::{Boundary, Cell, FACET, boundary_facet, mirror_index};
 use crate::triangulation::{Error, Triangulation, check_point};
 
 /// Whether `p` (not a vertex of `c`) is in conflict with the live cell `c` (perturbed): in
 /// its circumball, or for an infinite cell strictly beyond its hull facet, or on the facet's
-/// plane and in the perturbed circumdisk of the facet.
-#[inline]
+/// plane and in the perturbed circumdisk of the facet. The semi-static in-sphere filter
+/// inline, every other case in [`in_conflict_slow`].
+#[inline(always)]
 pub(crate) fn in_conflict(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3) -> bool {
+    let v = cells[c.index()].v.map(|w| w.0);
+    let infinite =
+        (v[0] == u32::MAX) | (v[1] == u32::MAX) | (v[2] == u32::MAX) | (v[3] == u32::MAX);
+    if !infinite && let Some(inside) = semi_static::insphere_decide(points, v, p) {
+        return inside;
+    }
+    in_conflict_slow(cells, points, c, p)
+}
+
+/// [`in_conflict`] in a search that counts, in `misses`, the semi-static filter's
+/// consecutive failures: after [`MAX_MISSES`] of them (nearly cospherical input, e.g.
+/// points on a sphere, where it almost never decides) the search goes straight to the later
+/// stages. Exact either way: only the speed depends on `misses`.
+#[inline(always)]
+fn in_conflict_counted(
+    cells: &[Cell],
+    points: &[DVec3],
+    c: CellId,
+    p: DVec3,
+    misses: &mut u32,
+) -> bool {
+    let v = cells[c.index()].v.map(|w| w.0);
+    let infinite =
+        (v[0] == u32::MAX) | (v[1] == u32::MAX) | (v[2] == u32::MAX) | (v[3] == u32::MAX);
+    if !infinite && *misses < MAX_MISSES {
+        if let Some(inside) = semi_static::insphere_decide(points, v, p) {
+            *misses = 0;
+            return inside;
+        }
+        *misses += 1;
+    }
+    in_conflict_slow(cells, points, c, p)
+}
+
+/// See [`in_conflict_counted`].
+const MAX_MISSES: u32 = 4;
+
+/// [`in_conflict`] for infinite cells and the in-sphere tests the semi-static filter left.
+#[inline(never)]
+fn in_conflict_slow(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3) -> bool {
     let cell = &cells[c.index()];
     let v = cell.v;
     let pt = |w: VertexId| points[w.index()];
     if let Some(k) = v.iter().position(|&w| w == VertexId::INFINITE) {
-        let [a, b, d] = FACET[k].map(|i| pt(v[i]));
+        let f = FACET[k];
+        let (a, b, d) = (pt(v[f[0]]), pt(v[f[1]]), pt(v[f[2]]));
         match orient3d(a, b, d, p) {
             Sign::Positive => true,
             Sign::Negative => false,
@@ -48,11 +91,12 @@ pub(crate) fn in_conflict(cells: &[Cell], points: &[DVec3], c: CellId, p: DVec3)
             }
         }
     } else {
+        // The semi-static filter failed (in `in_conflict`): the later stages directly.
         let (a, b, d, e) = (pt(v[0]), pt(v[1]), pt(v[2]), pt(v[3]));
-        match predicates::insphere(a, b, d, e, p) {
+        match predicates::insphere_undecided(a, b, d, e, p) {
             Sign::Positive => true,
             Sign::Negative => false,
-            Sign::Zero => insphere_perturbed(&[a, b, d, e], p),
+            Sign::Zero => predicates::insphere_tie(&[a, b, d, e], p),
         }
     }
 }
@@ -136,6 +180,7 @@ pub(crate) fn search<D: Decided, const DEPTH_FIRST: bool>(
         stack.push(c0);
     }
     let mut k = 0;
+    let mut misses = 0;
     loop {
         let c = if DEPTH_FIRST {
             match stack.pop() {
@@ -154,9 +199,13 @@ pub(crate) fn search<D: Decided, const DEPTH_FIRST: bool>(
             let inside = match d.get(n) {
                 Some(b) => b,
                 None => {
-                    let b = in_conflict(d.cells(), points, n, p);
+                    let b = in_conflict_counted(d.cells(), points, n, p, &mut misses);
                     d.set(n, b);
                     if b {
+                        // Its neighbors are read when it is popped: start loading them.
+                        for &m in &d.cells()[n.index()].n {
+                            prefetch(d.cells(), m);
+                        }
                         zone.push(n);
                         if DEPTH_FIRST {
                             stack.push(n);
@@ -169,6 +218,20 @@ pub(crate) fn search<D: Decided, const DEPTH_FIRST: bool>(
                 boundary.push(boundary_facet(d.cells(), c, i, n));
             }
         }
+    }
+}
+
+/// Hints the CPU to load cell `c` into the cache (no effect on results).
+#[inline(always)]
+#[allow(unsafe_code)]
+fn prefetch(cells: &[Cell], c: CellId) {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse"))]
+    if let Some(cell) = cells.get(c.index()) {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: `_mm_prefetch` only requires the SSE feature, statically enabled here (the
+        // `cfg` above; it is in the x86_64 baseline). A prefetch is a hint: it never faults
+        // and changes no memory, and the pointer is to a live element of `cells` anyway.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(cell).cast()) };
     }
 }
 

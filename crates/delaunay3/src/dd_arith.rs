@@ -71,3 +71,9 @@ pub fn mul<const FMA: bool>(x: D, o: D) -> D {
     let p = two_prod_with::<FMA>(x.0, o.0);
     quick(p.0, p.1 + (x.0 * o.1 + x.1 * o.0))
 }
+/// A double times a double-double: [`mul`] with `x = D(a, 0)`, without the zero terms.
+#[inline(always)]
+pub fn mul_f64<const FMA: bool>(a: f64, o: D) -> D {
+    let p = two_prod_with::<FMA>(a, o.0);
+    quick(p.0, p.1 + a * o.1)
+}

@@ -38,19 +38,25 @@
 //! `< 3`) points are held without cells; the triangulation is then built from all of them.
 //!
 //! # Performance
-//! Point location is a randomized visibility walk from the last created cell (or a hint);
-//! the cavity search uses a per-cell visit stamp and reused buffers, so an insertion does not
-//! allocate. In-sphere tests go through a static f64 filter, a double-double stage (decides
-//! nearly-cospherical inputs such as rounded sphere samples), an exact `i128` stage for
-//! grid-like inputs, then `robust`'s exact arithmetic. About 250-280 bytes per point.
-//! `crates/delaunay3/benches/cgal_baseline.sh` compares with CGAL on the same points;
+//! Points are spatially sorted once (BRIO rounds of Hilbert median splits on contiguous
+//! (point, index) records). Point location is a randomized visibility walk from the last
+//! created cell (or a hint); the cavity search uses a per-cell visit stamp, prefetches the
+//! neighbors of the cells it finds in conflict, and reuses its buffers, so an insertion does
+//! not allocate. In-sphere tests go through a semi-static filter inline in the search (an
+//! error bound from the largest coordinate differences, proved in `semi_static`), then
+//! Shewchuk's static filter, an exact `i128` stage for grid-like inputs, a double-double
+//! stage (decides nearly-cospherical inputs such as rounded sphere samples), then `robust`'s
+//! exact arithmetic. The new cells of a star are linked through a table indexed by local ids
+//! of the cavity's boundary vertices (`star`), not by hashing edges. About 250-290 bytes per
+//! point. `crates/delaunay3/benches/cgal_baseline.sh` compares with CGAL on the same points;
 //! `cargo bench -p delaunay3 --bench insert` is the criterion bench.
 //!
 //! # Modules (in reading order)
 //! [`ids`] (handles and their lifetimes), `tds` (cell storage, topology only), `triangulation`
 //! (the struct and read-only queries), `locate` (the walk), `cavity` (the conflict zone: one
-//! search for every insertion path), `insert` and `bulk` (insertion), [`construct`]
-//! (circumcenters), [`predicates`] (exact, perturbed), [`poles`] (Voronoi poles), `validate`.
+//! search for every insertion path), `star` (the new cells' adjacency), `insert` and `bulk`
+//! (insertion), [`construct`] (circumcenters), [`predicates`] (exact, perturbed; its first
+//! in-sphere filter in `semi_static`), [`poles`] (Voronoi poles), `validate`.
 //!
 //! # Example
 //! ```
@@ -78,8 +84,9 @@
 //! assert!(t.insert(DVec3::new(f64::NAN, 0.0, 0.0)).is_err());
 //! ```
 
-// One `unsafe` (calling a `target_feature` function after detecting the feature, with its
-// proof comment) in `predicates`; everything else is safe.
+// Two `unsafe` blocks, each with its proof comment: calling a `target_feature` function
+// after detecting the feature (`predicates`), and the cache prefetch hint of the conflict
+// search (`cavity`); everything else is safe.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -93,7 +100,9 @@ mod insert;
 mod locate;
 pub mod poles;
 pub mod predicates;
+mod semi_static;
 mod sort;
+mod star;
 mod tds;
 mod triangulation;
 mod validate;

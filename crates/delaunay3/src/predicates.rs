@@ -66,33 +66,45 @@ fn six_pairs<P: Copy, T>([a, b, c, d]: [P; 4], m: impl Fn(P, P) -> T) -> (T, T, 
 }
 
 /// Exact in-sphere test; requires `orient3d(a, b, c, d) == Positive`. Positive: `e` inside.
+/// Exact for coordinates in the range of [`crate::validate_point`] (0 or of magnitude in
+/// `[2^-140, 2^200]`: the filters' bounds assume no overflow and bounded underflow).
 ///
-/// Three stages: Shewchuk's static f64 filter, a double-double evaluation with a rigorous
-/// error bound (decides nearly-cospherical inputs, e.g. rounded sphere samples, ~20x faster
-/// than the adaptive expansions), then `robust::insphere` (exact).
+/// Four stages: the semi-static filter of [`crate::semi_static`] (an error bound from the
+/// largest coordinate differences), then in [`insphere_slow`] Shewchuk's tighter static
+/// filter on the permanent, a double-double evaluation with a rigorous error bound (decides
+/// nearly-cospherical inputs, e.g. rounded sphere samples, ~20x faster than the adaptive
+/// expansions), an exact `i128` stage for grid-like inputs, and `robust::insphere` (exact).
 #[inline(always)]
 pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
+    use crate::semi_static::{insphere_det, insphere_eps};
     let (ae, be, ce, de) = (a - e, b - e, c - e, d - e);
-    let ab = ae.x * be.y - be.x * ae.y;
-    let bc = be.x * ce.y - ce.x * be.y;
-    let cd = ce.x * de.y - de.x * ce.y;
-    let da = de.x * ae.y - ae.x * de.y;
-    let ac = ae.x * ce.y - ce.x * ae.y;
-    let bd = be.x * de.y - de.x * be.y;
-    let abc = ae.z * bc - be.z * ac + ce.z * ab;
-    let bcd = be.z * cd - ce.z * bd + de.z * bc;
-    let cda = ce.z * da + de.z * ac + ae.z * cd;
-    let dab = de.z * ab + ae.z * bd + be.z * da;
+    let det = insphere_det(ae, be, ce, de);
+    let eps = insphere_eps(ae, be, ce, de);
+    if det > eps || -det > eps {
+        return Sign::of(det);
+    }
+    insphere_slow(a, b, c, d, e, det)
+}
+
+/// [`insphere`] for inputs the semi-static filter did not decide (its check is not repeated).
+#[inline(always)]
+pub(crate) fn insphere_undecided(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
+    let det = crate::semi_static::insphere_det(a - e, b - e, c - e, d - e);
+    insphere_slow(a, b, c, d, e, det)
+}
+
+/// Shewchuk's static filter: `det` within `ISPERRBOUND_A` times the permanent of the
+/// minors (his `insphere` fast path) is undecided; returns the permanent then.
+fn insphere_static(ae: DVec3, be: DVec3, ce: DVec3, de: DVec3, det: f64) -> Result<Sign, f64> {
+    let m = |p: DVec3, q: DVec3| (p.x * q.y).abs() + (q.x * p.y).abs();
+    let (pab, pbc, pcd, pda, pac, pbd) = six_pairs([ae, be, ce, de], m);
+    let (az, bz, cz, dz) = (ae.z.abs(), be.z.abs(), ce.z.abs(), de.z.abs());
     let (al, bl, cl, dl) = (
         ae.length_squared(),
         be.length_squared(),
         ce.length_squared(),
         de.length_squared(),
     );
-    let det = (dl * abc - cl * dab) + (bl * cda - al * bcd);
-    let m = |p: DVec3, q: DVec3| (p.x * q.y).abs() + (q.x * p.y).abs();
-    let (pab, pbc, pcd, pda, pac, pbd) = six_pairs([ae, be, ce, de], m);
-    let (az, bz, cz, dz) = (ae.z.abs(), be.z.abs(), ce.z.abs(), de.z.abs());
     let permanent = (pcd * bz + pbd * cz + pbc * dz) * al
         + (pda * cz + pac * dz + pcd * az) * bl
         + (pab * dz + pbd * az + pda * bz) * cl
@@ -100,13 +112,19 @@ pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> Sign {
     const ISPERRBOUND_A: f64 = (16.0 + 224.0 * f64::EPSILON / 2.0) * f64::EPSILON / 2.0;
     let errbound = ISPERRBOUND_A * permanent;
     if det > errbound || -det > errbound {
-        return Sign::of(det);
+        return Ok(Sign::of(det));
     }
-    insphere_slow(a, b, c, d, e, permanent)
+    Err(permanent)
 }
 
+/// The stages after the semi-static filter (`det`: the f64 determinant, from the same
+/// evaluation as Shewchuk's).
 #[inline(never)]
-fn insphere_slow(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3, permanent: f64) -> Sign {
+fn insphere_slow(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3, det: f64) -> Sign {
+    let permanent = match insphere_static(a - e, b - e, c - e, d - e, det) {
+        Ok(s) => return s,
+        Err(p) => p,
+    };
     if let Some(s) = insphere_int(a, b, c, d, e) {
         return s;
     }
@@ -195,28 +213,61 @@ fn insphere_dd_fma(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> f64 {
     insphere_dd_with::<true>(a, b, c, d, e)
 }
 
-/// The in-sphere determinant in double-double arithmetic (see the bound in [`insphere`]).
+/// The in-sphere determinant in double-double arithmetic (see the bound in
+/// [`insphere_slow`]). When every difference `p - e` is exact in f64 (neighbouring points:
+/// Sterbenz), the same evaluation skips the products by their zero low parts.
 #[inline(always)]
 fn insphere_dd_with<const FMA: bool>(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> f64 {
-    use crate::dd_arith::{D, mul, two_sum};
+    use crate::dd_arith::two_sum;
     let diff = |p: DVec3| [two_sum(p.x, -e.x), two_sum(p.y, -e.y), two_sum(p.z, -e.z)];
-    let (ae, be, ce, de) = (diff(a), diff(b), diff(c), diff(d));
+    let q = [diff(a), diff(b), diff(c), diff(d)];
+    if q.iter().flatten().all(|t| t.1 == 0.0) {
+        insphere_dd_det::<FMA, true>(&q)
+    } else {
+        insphere_dd_det::<FMA, false>(&q)
+    }
+}
+
+/// The double-double determinant of the differences `q` (`EXACT`: all their low parts are
+/// zero). With `EXACT`, a product of two differences is `two_prod` of their high parts and
+/// a difference times a double-double is `mul_f64`: these are the values `mul` computes
+/// when the low parts are zero (`quick(P, e)` of an exact product `P + e` is `(P, e)`, and
+/// `a * o.1 + 0 * o.0 = a * o.1`), up to the sign of a zero, so the result is the same.
+#[inline(always)]
+fn insphere_dd_det<const FMA: bool, const EXACT: bool>(q: &[[crate::dd_arith::D; 3]; 4]) -> f64 {
+    use crate::dd_arith::{D, mul, mul_f64, two_prod_with};
     let x = |p: D, q: D| mul::<FMA>(p, q);
-    let m = |p: &[D; 3], q: &[D; 3]| x(p[0], q[1]) - x(q[0], p[1]);
+    // A product of two differences, and a difference times a double-double.
+    let x1 = |p: D, q: D| {
+        if EXACT {
+            two_prod_with::<FMA>(p.0, q.0)
+        } else {
+            x(p, q)
+        }
+    };
+    let xz = |p: D, q: D| {
+        if EXACT {
+            mul_f64::<FMA>(p.0, q)
+        } else {
+            x(p, q)
+        }
+    };
+    let [ae, be, ce, de] = q;
+    let m = |p: &[D; 3], q: &[D; 3]| x1(p[0], q[1]) - x1(q[0], p[1]);
     let (ab, bc, cd, da, ac, bd) = (
-        m(&ae, &be),
-        m(&be, &ce),
-        m(&ce, &de),
-        m(&de, &ae),
-        m(&ae, &ce),
-        m(&be, &de),
+        m(ae, be),
+        m(be, ce),
+        m(ce, de),
+        m(de, ae),
+        m(ae, ce),
+        m(be, de),
     );
-    let abc = x(ae[2], bc) - x(be[2], ac) + x(ce[2], ab);
-    let bcd = x(be[2], cd) - x(ce[2], bd) + x(de[2], bc);
-    let cda = x(ce[2], da) + x(de[2], ac) + x(ae[2], cd);
-    let dab = x(de[2], ab) + x(ae[2], bd) + x(be[2], da);
-    let lift = |p: &[D; 3]| x(p[0], p[0]) + x(p[1], p[1]) + x(p[2], p[2]);
-    let det = (x(lift(&de), abc) - x(lift(&ce), dab)) + (x(lift(&be), cda) - x(lift(&ae), bcd));
+    let abc = xz(ae[2], bc) - xz(be[2], ac) + xz(ce[2], ab);
+    let bcd = xz(be[2], cd) - xz(ce[2], bd) + xz(de[2], bc);
+    let cda = xz(ce[2], da) + xz(de[2], ac) + xz(ae[2], cd);
+    let dab = xz(de[2], ab) + xz(ae[2], bd) + xz(be[2], da);
+    let lift = |p: &[D; 3]| x1(p[0], p[0]) + x1(p[1], p[1]) + x1(p[2], p[2]);
+    let det = (x(lift(de), abc) - x(lift(ce), dab)) + (x(lift(be), cda) - x(lift(ae), bcd));
     det.0 + det.1
 }
 
@@ -242,7 +293,7 @@ pub fn insphere_perturbed(q: &[DVec3; 4], p: DVec3) -> bool {
 
 /// The perturbed decision when `p` is exactly on the circumsphere of `q`.
 #[inline(never)]
-fn insphere_tie(q: &[DVec3; 4], p: DVec3) -> bool {
+pub(crate) fn insphere_tie(q: &[DVec3; 4], p: DVec3) -> bool {
     let mut idx = [0usize, 1, 2, 3, 4];
     sort_lexicographic(&mut idx, q, p);
     // Two iterations suffice (Devillers & Teillaud) since q is not flat.
@@ -365,6 +416,7 @@ mod tests {
             (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
         };
         let mut decided_by_dd = 0;
+        let mut exact_diffs = 0;
         for k in 0..20000 {
             let mut q = [DVec3::ZERO; 5];
             let (center, radius) = (
@@ -388,8 +440,23 @@ mod tests {
             }
             // Dekker splitting (no FMA) computes the same double-double value.
             assert_eq!(dd, insphere_dd_with::<false>(q[0], q[1], q[2], q[3], q[4]));
+            // So does the general evaluation where the exact-differences one applies.
+            let diffs = [0, 1, 2, 3].map(|k| {
+                let t = |x: f64, y: f64| crate::dd_arith::two_sum(x, -y);
+                [t(q[k].x, q[4].x), t(q[k].y, q[4].y), t(q[k].z, q[4].z)]
+            });
+            if diffs.iter().flatten().all(|t| t.1 == 0.0) {
+                exact_diffs += 1;
+                for f in [
+                    insphere_dd_det::<true, true>,
+                    insphere_dd_det::<false, true>,
+                ] {
+                    assert_eq!(f(&diffs), insphere_dd_det::<true, false>(&diffs));
+                }
+            }
         }
         assert!(decided_by_dd > 19000);
+        assert!(exact_diffs > 100, "{exact_diffs}");
     }
 
     /// `robust`'s exact in-sphere sign of `q[4]` against `q[0..4]`, the reference.

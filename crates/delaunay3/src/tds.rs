@@ -10,6 +10,7 @@
 
 use crate::hash::{EdgeMap, edge_key};
 use crate::ids::{CellId, VertexId};
+use crate::star::StarLinks;
 
 /// Marks a dead (free) slot in `v[0]`. Never a vertex of a live cell.
 pub(crate) const DEAD: VertexId = VertexId::NONE;
@@ -57,11 +58,24 @@ pub(crate) fn mirror_index(cells: &[Cell], n: CellId, c: CellId) -> usize {
         .expect("neighbor symmetry")
 }
 
+/// [`mirror_index`] without branches (the conflict search's boundary facets): exactly one
+/// neighbor of `n` is `c` (two cells share at most one facet), so the sum is its index.
+#[inline(always)]
+fn mirror_index_fast(cells: &[Cell], n: CellId, c: CellId) -> usize {
+    let m = cells[n.index()].n;
+    debug_assert_eq!(
+        m.iter().filter(|&&x| x == c).count(),
+        1,
+        "neighbor symmetry"
+    );
+    usize::from(m[1] == c) + 2 * usize::from(m[2] == c) + 3 * usize::from(m[3] == c)
+}
+
 /// The facet of cavity cell `c` opposite its vertex `i`, whose other side `n` is outside.
 #[inline]
 pub(crate) fn boundary_facet(cells: &[Cell], c: CellId, i: usize, n: CellId) -> Boundary {
     let cv = cells[c.index()].v;
-    let j = mirror_index(cells, n, c) as u8;
+    let j = mirror_index_fast(cells, n, c) as u8;
     Boundary {
         v: FACET[i].map(|k| cv[k]),
         out: n,
@@ -83,6 +97,9 @@ pub(crate) struct Tds {
     pub(crate) last_cell: CellId,
     stamp: u32,
     edges: EdgeMap,
+    star: StarLinks,
+    links: Vec<[u32; 3]>,
+    slots: Vec<CellId>,
 }
 
 impl Default for Tds {
@@ -97,6 +114,9 @@ impl Default for Tds {
             last_cell: CellId(0),
             stamp: 0,
             edges: EdgeMap::default(),
+            star: StarLinks::default(),
+            links: Vec::new(),
+            slots: Vec::new(),
         }
     }
 }
@@ -109,7 +129,10 @@ impl Tds {
             self.cells.capacity() * size_of::<Cell>(),
             self.free.capacity() * size_of::<CellId>(),
             self.vertex_cell.capacity() * size_of::<CellId>(),
-            self.edges.memory_bytes(),
+            self.edges.memory_bytes()
+                + self.star.memory_bytes()
+                + self.links.capacity() * 12
+                + self.slots.capacity() * 4,
         ]
     }
 
@@ -174,7 +197,7 @@ impl Tds {
         w: VertexId,
         cavity: &[CellId],
         boundary: &[Boundary],
-        mut created: Option<&mut Vec<CellId>>,
+        created: Option<&mut Vec<CellId>>,
         check: impl Fn([VertexId; 4]),
     ) {
         for &c in cavity {
@@ -183,6 +206,79 @@ impl Tds {
                 self.n_finite -= 1;
             }
         }
+        let nb = boundary.len();
+        let mut links = std::mem::take(&mut self.links);
+        let n_vertices = self.vertex_cell.len();
+        if !self
+            .star
+            .link(boundary.iter().map(|b| b.v), n_vertices, &mut links)
+        {
+            self.replace_with_star_hashed(w, cavity, boundary, created, check);
+            self.links = links;
+            return;
+        }
+        let mut slots = std::mem::take(&mut self.slots);
+        slots.clear();
+        for k in 0..nb {
+            let s = if k < cavity.len() {
+                cavity[k]
+            } else {
+                self.alloc_cell()
+            };
+            slots.push(s);
+        }
+        for (k, b) in boundary.iter().enumerate() {
+            let slot = slots[k];
+            let v = [b.v[0], b.v[1], b.v[2], w];
+            let n = links[k].map(|x| slots[(x >> 2) as usize]);
+            self.cells[slot.index()] = Cell {
+                v,
+                n: [n[0], n[1], n[2], b.out],
+                mark: 0,
+            };
+            self.cells[b.out.index()].n[b.j as usize] = slot;
+            if v.contains(&VertexId::INFINITE) {
+                self.infinite_cell = slot;
+            } else {
+                self.n_finite += 1;
+                check(v);
+            }
+        }
+        self.n_live += nb;
+        // Each vertex's cell: the last new cell containing it (as the hashed path does).
+        for (x, k) in self.star.vertices() {
+            if x != VertexId::INFINITE {
+                self.vertex_cell[x.index()] = slots[k as usize];
+            }
+        }
+        if let Some(&last) = slots.last() {
+            if w != VertexId::INFINITE {
+                self.vertex_cell[w.index()] = last;
+            }
+            self.last_cell = last;
+        }
+        if let Some(cr) = created {
+            cr.extend_from_slice(&slots);
+        }
+        for &c in cavity.iter().skip(nb) {
+            self.cells[c.index()].v = [DEAD; 4];
+            self.free.push(c);
+        }
+        self.slots = slots;
+        self.links = links;
+    }
+
+    /// [`Tds::replace_with_star`] for stars of more than [`crate::star::MAX_LOCAL`] boundary
+    /// vertices: new cells linked through a hash map of edges (the live counts of the
+    /// cavity are already removed).
+    fn replace_with_star_hashed(
+        &mut self,
+        w: VertexId,
+        cavity: &[CellId],
+        boundary: &[Boundary],
+        mut created: Option<&mut Vec<CellId>>,
+        check: impl Fn([VertexId; 4]),
+    ) {
         let nb = boundary.len();
         self.edges.reset(nb * 3 / 2 + 1);
         for (k, b) in boundary.iter().enumerate() {
