@@ -167,16 +167,7 @@ fn drop_fragments(out: &mut MeshResult, img: &ImageSurface, h: f64) -> Vec<Topol
         .iter()
         .map(|t| !dead[t[0] as usize])
         .collect();
-    let mut k = 0;
-    out.mesh.triangles.retain(|_| {
-        k += 1;
-        keep[k - 1]
-    });
-    let mut k = 0;
-    out.balls.retain(|_| {
-        k += 1;
-        keep[k - 1]
-    });
+    crate::levels::repair::retain_marked(&mut out.mesh.triangles, &mut out.balls, &keep);
     crate::levels::repair::compact(&mut out.mesh);
     out_d
 }

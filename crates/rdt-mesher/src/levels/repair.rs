@@ -520,16 +520,7 @@ fn drop_small(
             out.push(decision(mesh, &mesh.triangles, &comp, kind, comp.len()));
         }
     }
-    let mut k = 0;
-    mesh.triangles.retain(|_| {
-        k += 1;
-        live[k - 1]
-    });
-    let mut k = 0;
-    balls.retain(|_| {
-        k += 1;
-        live[k - 1]
-    });
+    retain_marked(&mut mesh.triangles, balls, &live);
     out
 }
 
@@ -657,7 +648,12 @@ fn measure_sizes(out: &mut crate::MeshResult, opts: &crate::MeshOptions) {
     else {
         return;
     };
-    let st = &mut out.stats;
+    record_max_r_over_sigma(&mut out.stats, m);
+}
+
+/// `m`, the largest r / sigma measured on the mesh written, into the figures and
+/// `unmet: size` (which it replaces).
+pub(crate) fn record_max_r_over_sigma(st: &mut crate::Stats, m: f64) {
     st.max_r_over_sigma = Some(m);
     st.unmet.retain(|u| !matches!(u, crate::Unmet::Size { .. }));
     if m > 1.0 {
@@ -737,6 +733,24 @@ fn add_edges(tris: &[[u32; 3]], edges: &mut HashSet<[u32; 2]>) {
             edges.insert([a.min(b), a.max(b)]);
         }
     }
+}
+
+/// Keep the triangles that `keep` marks and their balls (`balls` parallel to `triangles`).
+pub(crate) fn retain_marked(
+    triangles: &mut Vec<[u32; 3]>,
+    balls: &mut Vec<SurfaceBall>,
+    keep: &[bool],
+) {
+    let mut k = 0;
+    triangles.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    let mut k = 0;
+    balls.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
 }
 
 /// Drop the vertices no triangle uses (keeping the order of the others).

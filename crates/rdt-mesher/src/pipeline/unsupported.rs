@@ -88,16 +88,7 @@ pub(crate) fn drop_unsupported(out: &mut Outcome, input: &Input, sigma: f64) {
             facets_added: 0,
         });
     }
-    let mut k = 0;
-    mesh.triangles.retain(|_| {
-        k += 1;
-        live[k - 1]
-    });
-    let mut k = 0;
-    out.balls.retain(|_| {
-        k += 1;
-        live[k - 1]
-    });
+    crate::levels::repair::retain_marked(&mut mesh.triangles, &mut out.balls, &live);
     let before: Vec<DVec3> = mesh.vertices.clone();
     crate::levels::repair::compact(mesh);
     let key = |p: &DVec3| p.to_array().map(f64::to_bits);
@@ -125,16 +116,7 @@ pub(crate) fn drop_unsupported(out: &mut Outcome, input: &Input, sigma: f64) {
         .sigma
         .and_then(|s| out.balls.iter().map(|b| b.radius / s).reduce(f64::max))
     {
-        st.max_r_over_sigma = Some(m);
-        st.unmet.retain(|u| !matches!(u, crate::Unmet::Size { .. }));
-        if m > 1.0 {
-            st.unmet.insert(
-                0,
-                crate::Unmet::Size {
-                    max_r_over_sigma: m,
-                },
-            );
-        }
+        crate::levels::repair::record_max_r_over_sigma(st, m);
     }
     st.topology_decisions.extend(decisions);
 }

@@ -230,10 +230,11 @@ impl RegionMask {
                     if !self.has(p) {
                         continue;
                     }
+                    let np = self.node(p);
                     for axis in 0..3 {
                         let mut q = p;
                         q[axis] += 1;
-                        let (np, nq) = (self.node(p), self.node(q));
+                        let nq = self.node(q);
                         if self.has(q) && keep(np, nq) {
                             let (a, b) = (node(p), node(q));
                             out.push(Join {
@@ -255,7 +256,7 @@ impl RegionMask {
                             {
                                 continue;
                             }
-                            let (np, nq) = (self.node(p), self.node(q));
+                            let nq = self.node(q);
                             if !keep(np, nq) {
                                 continue;
                             }
