@@ -85,15 +85,17 @@ fn image_hausdorff_is_measured_exactly() {
             "points of S on the voxel edges",
         ],
     );
-    // Marching cubes at iso 3 (skimage, affine applied) measures 6.109 from its vertices to
-    // this mesh and 1.745 from the mesh to its triangles (the trilinear surface is closer).
+    // Marching cubes at iso 3 (skimage, affine applied) measures 4.613 from its vertices to
+    // this mesh and 1.069 from the mesh to its triangles (the trilinear surface is closer;
+    // `python/tests/test_images_vs_marching_cubes.py`, case motor@3 at 1 voxel, 2026-12-04;
+    // 6.109 before the coverage's stars of issue 14).
     let two_sided: f64 = line
         .split("two-sided ")
         .nth(1)
         .and_then(|x| x.split(' ').next())
         .and_then(|x| x.parse().ok())
         .unwrap();
-    assert!((0.9 * 6.109..=1.1 * 6.109).contains(&two_sided), "{line}");
+    assert!((0.9 * 4.613..=1.1 * 4.613).contains(&two_sided), "{line}");
 }
 
 /// Issue 16: a simulated scan whose IMLS surface has a bubble. `mesh` drops it, prints it,

@@ -126,16 +126,15 @@ fn bridge_splits(
                 if root_of(&merged, i) == 0 {
                     continue;
                 }
+                // Pieces smaller than a voxel are bridged too when a tube fits: dropped as
+                // fragments (`components`), they could leave their part of S farther than a
+                // voxel plus sigma from the mesh.
                 let bbox = ps[i]
                     .iter()
                     .map(|&v| out.mesh.vertices[v as usize])
                     .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
                         (lo.min(p), hi.max(p))
                     });
-                // Pieces smaller than a voxel are left to `drop_fragment`.
-                if bbox.0.distance(bbox.1) < h {
-                    continue;
-                }
                 let Some((j, join)) = find_join(img, label, &mut node_piece, i, bbox, &merged, h)
                 else {
                     continue;

@@ -8,9 +8,13 @@
 //! mesh (after the topological repair):
 //! - **drop a fragment** (a mesh change, reported as a [`TopologyDecision`] of kind
 //!   `drop_fragment`): a piece of a scan component meshed in several pieces, not its largest,
-//!   whose box diagonal is below the resolution (a voxel): a sub-voxel piece cut off by a neck
-//!   thinner than the floor (or by the repair's cut), which no sample of the size bound
-//!   resolves. The piece is closed, so the mesh stays a closed manifold.
+//!   that no bridge joined (`bridges`), and either whose box diagonal is below the resolution
+//!   h (a voxel: a sub-voxel piece cut off by a neck thinner than the floor, or by the
+//!   repair's cut, which no sample of the size bound resolves) or whose every vertex lies
+//!   within h + sigma of a vertex of the component's largest piece (a piece hanging at a
+//!   neck no tube could join: without it, its part of S is still within the two-sided
+//!   distance of the image suite, h + sigma, of the mesh). The piece is closed, so the mesh
+//!   stays a closed manifold.
 //! - **split**: a scan component meshed as several pieces (a neck the rounds did not mesh)
 //!   keeps its pieces; each piece but the largest is one decision (its box).
 //! - **joined**: a scan component with vertices of the mesh on it but no piece of its own (a
@@ -123,8 +127,14 @@ pub(crate) fn pieces(mesh: &meshio::TriMesh, img: &ImageSurface) -> Vec<(Vec<u32
 }
 
 /// The fragment rule (module docs): remove the closed pieces, not the largest of their scan
-/// component, whose box diagonal is below `h`; one decision per piece removed.
-fn drop_fragments(out: &mut MeshResult, img: &ImageSurface, h: f64) -> Vec<TopologyDecision> {
+/// component, whose box diagonal is below `h` or whose vertices are all within `h + sigma`
+/// of the largest piece's; one decision per piece removed.
+fn drop_fragments(
+    out: &mut MeshResult,
+    img: &ImageSurface,
+    h: f64,
+    criteria: &crate::Criteria,
+) -> Vec<TopologyDecision> {
     let mesh = &out.mesh;
     let mut by_label: BTreeMap<usize, Vec<Vec<u32>>> = BTreeMap::new();
     for (vs, l) in pieces(mesh, img) {
@@ -139,9 +149,17 @@ fn drop_fragments(out: &mut MeshResult, img: &ImageSurface, h: f64) -> Vec<Topol
             continue;
         }
         ps.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
+        let mut near_largest: Option<NearestVertex> = None;
         for p in &ps[1..] {
             let (center, size) = bbox(p.iter().map(|&v| mesh.vertices[v as usize]));
-            if size < h {
+            let mut hanging = || {
+                let near = near_largest.get_or_insert_with(|| NearestVertex::new(mesh, &ps[0]));
+                p.iter().all(|&v| {
+                    let x = mesh.vertices[v as usize];
+                    near.distance(x) <= h + criteria.sigma_at(x).unwrap_or(h)
+                })
+            };
+            if size < h || hanging() {
                 p.iter().for_each(|&v| dead[v as usize] = true);
                 found.push((center, size, p.clone()));
             }
@@ -170,6 +188,30 @@ fn drop_fragments(out: &mut MeshResult, img: &ImageSurface, h: f64) -> Vec<Topol
     crate::levels::repair::retain_marked(&mut out.mesh.triangles, &mut out.balls, &keep);
     crate::levels::repair::compact(&mut out.mesh);
     out_d
+}
+
+/// The distance from a point to the nearest of some vertices of a mesh.
+struct NearestVertex(Option<kiddo::ImmutableKdTree<f64, 3>>);
+
+impl NearestVertex {
+    fn new(mesh: &meshio::TriMesh, vertices: &[u32]) -> Self {
+        let coords: Vec<[f64; 3]> = vertices
+            .iter()
+            .map(|&v| mesh.vertices[v as usize].to_array())
+            .collect();
+        Self(kiddo::ImmutableKdTree::new_from_slice(&coords).ok())
+    }
+
+    /// Infinite when there is no vertex.
+    fn distance(&self, p: DVec3) -> f64 {
+        self.0.as_ref().map_or(f64::INFINITY, |t| {
+            t.query(&p.to_array())
+                .nearest_one::<kiddo::SquaredEuclidean<f64>>()
+                .execute()
+                .distance
+                .sqrt()
+        })
+    }
 }
 
 /// The component decisions of `out` against `img`'s voxel scan (see the module docs), in
@@ -352,7 +394,7 @@ pub(crate) fn apply(
         return;
     };
     if let Some(h) = opts.resolution {
-        let d = drop_fragments(out, img, h);
+        let d = drop_fragments(out, img, h, &opts.criteria);
         record(out, opts, d);
     }
     out.stats.component_decisions = decide(out, img);
