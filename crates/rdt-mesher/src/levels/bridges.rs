@@ -40,6 +40,11 @@ use std::collections::BTreeMap;
 /// Doublings of the search box's margin.
 const ROUNDS: u32 = 6;
 
+/// Doublings for a piece smaller than a voxel (margins up to 6 voxels): its join, if the scan
+/// has one, is next to it; a wider search found none on the MNI T1 template and cost 0.17 s
+/// a piece.
+const SMALL_ROUNDS: u32 = 3;
+
 /// Triangles of each piece tried first, nearest the join first.
 const NEAR: usize = 8;
 
@@ -164,7 +169,8 @@ fn find_join(
     h: f64,
 ) -> Option<(usize, Join)> {
     let root = root_of(merged, i);
-    for r in 0..ROUNDS {
+    let small = lo.distance(hi) < h;
+    for r in 0..if small { SMALL_ROUNDS } else { ROUNDS } {
         let m = DVec3::splat(1.5 * h * f64::from(1u32 << r));
         let mut best: Option<(f64, usize, Join)> = None;
         // The other piece of a join between piece i and a piece not merged with it (the

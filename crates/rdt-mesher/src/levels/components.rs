@@ -153,11 +153,9 @@ fn drop_fragments(
         for p in &ps[1..] {
             let (center, size) = bbox(p.iter().map(|&v| mesh.vertices[v as usize]));
             let mut hanging = || {
-                let near = near_largest.get_or_insert_with(|| NearestVertex::new(mesh, &ps[0]));
-                p.iter().all(|&v| {
-                    let x = mesh.vertices[v as usize];
-                    near.distance(x) <= h + criteria.sigma_at(x).unwrap_or(h)
-                })
+                near_largest
+                    .get_or_insert_with(|| NearestVertex::new(mesh, &ps[0]))
+                    .holds(mesh, p, h, criteria)
             };
             if size < h || hanging() {
                 p.iter().for_each(|&v| dead[v as usize] = true);
@@ -190,7 +188,8 @@ fn drop_fragments(
     out_d
 }
 
-/// The distance from a point to the nearest of some vertices of a mesh.
+/// The distance from a point to the nearest of some vertices of a mesh (the largest piece of
+/// a split component: the fragment rule).
 struct NearestVertex(Option<kiddo::ImmutableKdTree<f64, 3>>);
 
 impl NearestVertex {
@@ -200,6 +199,21 @@ impl NearestVertex {
             .map(|&v| mesh.vertices[v as usize].to_array())
             .collect();
         Self(kiddo::ImmutableKdTree::new_from_slice(&coords).ok())
+    }
+
+    /// Whether every vertex of `piece` is within `h + sigma` of these vertices (the fragment
+    /// rule's *hanging* piece).
+    fn holds(
+        &self,
+        mesh: &meshio::TriMesh,
+        piece: &[u32],
+        h: f64,
+        criteria: &crate::Criteria,
+    ) -> bool {
+        piece.iter().all(|&v| {
+            let x = mesh.vertices[v as usize];
+            self.distance(x) <= h + criteria.sigma_at(x).unwrap_or(h)
+        })
     }
 
     /// Infinite when there is no vertex.

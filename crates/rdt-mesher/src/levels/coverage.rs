@@ -94,40 +94,44 @@ impl Mesher<'_> {
                         > t * t
             })
             .collect();
-        let ids: Vec<u32> = (0..n as u32).filter(|&v| used[v as usize]).collect();
-        let coords: Vec<[f64; 3]> = ids
-            .iter()
-            .map(|&v| tri.point(VertexId::from_index(v as usize)).to_array())
-            .collect();
-        let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords);
-        let far: Vec<(DVec3, f64)> = match tree {
-            _ if unsure.is_empty() => Vec::new(),
-            Ok(tree) if !coords.is_empty() => {
-                let found: Vec<(usize, u32, f64)> = unsure
-                    .par_iter()
-                    .map(|&i| {
-                        let r = tree
-                            .query(&crossings[i].to_array())
-                            .nearest_one::<SquaredEuclidean<f64>>()
-                            .execute();
-                        (i, ids[r.item as usize], r.distance)
-                    })
-                    .collect();
-                let mut far = Vec::new();
-                for (i, v, d2) in found {
-                    nearest[i] = v;
-                    let p = crossings[i];
-                    let t = tau(p);
-                    if d2 > t * t {
-                        far.push((p, t));
-                    }
-                }
-                far
-            }
-            _ => unsure
+        // The vertices of Del_S(E) in a tree, only when some crossing needs looking up (the
+        // later calls, after a neck round or a manifold pass, mostly need none).
+        let far: Vec<(DVec3, f64)> = if unsure.is_empty() {
+            Vec::new()
+        } else {
+            let ids: Vec<u32> = (0..n as u32).filter(|&v| used[v as usize]).collect();
+            let coords: Vec<[f64; 3]> = ids
                 .iter()
-                .map(|&i| (crossings[i], tau(crossings[i])))
-                .collect(),
+                .map(|&v| tri.point(VertexId::from_index(v as usize)).to_array())
+                .collect();
+            match ImmutableKdTree::<f64, 3>::new_from_slice(&coords) {
+                Ok(tree) if !coords.is_empty() => {
+                    let found: Vec<(usize, u32, f64)> = unsure
+                        .par_iter()
+                        .map(|&i| {
+                            let r = tree
+                                .query(&crossings[i].to_array())
+                                .nearest_one::<SquaredEuclidean<f64>>()
+                                .execute();
+                            (i, ids[r.item as usize], r.distance)
+                        })
+                        .collect();
+                    let mut far = Vec::new();
+                    for (i, v, d2) in found {
+                        nearest[i] = v;
+                        let p = crossings[i];
+                        let t = tau(p);
+                        if d2 > t * t {
+                            far.push((p, t));
+                        }
+                    }
+                    far
+                }
+                _ => unsure
+                    .iter()
+                    .map(|&i| (crossings[i], tau(crossings[i])))
+                    .collect(),
+            }
         };
         let shrink = 0.25f64.powi(self.stats.cover_rounds as i32);
         let mut pts = net(&far, shrink);
@@ -193,35 +197,28 @@ fn stars(crossings: &[DVec3], far: &[(DVec3, f64)], radius: f64, taken: &[DVec3]
         return Vec::new();
     }
     let cell = |p: DVec3| (p / radius).floor().as_i64vec3().to_array();
-    let mut grid: FxHashMap<[i64; 3], Vec<u32>> = FxHashMap::default();
-    for (i, &q) in crossings.iter().enumerate() {
-        grid.entry(cell(q)).or_default().push(i as u32);
-    }
-    let mut chosen = vec![false; crossings.len()];
+    let mut grid: FxHashMap<[i64; 3], Vec<DVec3>> = FxHashMap::default();
     for &(p, _) in far {
-        let c = cell(p);
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let Some(v) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                        continue;
-                    };
-                    for &i in v {
-                        if crossings[i as usize].distance_squared(p) <= radius * radius {
-                            chosen[i as usize] = true;
-                        }
-                    }
-                }
-            }
-        }
+        grid.entry(cell(p)).or_default().push(p);
     }
+    let near_far = |q: DVec3| {
+        let c = cell(q);
+        (-1..=1).any(|dz| {
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dx| {
+                    grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+                        .is_some_and(|v| v.iter().any(|p| p.distance_squared(q) <= radius * radius))
+                })
+            })
+        })
+    };
     let taken: rustc_hash::FxHashSet<[u64; 3]> = taken
         .iter()
         .map(|p| p.to_array().map(f64::to_bits))
         .collect();
-    (0..crossings.len())
-        .filter(|&i| chosen[i])
-        .map(|i| crossings[i])
-        .filter(|p| !taken.contains(&p.to_array().map(f64::to_bits)))
+    crossings
+        .par_iter()
+        .filter(|&&q| near_far(q) && !taken.contains(&q.to_array().map(f64::to_bits)))
+        .copied()
         .collect()
 }
