@@ -34,7 +34,7 @@ use rustc_hash::FxHashMap;
 use std::time::Instant;
 
 /// Rounds of coverage per run.
-pub(crate) const COVER_ROUNDS: usize = 6;
+pub(crate) const COVER_ROUNDS: usize = 8;
 
 /// The first round (counted from 0) whose far crossings get their star.
 const STAR_FROM: usize = 3;
