@@ -144,7 +144,10 @@ fn bridge_splits(
                 else {
                     continue;
                 };
-                if let Some(d) = bridge(out, img, &ps[i], &ps[j], &join, criteria) {
+                // A piece below a voxel gets only the pairs among the nearest triangles: its
+                // failed tries were 60 ms each with the wide pairs on the MNI T1.
+                let wide = bbox.0.distance(bbox.1) >= h;
+                if let Some(d) = bridge(out, img, &ps[i], &ps[j], &join, criteria, wide) {
                     let (ri, rj) = (root_of(&merged, i), root_of(&merged, j));
                     merged[ri.max(rj)] = ri.min(rj);
                     decisions.push(d);
@@ -209,8 +212,8 @@ fn find_join(
 /// their loops: of the [`NEAR`] triangles of each piece nearest `j.via`, the pairs by
 /// increasing distance between their centroids, each with 0 to [`MAX_RINGS`] rings of points
 /// of S and either zipper (`tube_with_rings`), the first tube whose circumballs are within
-/// sigma and which intersects no other triangle. `None` (the mesh unchanged) when there is
-/// none.
+/// sigma and which intersects no other triangle (then, `wide`, the wider pairs). `None` (the
+/// mesh unchanged) when there is none.
 fn bridge(
     out: &mut MeshResult,
     img: &ImageSurface,
@@ -218,8 +221,9 @@ fn bridge(
     b: &[u32],
     j: &Join,
     criteria: &crate::Criteria,
+    wide: bool,
 ) -> Option<TopologyDecision> {
-    let (pairs, region) = candidate_pairs(&out.mesh, a, b, j);
+    let (pairs, region) = candidate_pairs(&out.mesh, a, b, j, wide);
     // The candidates in order (pairs, then variants), evaluated in parallel a chunk at a time
     // (each independently of the others: the choice below is the sequential one): the first
     // within sigma that crosses nothing is taken; the oversized ones are kept for later.
@@ -291,13 +295,14 @@ fn bridge(
 
 /// The candidate pairs of triangles (squared distance between centroids, triangle of `a`,
 /// triangle of `b`): those among the [`NEAR`] triangles of each piece nearest the join first,
-/// then the others among the [`NEAR_WIDE`] nearest, each group by increasing distance; and
-/// the region of the triangles that may cross their tubes.
+/// then, `with_wide`, the others among the [`NEAR_WIDE`] nearest, each group by increasing
+/// distance; and the region of the triangles that may cross their tubes.
 fn candidate_pairs(
     mesh: &meshio::TriMesh,
     a: &[u32],
     b: &[u32],
     j: &Join,
+    with_wide: bool,
 ) -> (Vec<(f64, usize, usize)>, Region) {
     let in_a: std::collections::HashSet<u32> = a.iter().copied().collect();
     let in_b: std::collections::HashSet<u32> = b.iter().copied().collect();
@@ -332,7 +337,9 @@ fn candidate_pairs(
     };
     pairs.sort_by(by_distance);
     wide.sort_by(by_distance);
-    pairs.extend(wide);
+    if with_wide {
+        pairs.extend(wide);
+    }
     // The candidate tubes lie near the two sets of triangles and the join (their rings within
     // three tube lengths of the axis): the triangles that may cross them, listed once.
     let region = {
