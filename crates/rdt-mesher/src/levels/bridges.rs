@@ -40,9 +40,7 @@ use std::collections::BTreeMap;
 /// Doublings of the search box's margin.
 const ROUNDS: u32 = 6;
 
-/// Doublings for a piece smaller than a voxel (margins up to 6 voxels): its join, if the scan
-/// has one, is next to it; a wider search found none on the MNI T1 template and cost 0.17 s
-/// a piece.
+/// Doublings for a piece below a voxel (margins up to 6 voxels; wider found none on the T1).
 const SMALL_ROUNDS: u32 = 3;
 
 /// Triangles of each piece tried first, nearest the join first.
@@ -131,9 +129,7 @@ fn bridge_splits(
                 if root_of(&merged, i) == 0 {
                     continue;
                 }
-                // Pieces smaller than a voxel are bridged too when a tube fits: dropped as
-                // fragments (`components`), they could leave their part of S farther than a
-                // voxel plus sigma from the mesh.
+                // Sub-voxel pieces too (dropped, their part of S could be beyond h + sigma).
                 let bbox = ps[i]
                     .iter()
                     .map(|&v| out.mesh.vertices[v as usize])
@@ -144,8 +140,7 @@ fn bridge_splits(
                 else {
                     continue;
                 };
-                // A piece below a voxel gets only the pairs among the nearest triangles: its
-                // failed tries were 60 ms each with the wide pairs on the MNI T1.
+                // Below a voxel, only the nearest pairs (wide failures: 60 ms each on the T1).
                 let wide = bbox.0.distance(bbox.1) >= h;
                 if let Some(d) = bridge(out, img, &ps[i], &ps[j], &join, criteria, wide) {
                     let (ri, rj) = (root_of(&merged, i), root_of(&merged, j));
@@ -754,7 +749,7 @@ mod tests {
             };
             let (a, b): (Vec<u32>, Vec<u32>) = ((0..6).collect(), (6..12).collect());
             let criteria = crate::Criteria::uniform(sigma);
-            let Some(d) = bridge(&mut out, &img, &a, &b, &join, &criteria) else {
+            let Some(d) = bridge(&mut out, &img, &a, &b, &join, &criteria, true) else {
                 // Left split only when every tube is over the cap.
                 none += 1;
                 assert!(
