@@ -36,8 +36,8 @@ pub(crate) struct ScanCache {
     /// The voxel-edge crossings of S, computed by the first coverage round (`coverage`).
     pub crossings: Option<Vec<DVec3>>,
     /// Per crossing, the vertex of Del_S(E) found nearest to it by the last coverage round
-    /// that looked for one (`u32::MAX`: none yet).
-    pub nearest: Vec<u32>,
+    /// that looked for one (`u32::MAX`: none yet) and its squared distance to the crossing.
+    pub nearest: Vec<(u32, f64)>,
     /// Per vertex of Del(E), its scan component once computed (`necks`): `None` not yet,
     /// `Some(None)` on no component.
     pub labels: Vec<Option<Option<usize>>>,
