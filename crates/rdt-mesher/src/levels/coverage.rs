@@ -194,21 +194,24 @@ fn stars(crossings: &[DVec3], far: &[(DVec3, f64)], radius: f64, taken: &[DVec3]
     if far.is_empty() {
         return Vec::new();
     }
+    // Each far crossing in the 27 cells around its own: a crossing looks up its own cell only.
     let cell = |p: DVec3| (p / radius).floor().as_i64vec3().to_array();
     let mut grid: FxHashMap<[i64; 3], Vec<DVec3>> = FxHashMap::default();
     for &(p, _) in far {
-        grid.entry(cell(p)).or_default().push(p);
+        let c = cell(p);
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    grid.entry([c[0] + dx, c[1] + dy, c[2] + dz])
+                        .or_default()
+                        .push(p);
+                }
+            }
+        }
     }
     let near_far = |q: DVec3| {
-        let c = cell(q);
-        (-1..=1).any(|dz| {
-            (-1..=1).any(|dy| {
-                (-1..=1).any(|dx| {
-                    grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
-                        .is_some_and(|v| v.iter().any(|p| p.distance_squared(q) <= radius * radius))
-                })
-            })
-        })
+        grid.get(&cell(q))
+            .is_some_and(|v| v.iter().any(|p| p.distance_squared(q) <= radius * radius))
     };
     let taken: rustc_hash::FxHashSet<[u64; 3]> = taken
         .iter()
