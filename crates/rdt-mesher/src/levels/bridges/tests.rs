@@ -1,0 +1,171 @@
+//! Tests of the bridges between the pieces of a split component.
+use super::*;
+use glam::DAffine3;
+use oracle::image::{ImageOptions, Volume, Voxels};
+
+/// A cylinder of radius 3 voxels along x through (·, 12, 12), 28 x 24 x 24 voxels of 1 mm.
+fn cylinder() -> ImageSurface {
+    let n = [28usize, 24, 24];
+    let mut d = Vec::new();
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for _ in 0..n[0] {
+                let r = ((j as f64 - 12.0).powi(2) + (k as f64 - 12.0).powi(2)).sqrt();
+                d.push((3.0 - r) as f32);
+            }
+        }
+    }
+    let vol = Volume::new(n, Voxels::F32(d), DAffine3::IDENTITY).unwrap();
+    let opts = ImageOptions {
+        iso: Some(0.0),
+        ..Default::default()
+    };
+    ImageSurface::new(vol, &opts).unwrap()
+}
+
+/// Two outward octahedra of radius 2 centred at `(x, 12, 12)` for each `x`.
+fn octahedra(xs: &[f64]) -> meshio::TriMesh {
+    let mut m = meshio::TriMesh {
+        vertices: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for &x in xs {
+        let c = DVec3::new(x, 12.0, 12.0);
+        let o = m.vertices.len() as u32;
+        for a in [
+            DVec3::X,
+            -DVec3::X,
+            DVec3::Y,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ] {
+            m.vertices.push(c + 2.0 * a);
+        }
+        for (s, t) in [(0, 2), (2, 1), (1, 3), (3, 0)] {
+            m.triangles.push([o + s, o + t, o + 4]);
+            m.triangles.push([o + t, o + s, o + 5]);
+        }
+    }
+    m
+}
+
+#[test]
+fn a_tube_with_rings_on_s_joins_two_closed_pieces_into_one_sphere() {
+    let img = cylinder();
+    let via = DVec3::new(10.0, 12.0, 12.0);
+    for rings in 0..=MAX_RINGS {
+        let mut m = octahedra(&[5.0, 15.0]);
+        // The triangles facing each other: (+x, +y, +z) of the first, (-x, +y, +z) of the
+        // second.
+        let ta = m.triangles.iter().position(|t| *t == [0, 2, 4]).unwrap();
+        let tb = m.triangles.iter().position(|t| *t == [8, 7, 10]).unwrap();
+        let (fa, fb) = (m.triangles[ta], m.triangles[tb]);
+        let (tube, pts) = tube_with_rings(&m, &img, (fa, fb), via, rings, true).unwrap();
+        assert_eq!(pts.len(), 3 * rings);
+        for p in &pts {
+            // Each ring point is on S: the cylinder's wall.
+            let r = ((p.y - 12.0).powi(2) + (p.z - 12.0).powi(2)).sqrt();
+            assert!(
+                (r - 3.0).abs() < 0.05,
+                "rings {rings}: {p} off the wall ({r})"
+            );
+        }
+        m.vertices.extend(&pts);
+        let (hi, lo) = (ta.max(tb), ta.min(tb));
+        m.triangles.swap_remove(hi);
+        m.triangles.swap_remove(lo);
+        let first_new = m.triangles.len();
+        m.triangles.extend(&tube);
+        let rep = verify::check(&m, &verify::Options::default());
+        for name in verify::CLOSED_MANIFOLD_CHECKS {
+            assert_eq!(
+                rep.status(name),
+                Some(verify::Status::Pass),
+                "rings {rings}: {name}: {:?}",
+                rep.check(name)
+            );
+        }
+        assert!(super::super::repair::intersecting_vertices(&m, first_new).is_empty());
+        // One sphere: V - E + F = 2, one component.
+        let (v, f) = (m.vertices.len() as i64, m.triangles.len() as i64);
+        assert_eq!(v - f / 2, 2, "rings {rings}");
+        assert_eq!(tube.len(), 6 * (rings + 1));
+    }
+}
+
+#[test]
+fn a_split_is_bridged_within_sigma_else_oversized_up_to_the_cap_else_left() {
+    let img = cylinder();
+    let join = Join {
+        a: DVec3::new(9.0, 12.0, 12.0),
+        b: DVec3::new(10.0, 12.0, 12.0),
+        via: DVec3::new(9.5, 12.0, 12.0),
+        diagonal: false,
+        nodes: [usize::MAX; 2],
+    };
+    let (mut within, mut over, mut none) = (0, 0, 0);
+    for k in 0..40 {
+        let sigma = 20.0 * 0.8f64.powi(k);
+        let mesh = octahedra(&[5.0, 15.0]);
+        let balls = mesh
+            .triangles
+            .iter()
+            .map(|t| super::super::repair::circumball(t.map(|v| mesh.vertices[v as usize])))
+            .collect();
+        let mut out = MeshResult {
+            mesh,
+            balls,
+            sample: Vec::new(),
+            stats: Default::default(),
+        };
+        let (a, b): (Vec<u32>, Vec<u32>) = ((0..6).collect(), (6..12).collect());
+        let criteria = crate::Criteria::uniform(sigma);
+        let Some(d) = bridge(&mut out, &img, &a, &b, &join, &criteria, true) else {
+            // Left split only when every tube is over the cap.
+            none += 1;
+            assert!(
+                over > 0,
+                "sigma {sigma}: no tube, yet none oversized before"
+            );
+            continue;
+        };
+        // Whatever the kind: one closed sphere, no self-intersection, balls per triangle.
+        let m = &out.mesh;
+        let rep = verify::check(m, &verify::Options::default());
+        for name in verify::CLOSED_MANIFOLD_CHECKS {
+            assert_eq!(
+                rep.status(name),
+                Some(verify::Status::Pass),
+                "sigma {sigma}: {name}"
+            );
+        }
+        assert_eq!(out.balls.len(), m.triangles.len());
+        let (v, f) = (m.vertices.len() as i64, m.triangles.len() as i64);
+        assert_eq!(v - f / 2, 2, "sigma {sigma}");
+        // The tube's balls follow the 14 triangles kept.
+        let worst = out.balls[14..]
+            .iter()
+            .map(|b| b.radius / sigma)
+            .fold(0.0f64, f64::max);
+        match d.kind {
+            DecisionKind::Bridge => {
+                within += 1;
+                assert_eq!(
+                    over + none,
+                    0,
+                    "sigma {sigma}: within after a smaller sigma failed"
+                );
+                assert!(worst <= 1.0, "sigma {sigma}: {worst}");
+            }
+            DecisionKind::BridgeOverSize { max_r_over_sigma } => {
+                over += 1;
+                assert_eq!(none, 0);
+                assert!(max_r_over_sigma > 1.0 && max_r_over_sigma <= MAX_OVERSIZE);
+                assert!((worst - max_r_over_sigma).abs() < 1e-9 * worst, "{worst}");
+            }
+            k => panic!("{k:?}"),
+        }
+    }
+    assert!(within > 0 && over > 0 && none > 0, "{within} {over} {none}");
+}
