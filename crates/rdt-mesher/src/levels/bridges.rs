@@ -476,7 +476,7 @@ fn tube_with_rings(
     };
     let id = |v: u32| local.binary_search(&v).expect("a loop vertex") as u32;
     let centroid = |l: &[u32]| l.iter().map(|&v| pos(v)).sum::<DVec3>() / 3.0;
-    let mut edges = std::collections::HashSet::new();
+    let mut edges = rustc_hash::FxHashSet::default();
     let mut tube = Vec::new();
     let mut p: Vec<u32> = fa.to_vec();
     for q in loops.iter().rev() {

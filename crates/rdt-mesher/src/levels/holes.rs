@@ -5,7 +5,7 @@
 //! larger, when no such triangulation exists, or when the loop is long.
 
 use glam::DVec3;
-use std::collections::HashSet;
+use rustc_hash::FxHashSet as HashSet;
 
 /// Loops longer than this are closed by the centroid fan (the program is cubic).
 const MAX_DP: usize = 200;
@@ -129,7 +129,7 @@ mod tests {
     #[test]
     fn a_square_gets_two_triangles_and_a_taken_diagonal_is_avoided() {
         let mut pts = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
-        let mut edges = HashSet::new();
+        let mut edges = HashSet::default();
         let t = close_loop(&[0, 1, 2, 3], &mut pts, &mut edges);
         assert_eq!(t.len(), 2);
         // Both diagonals taken: the centroid fan.

@@ -50,7 +50,7 @@ pub(super) use super::tubes::{circumball, tube};
 use crate::stats::SurfaceBall;
 use glam::DVec3;
 use meshio::TriMesh;
-use std::collections::HashSet;
+use rustc_hash::FxHashSet as HashSet;
 
 /// What a topological decision did (see the module docs).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -228,7 +228,7 @@ fn cut_and_close(
     let kept = live_tris(&mesh.triangles, &live);
     let links = Links::new(&kept, n);
     // Rule 3: close every boundary loop (traced in vertex order: deterministic).
-    let mut edges: HashSet<[u32; 2]> = HashSet::new();
+    let mut edges: HashSet<[u32; 2]> = HashSet::default();
     for t in &kept {
         for i in 0..3 {
             let (a, b) = (t[i], t[(i + 1) % 3]);

@@ -10,7 +10,7 @@
 use crate::stats::SurfaceBall;
 use glam::DVec3;
 use meshio::TriMesh;
-use std::collections::HashSet;
+use rustc_hash::FxHashSet as HashSet;
 
 /// The tube of the loops `p` and `q` ([`tube`]) of the zipper on the positions as they are or
 /// with `p` moved onto `q`'s centroid (along a tube longer than its loops are wide the raw
@@ -36,7 +36,7 @@ pub(super) fn tube_within(
         } else {
             &mesh.vertices
         };
-        let t = tube(p, q, pts, &mut HashSet::new());
+        let t = tube(p, q, pts, &mut HashSet::default());
         let over = |t: &[u32; 3]| {
             let b = circumball(t.map(|v| mesh.vertices[v as usize]));
             criteria
@@ -100,7 +100,7 @@ fn zipper(
     let pv = |k: usize| p[(i + k) % m];
     // q walked backwards: the k-th step back from j.
     let qv = |k: usize| q[(j + n * (k / n + 1) - k % n) % n];
-    let mut seen: HashSet<(usize, usize)> = HashSet::new();
+    let mut seen: HashSet<(usize, usize)> = HashSet::default();
     seen.insert((0, 0));
     let (mut a, mut b) = (0usize, 0usize);
     let mut out = Vec::with_capacity(m + n);

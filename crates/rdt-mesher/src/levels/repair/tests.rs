@@ -253,7 +253,7 @@ fn a_tube_is_an_oriented_annulus_for_any_loop_lengths() {
             }
             let p: Vec<u32> = (0..m as u32).collect();
             let q: Vec<u32> = (m as u32..(m + n) as u32).collect();
-            let mut edges = HashSet::new();
+            let mut edges = HashSet::default();
             let t = tube(&p, &q, &pts, &mut edges);
             assert_eq!(t.len(), m + n, "{m} {n}");
             let mut directed: std::collections::HashMap<(u32, u32), usize> = Default::default();
