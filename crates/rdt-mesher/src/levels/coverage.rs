@@ -195,20 +195,8 @@ fn stars(crossings: &[DVec3], far: &[(DVec3, f64)], radius: f64, taken: &[DVec3]
         return Vec::new();
     }
     // Each far crossing in the 27 cells around its own: a crossing looks up its own cell only.
-    let cell = |p: DVec3| (p / radius).floor().as_i64vec3().to_array();
-    let mut grid: FxHashMap<[i64; 3], Vec<DVec3>> = FxHashMap::default();
-    for &(p, _) in far {
-        let c = cell(p);
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    grid.entry([c[0] + dx, c[1] + dy, c[2] + dz])
-                        .or_default()
-                        .push(p);
-                }
-            }
-        }
-    }
+    let cell = |p: DVec3| cell_of(p, radius);
+    let grid = spread_grid(far.iter().map(|&(p, _)| (p, p)), radius);
     let near_far = |q: DVec3| {
         grid.get(&cell(q))
             .is_some_and(|v| v.iter().any(|p| p.distance_squared(q) <= radius * radius))
@@ -222,6 +210,34 @@ fn stars(crossings: &[DVec3], far: &[(DVec3, f64)], radius: f64, taken: &[DVec3]
         .filter(|&&q| near_far(q) && !taken.contains(&q.to_array().map(f64::to_bits)))
         .copied()
         .collect()
+}
+
+/// The cell of side `side` that holds `p`.
+fn cell_of(p: DVec3, side: f64) -> [i64; 3] {
+    (p / side).floor().as_i64vec3().to_array()
+}
+
+/// A grid of cells of side `side` in which each item is listed in the 27 cells around the
+/// cell of its point, in the items' order: any point within `side` of an item's point finds
+/// the item in its own cell.
+fn spread_grid<T>(items: impl Iterator<Item = (DVec3, T)>, side: f64) -> FxHashMap<[i64; 3], Vec<T>>
+where
+    T: Copy,
+{
+    let mut grid: FxHashMap<[i64; 3], Vec<T>> = FxHashMap::default();
+    for (p, t) in items {
+        let c = cell_of(p, side);
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    grid.entry([c[0] + dx, c[1] + dy, c[2] + dz])
+                        .or_default()
+                        .push(t);
+                }
+            }
+        }
+    }
+    grid
 }
 
 /// For each point `pts[k]`, a vertex among `ids` within `taus[k]` of it (the least such id)
@@ -238,20 +254,8 @@ fn witnesses_near(
     if side <= 0.0 || !side.is_finite() {
         return vec![None; pts.len()];
     }
-    let cell = |p: DVec3| (p / side).floor().as_i64vec3().to_array();
-    let mut grid: FxHashMap<[i64; 3], Vec<u32>> = FxHashMap::default();
-    for (k, &p) in pts.iter().enumerate() {
-        let c = cell(p);
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    grid.entry([c[0] + dx, c[1] + dy, c[2] + dz])
-                        .or_default()
-                        .push(k as u32);
-                }
-            }
-        }
-    }
+    let cell = |p: DVec3| cell_of(p, side);
+    let grid = spread_grid(pts.iter().enumerate().map(|(k, &p)| (p, k as u32)), side);
     let hits: Vec<(u32, u32, f64)> = ids
         .par_iter()
         .flat_map_iter(|&v| {
