@@ -562,29 +562,19 @@ fn tube_crosses(
 /// `mesh`: [`super::repair::intersecting_vertices`] is not empty, decided at the first such
 /// triangle (one thread: the candidate tubes are already evaluated in parallel).
 fn any_intersection(mesh: &meshio::TriMesh, first_new: usize) -> bool {
-    use geom::bvh::{Aabb, Bvh};
     use verify::intersect::{corners, pair_intersects};
-    let mut queried: Vec<u32> = Vec::new();
-    for i in first_new..mesh.triangles.len() {
-        let c = corners(mesh, i);
-        if geom::predicates::collinear(c[0], c[1], c[2]) {
-            return true;
-        }
-        queried.push(i as u32);
+    let new = super::repair::NewTriangles::of(mesh, first_new);
+    if !new.degenerate.is_empty() {
+        return true;
     }
-    if queried.is_empty() {
+    if new.queried.is_empty() {
         return false;
     }
-    let boxes = queried
-        .iter()
-        .map(|&i| Aabb::from_points(&corners(mesh, i as usize)))
-        .collect();
-    let bvh = Bvh::new(boxes);
     let mut hit = false;
     for j in 0..mesh.triangles.len() {
-        let b = Aabb::from_points(&corners(mesh, j));
-        bvh.for_each_overlap(&b, |k| {
-            let i = queried[k as usize] as usize;
+        let b = geom::bvh::Aabb::from_points(&corners(mesh, j));
+        new.bvh.for_each_overlap(&b, |k| {
+            let i = new.queried[k as usize] as usize;
             hit = hit || (j != i && pair_intersects(mesh, i, j));
         });
         if hit {

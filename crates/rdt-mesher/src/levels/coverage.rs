@@ -134,6 +134,9 @@ impl Mesher<'_> {
         let shrink = 0.25f64.powi(self.stats.cover_rounds as i32);
         let mut pts = net(&far, shrink);
         if self.stats.cover_rounds >= STAR_FROM {
+            // The net's points are left out of the stars: inserted again they would add no
+            // point, but the duplicate's walk moves the triangulation's next start, hence
+            // the new cells' ids and the refinement's order (measured: other meshes).
             pts.extend(stars(crossings, &far, STAR_RADIUS * h, &pts));
         }
         self.t_oracle += t.elapsed();
@@ -165,7 +168,7 @@ fn net(far: &[(DVec3, f64)], shrink: f64) -> Vec<DVec3> {
     else {
         return Vec::new();
     };
-    let cell = |p: DVec3| (p / g).floor().as_i64vec3().to_array();
+    let cell = |p: DVec3| cell_of(p, g);
     let mut grid: FxHashMap<[i64; 3], Vec<DVec3>> = FxHashMap::default();
     let mut out = Vec::new();
     for &(p, t) in far {

@@ -256,12 +256,11 @@ fn ring_points(img: &ImageSurface, label: usize, pieces: &Split, round: usize) -
             .collect()
         })
         .collect();
-    let key = |p: DVec3| p.to_array().map(f64::to_bits);
-    let mut seen: FxHashSet<([u64; 3], [u64; 3])> = FxHashSet::default();
+    let mut seen: FxHashSet<[usize; 2]> = FxHashSet::default();
     let joins: Vec<NearJoin> = found
         .into_iter()
         .flatten()
-        .filter(|(j, _, _)| seen.insert((key(j.a), key(j.b))))
+        .filter(|(j, _, _)| seen.insert(j.nodes))
         .collect();
     // Per pair of pieces, the join whose nodes are nearest to them (ties: the smaller nodes,
     // compared as coordinates).

@@ -234,8 +234,11 @@ impl RegionMask {
                     for axis in 0..3 {
                         let mut q = p;
                         q[axis] += 1;
+                        if !self.has(q) {
+                            continue;
+                        }
                         let nq = self.node(q);
-                        if self.has(q) && keep(np, nq) {
+                        if keep(np, nq) {
                             let (a, b) = (node(p), node(q));
                             out.push(Join {
                                 a: np.at,
