@@ -563,7 +563,7 @@ fn tube_crosses(
 /// triangle (one thread: the candidate tubes are already evaluated in parallel).
 fn any_intersection(mesh: &meshio::TriMesh, first_new: usize) -> bool {
     use verify::intersect::{corners, pair_intersects};
-    let new = super::repair::NewTriangles::of(mesh, first_new);
+    let new = super::new_triangles::NewTriangles::of(mesh, first_new);
     if !new.degenerate.is_empty() {
         return true;
     }

@@ -15,6 +15,7 @@ mod holes;
 mod links;
 pub(crate) mod manifold;
 pub(crate) mod necks;
+mod new_triangles;
 pub(crate) mod repair;
 pub(crate) mod scaffold;
 mod tubes;

@@ -45,6 +45,7 @@
 
 use super::holes::close_loop;
 use super::links::{Link, Links};
+use super::new_triangles::NewTriangles;
 use super::tubes::tube_within;
 pub(super) use super::tubes::{circumball, tube};
 use crate::stats::SurfaceBall;
@@ -170,12 +171,13 @@ pub(super) fn intersecting_vertices(mesh: &TriMesh, first_new: usize) -> Vec<u32
         return Vec::new();
     }
     use rayon::prelude::*;
-    let NewTriangles {
-        degenerate,
-        queried,
-        bvh,
-    } = NewTriangles::of(mesh, first_new);
-    let mut out: Vec<u32> = degenerate.iter().flat_map(|&i| mesh.triangles[i]).collect();
+    let new = NewTriangles::of(mesh, first_new);
+    let (queried, bvh) = (&new.queried, &new.bvh);
+    let mut out: Vec<u32> = new
+        .degenerate
+        .iter()
+        .flat_map(|&i| mesh.triangles[i])
+        .collect();
     let hits: Vec<u32> = (0..mesh.triangles.len())
         .into_par_iter()
         .flat_map_iter(|j| {
@@ -195,42 +197,6 @@ pub(super) fn intersecting_vertices(mesh: &TriMesh, first_new: usize) -> Vec<u32
     out.sort_unstable();
     out.dedup();
     out
-}
-
-/// The triangles of a mesh from `first_new` on, for intersection tests against the whole
-/// mesh: the degenerate ones (collinear corners) and a tree of the boxes of the others (the
-/// new triangles are few: the tree queried with every triangle's box gives the same pairs as
-/// a tree of the whole mesh queried with the new boxes).
-pub(super) struct NewTriangles {
-    /// Degenerate triangles.
-    pub degenerate: Vec<usize>,
-    /// The other triangles: box `k` of `bvh` is triangle `queried[k]`'s.
-    pub queried: Vec<u32>,
-    pub bvh: geom::bvh::Bvh,
-}
-
-impl NewTriangles {
-    pub(super) fn of(mesh: &TriMesh, first_new: usize) -> Self {
-        use geom::bvh::{Aabb, Bvh};
-        let (mut degenerate, mut queried) = (Vec::new(), Vec::new());
-        for i in first_new..mesh.triangles.len() {
-            let c = verify::intersect::corners(mesh, i);
-            if geom::predicates::collinear(c[0], c[1], c[2]) {
-                degenerate.push(i);
-            } else {
-                queried.push(i as u32);
-            }
-        }
-        let boxes = queried
-            .iter()
-            .map(|&i| Aabb::from_points(&verify::intersect::corners(mesh, i as usize)))
-            .collect();
-        NewTriangles {
-            degenerate,
-            queried,
-            bvh: Bvh::new(boxes),
-        }
-    }
 }
 
 /// Rules 1 to 3 once, `forced` bad as well; returns the decisions and the index of the first
