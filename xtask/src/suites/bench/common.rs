@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// Which group: delaunay, mesh, image, all; or scale (issue 21's sizes, not in all).
+    /// Which group: delaunay, mesh, image, pointset, all; or scale (issue 21's sizes, not in all).
     #[arg(default_value = "all")]
     pub name: String,
     /// Also run the CGAL baseline programs (bench/cgal; installs libcgal-dev with apt if missing).

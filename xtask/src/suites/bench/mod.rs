@@ -6,6 +6,7 @@ mod common;
 mod delaunay;
 mod image;
 mod mesh;
+mod pointset;
 mod scale;
 
 use anyhow::{Result, bail};
@@ -34,13 +35,17 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         image::bench_image(a, &mut rows)?;
         any = true;
     }
+    if all || a.name == "pointset" {
+        pointset::bench_pointset(a, &mut rows)?;
+        any = true;
+    }
     if a.name == "scale" {
         scale::bench_scale(a, &mut rows)?;
         any = true;
     }
     if !any {
         bail!(
-            "unknown bench group '{}': use delaunay, mesh, image, scale or all (scale is not in all)",
+            "unknown bench group '{}': use delaunay, mesh, image, pointset, scale or all (scale is not in all)",
             a.name
         );
     }
