@@ -369,7 +369,8 @@ fn xyz_reader() {
     let e = read_xyz("/nonexistent/dir/h.xyz").unwrap_err();
     assert!(e.to_string().contains("h.xyz"));
     // Round trip through a file.
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("oracle-xyz-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("oracle-xyz-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("s.xyz");
     let pts = noisy_sphere(20, DVec3::ZERO, 1.0, 0.0, 3);

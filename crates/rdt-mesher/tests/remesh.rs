@@ -213,7 +213,8 @@ fn noisy_bunny_point_set_remeshes_to_a_closed_genus_0_manifold() {
 /// Bad inputs give a clear error at library level (the CLI prints the same messages).
 #[test]
 fn bad_inputs_give_clear_errors() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("rdt-remesh-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("rdt-remesh-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // The reader's error for a file `name` holding `text`: it names the file and `what`.
     let read_error = |name: &str, text: &str, what: &str| {

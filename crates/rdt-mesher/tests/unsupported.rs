@@ -52,7 +52,8 @@ fn drops(out: &Outcome) -> Vec<&rdt_mesher::TopologyDecision> {
 }
 
 fn ply_bytes(m: &meshio::TriMesh, name: &str) -> Vec<u8> {
-    let p = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("rdt-unsupported-{}-{name}.ply", std::process::id()));
+    let p = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("rdt-unsupported-{}-{name}.ply", std::process::id()));
     meshio::write(&p, m).unwrap();
     let b = std::fs::read(&p).unwrap();
     let _ = std::fs::remove_file(&p);
