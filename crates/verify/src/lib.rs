@@ -121,6 +121,10 @@ pub struct Options {
     pub max_hausdorff: Option<f64>,
     /// Requested epsilon of the loose epsilon-sample certificate.
     pub epsilon: Option<f64>,
+    /// `epsilon` was not asked for but derived (the mesher's sigma / d_M^inf): at or above
+    /// epsilon_1 (no theorem applies there) a facet over it makes the `loose-epsilon` check
+    /// INFO "no guarantee", not FAIL (no guarantee was promised). Default false.
+    pub epsilon_derived: bool,
     pub dm: DmSource,
     /// Surface Delaunay balls of the restricted facets (from the mesher). Default: computed
     /// from the mesh ([`certificate::surface_delaunay_balls`]).
@@ -150,6 +154,7 @@ impl Default for Options {
             surface_samples_source: None,
             max_hausdorff: None,
             epsilon: None,
+            epsilon_derived: false,
             dm: DmSource::Auto,
             surface_balls: None,
             component_seeds: None,

@@ -152,6 +152,24 @@ fn loose_epsilon_certificate_on_the_sphere() {
     assert!(c.exceeding_total >= exceeding && c.exceeding_total <= not_exceeding);
     assert!(c.exceeding_total > 0);
     assert_eq!(r.status("loose-epsilon"), Some(Status::Fail));
+    // The same eps, derived (sigma / d_M^inf, not asked for): above epsilon_1 no theorem
+    // applies, so the facets over it are INFO "no guarantee"; below it they still FAIL.
+    for (e, want) in [(eps, Status::Info), (0.05, Status::Fail)] {
+        assert!(max_r > verify::certificate::EPSILON_1 && eps >= verify::certificate::EPSILON_1);
+        let derived = Options {
+            epsilon: Some(e),
+            epsilon_derived: true,
+            ..sphere_opts()
+        };
+        let r = check_against(&m, &UnitSphere, &derived);
+        assert!(!r.certificate.as_ref().unwrap().passed());
+        assert_eq!(
+            r.status("loose-epsilon"),
+            Some(want),
+            "eps {e}: {}",
+            r.summary()
+        );
+    }
     // Request more than achieved: the certificate holds (PASS below epsilon_1, INFO "no
     // guarantee" above).
     let opts = Options {

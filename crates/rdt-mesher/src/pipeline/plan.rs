@@ -316,7 +316,9 @@ impl Plan<'_, '_> {
         if self.request.verify {
             progress(Event::Verifying);
             let epsilon = (self.request.certify_epsilon).or(self.input.dm_inf().map(|d| sigma / d));
-            let vopts = verify_options(self.input, self.request, &out, epsilon);
+            let mut vopts = verify_options(self.input, self.request, &out, epsilon);
+            // sigma / d_M^inf when no eps was asked for (see `verify::Options`).
+            vopts.epsilon_derived = self.request.certify_epsilon.is_none();
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
             let dropped = super::unsupported::dropped(&out.stats);
             data_support(&mut report, self.input, &out.mesh, sigma, &dropped);
