@@ -35,10 +35,17 @@ fn main() {
         noise,
         density_ratio: dens,
         normals: nrm,
-        hole: 0.0,
+        // `SCANPROBE_HOLE=0.05`: a missing patch of that radius (fraction of the diagonal).
+        hole: std::env::var("SCANPROBE_HOLE")
+            .ok()
+            .and_then(|h| h.parse().ok())
+            .unwrap_or(0.0),
         seed,
     };
     let scan = simulate(&source, &spec);
+    if let Some((c, r)) = scan.hole {
+        println!("hole at {c:?}, radius {r}");
+    }
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for &v in &source.vertices {
         lo = lo.min(v);

@@ -6,9 +6,12 @@
 //! `p_i`) meets the cell's box; elsewhere, in the *clear* cells, the kernel weight is exactly
 //! 0 and the value is the far field `±max_radius`. The clear cells are split into
 //! 6-connected components (typically: the outside, and the inside of each closed surface),
-//! and each component is signed once, by the winding number at a few of its cells spread
-//! in breadth-first order; a component whose samples disagree (an open or leaky point set)
-//! keeps sign 0, "unknown", and its queries are evaluated one by one as before.
+//! and each component is signed once, by the winding number at a few of its cells and at up
+//! to [`BORDER_SAMPLES`] of its border cells (next to a blocked cell), spread in
+//! breadth-first order; a component whose samples disagree (an open or leaky point set: a
+//! hole in the data joins the inside to the outside, and its border cells lie on both
+//! sides of the surface) keeps sign 0, "unknown", and its queries are evaluated one by one
+//! as before.
 //!
 //! Invariants: deterministic (a sequential flood fill; signs evaluated independently);
 //! [`FarCache::get`] returns ±1 only in a clear cell of a unanimously signed component, or
@@ -22,8 +25,12 @@ use rayon::prelude::*;
 
 /// Most cells per axis (`128³` cells: 2 MB of signs).
 const MAX_CELLS: usize = 128;
-/// Winding-number samples per component.
+/// Winding-number samples per component, spread over its cells...
 const SAMPLES: usize = 5;
+/// ...and over its border cells (next to a blocked cell). Without them, a component that a
+/// hole in the data joins to the inside was signed by 5 cells all outside (the fandisk
+/// missing-patch scan: the inside meshed as a second wall).
+const BORDER_SAMPLES: usize = 1024;
 /// Stored for a blocked cell.
 const BLOCKED: i8 = 2;
 
@@ -200,9 +207,26 @@ fn blocked_cells(
         )
 }
 
+/// The 6-neighbours of cell `c` of the `n³` grid (x fastest) that are in the grid.
+fn neighbours6(c: usize, n: usize) -> impl Iterator<Item = usize> {
+    let (i, j, k) = (c % n, (c / n) % n, c / (n * n));
+    let nn = n * n;
+    [
+        (i > 0).then(|| c - 1),
+        (i + 1 < n).then(|| c + 1),
+        (j > 0).then(|| c - n),
+        (j + 1 < n).then(|| c + n),
+        (k > 0).then(|| c - nn),
+        (k + 1 < n).then(|| c + nn),
+    ]
+    .into_iter()
+    .flatten()
+}
+
 /// The 6-connected components of the clear cells of the `n³` grid (breadth-first, in index
 /// order): the label of each cell ([`NONE`] if blocked), up to [`SAMPLES`] cells of each
-/// component spread in breadth-first order (with their component), and the component count.
+/// component and up to [`BORDER_SAMPLES`] of its border cells, spread in breadth-first order
+/// (with their component), and the component count.
 fn clear_components(
     n: usize,
     is_blocked: impl Fn(usize) -> bool,
@@ -254,6 +278,19 @@ fn clear_components(
         let take = SAMPLES.min(m);
         for s in 0..take {
             samples.push((comps, queue[s * m / take + (m / take) / 2]));
+        }
+        // Its cells next to a blocked cell (the sides of the shell of supports), at most
+        // BORDER_SAMPLES of them spread in breadth-first order: a component that reaches
+        // both sides of the surface (through a hole in the data) has border cells on both.
+        let border: Vec<usize> = queue
+            .iter()
+            .copied()
+            .filter(|&c| neighbours6(c, n).any(&is_blocked))
+            .collect();
+        let b = border.len();
+        let take = BORDER_SAMPLES.min(b);
+        for s in 0..take {
+            samples.push((comps, border[s * b / take + (b / take) / 2]));
         }
         comps += 1;
     }
@@ -309,6 +346,33 @@ mod tests {
         assert!(known as f64 > 0.9 * total as f64, "{known} of {total}");
         // Outside the grid: unknown.
         assert_eq!(fc.get(DVec3::splat(3.0)), 0);
+    }
+
+    /// A sphere of points with a hole: the inside and the outside are one clear component
+    /// through the hole, the inside a tiny part of it. Its border cells on the inside sign it
+    /// as mixed, so it stays unknown (5 cells spread over the whole component all fall
+    /// outside: it was signed "outside", inside included).
+    #[test]
+    fn a_component_leaking_through_a_hole_stays_unknown() {
+        let mut rng = SplitMix64(3);
+        let hole = DVec3::new(0.0, 0.0, 0.5);
+        let pts: Vec<DVec3> = (0..20_000)
+            .map(|_| rng.unit_vector() * 0.5)
+            .filter(|p| (*p - hole).length() > 0.3)
+            .collect();
+        let r = vec![0.04; pts.len()];
+        let region = |x: DVec3| if x.length() < 0.5 { -1 } else { 1 };
+        let fc = FarCache::build(DVec3::ZERO, 2.5, &pts, &r, 0.04, region);
+        assert_eq!(fc.components, 1);
+        assert_eq!(fc.get(DVec3::ZERO), 0, "inside");
+        assert_eq!(fc.get(DVec3::new(2.0, 0.0, 0.0)), 0, "outside");
+        // Closed (no hole): two components, each signed.
+        let closed: Vec<DVec3> = (0..20_000).map(|_| rng.unit_vector() * 0.5).collect();
+        let r = vec![0.04; closed.len()];
+        let fc = FarCache::build(DVec3::ZERO, 2.5, &closed, &r, 0.04, region);
+        assert_eq!(fc.components, 2);
+        assert_eq!(fc.get(DVec3::ZERO), -1);
+        assert_eq!(fc.get(DVec3::new(2.0, 0.0, 0.0)), 1);
     }
 
     /// A component whose samples disagree stays unknown.
