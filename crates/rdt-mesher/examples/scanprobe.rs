@@ -142,12 +142,13 @@ fn main() {
                 let (w, b2, c) = s.kernel_weight(x);
                 let g = s.gradient(x);
                 println!(
-                    "t {:+.4} f {:+.4e} |g| {:.3} g.dir {:+.3} weight {w:.2} band {:.2} count {c}",
+                    "t {:+.4} f {:+.4e} |g| {:.3} g.dir {:+.3} weight {w:.2} band {:.2} count {c} winding {:.3}",
                     k as f64 * step,
                     s.value(x),
                     g.length(),
                     g.normalize().dot(dir),
-                    b2.sqrt()
+                    b2.sqrt(),
+                    s.winding_number(x)
                 );
             }
         }
