@@ -50,6 +50,29 @@ fn mesh_model_scan(
     (scan, out, h)
 }
 
+/// The output is one closed oriented manifold of genus `genus` and `verify` passes.
+fn assert_one_closed_component_passing(out: &rdt_mesher::pipeline::Outcome, genus: i64) {
+    let r = out.report.as_ref().unwrap();
+    let t = r.topology.as_ref().unwrap();
+    assert!(t.is_closed_oriented_manifold(), "{}", r.summary());
+    assert_eq!(t.genera(), vec![Some(genus)], "{}", r.summary());
+    assert!(r.passed(), "{}", r.summary());
+}
+
+/// The scan's missing patch is reported as an unsupported region.
+fn assert_hole_flagged(scan: &verify::scan_sim::Scan, out: &rdt_mesher::pipeline::Outcome) {
+    let r = out.report.as_ref().unwrap();
+    let (c, radius) = scan.hole.unwrap();
+    let ds = r.data_support.as_ref().unwrap();
+    assert!(
+        ds.unsupported_regions
+            .iter()
+            .any(|u| (DVec3::from_array(u.centroid) - c).length() < radius),
+        "{}",
+        r.summary()
+    );
+}
+
 #[test]
 fn a_clean_scan_meshes_to_one_supported_genus_0_component() {
     let spec = ScanSpec {
@@ -89,11 +112,7 @@ fn a_ten_to_one_density_scan_keeps_its_genus_within_the_bound() {
         ..Default::default()
     };
     let (_, out, h) = mesh_model_scan("fertility", &spec, 0.006);
-    let r = out.report.as_ref().unwrap();
-    let t = r.topology.as_ref().unwrap();
-    assert!(t.is_closed_oriented_manifold(), "{}", r.summary());
-    assert_eq!(t.genera(), vec![Some(4)], "{}", r.summary());
-    assert!(r.passed(), "{}", r.summary());
+    assert_one_closed_component_passing(&out, 4);
     assert!(h <= 0.0075, "Hausdorff {h}");
 }
 
@@ -107,20 +126,8 @@ fn a_missing_patch_is_bridged_and_flagged() {
         ..Default::default()
     };
     let (scan, out, _) = mesh_scan(&spec);
-    let r = out.report.as_ref().unwrap();
-    let t = r.topology.as_ref().unwrap();
-    assert!(t.is_closed_oriented_manifold(), "{}", r.summary());
-    assert_eq!(t.genera(), vec![Some(0)], "{}", r.summary());
-    assert!(r.passed(), "{}", r.summary());
-    let (c, radius) = scan.hole.unwrap();
-    let ds = r.data_support.as_ref().unwrap();
-    assert!(
-        ds.unsupported_regions
-            .iter()
-            .any(|u| (DVec3::from_array(u.centroid) - c).length() < radius),
-        "{}",
-        r.summary()
-    );
+    assert_one_closed_component_passing(&out, 0);
+    assert_hole_flagged(&scan, &out);
 }
 
 /// The table's fandisk missing-patch row: the hole joins the model's inside to its outside
@@ -140,25 +147,10 @@ fn a_missing_patch_does_not_turn_the_inside_out() {
         ..Default::default()
     };
     let (scan, out, h) = mesh_model_scan("fandisk", &spec, 0.006);
-    let r = out.report.as_ref().unwrap();
-    let t = r.topology.as_ref().unwrap();
-    assert!(t.is_closed_oriented_manifold(), "{}", r.summary());
-    assert_eq!(t.genera(), vec![Some(0)], "{}", r.summary());
-    assert!(r.passed(), "{}", r.summary());
-    assert!(
-        out.mesh.vertices.len() < 24_000,
-        "{}",
-        out.mesh.vertices.len()
-    );
+    assert_one_closed_component_passing(&out, 0);
+    let n = out.mesh.vertices.len();
+    assert!(n < 24_000, "{n} vertices: a second wall?");
     // The bridge has no data to follow: listed, not held to the table's 0.75%.
     assert!(h < 0.02, "Hausdorff {h}");
-    let (c, radius) = scan.hole.unwrap();
-    let ds = r.data_support.as_ref().unwrap();
-    assert!(
-        ds.unsupported_regions
-            .iter()
-            .any(|u| (DVec3::from_array(u.centroid) - c).length() < radius),
-        "{}",
-        r.summary()
-    );
+    assert_hole_flagged(&scan, &out);
 }
