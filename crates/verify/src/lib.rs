@@ -570,6 +570,29 @@ fn self_intersection_checks(
     }
 }
 
+/// The triangles whose smallest angle is below `min_deg` (degenerate ones included) and the
+/// centroid of the one with the smallest angle.
+fn below_angle(mesh: &TriMesh, min_deg: f64) -> (usize, Option<DVec3>) {
+    let (mut below, mut worst) = (0, (f64::INFINITY, None));
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+        let smallest = quality::triangle_shape(a, b, c).map_or(0.0, |(angles, _, _)| {
+            angles
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min)
+                .to_degrees()
+        });
+        if smallest < min_deg {
+            below += 1;
+            if smallest < worst.0 {
+                worst = (smallest, Some((a + b + c) / 3.0));
+            }
+        }
+    }
+    (below, worst.1)
+}
+
 /// Angle, radius-edge and area/volume checks.
 fn quality_checks(r: &mut Report, mesh: &TriMesh, opts: &Options) {
     let q = quality::analyze(mesh, opts.angle_bin_deg);
@@ -578,9 +601,23 @@ fn quality_checks(r: &mut Report, mesh: &TriMesh, opts: &Options) {
         q.min_angle_deg, q.max_angle_deg
     );
     match opts.min_angle_deg {
+        Some(m) if q.min_angle_deg < m => {
+            let (below, worst) = below_angle(mesh, m);
+            let at = worst.map_or(String::new(), |c| {
+                format!("; the smallest at ({:.4}, {:.4}, {:.4})", c.x, c.y, c.z)
+            });
+            r.push(
+                "angles",
+                Status::Fail,
+                format!(
+                    "{angle_detail} (required min >= {m}): {below} of {} triangles below{at}",
+                    mesh.triangles.len()
+                ),
+            )
+        }
         Some(m) => r.push(
             "angles",
-            pass_fail(q.min_angle_deg >= m),
+            Status::Pass,
             format!("{angle_detail} (required min >= {m})"),
         ),
         None => r.push("angles", Status::Info, angle_detail),

@@ -361,3 +361,31 @@ fn level_set_bounds_hold_at_both_precisions() {
         assert!(fine.upper <= coarse.upper + ls.tolerance_at(Precision::Fine, coarse.upper));
     }
 }
+
+/// A failed angle check says how many triangles are below the bound and where the smallest
+/// is: a tetrahedron with its apex 10 above a unit right triangle has three slivers (apex
+/// angles 5.7, 5.7 and 8.1 degrees) and a base of 45-45-90.
+#[test]
+fn failed_angles_count_the_triangles_below() {
+    let m = TriMesh {
+        vertices: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(0.0, 0.0, 10.0)],
+        triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    };
+    let opts = |m: f64| Options {
+        min_angle_deg: Some(m),
+        ..quiet()
+    };
+    let r = verify::check(&m, &opts(30.0));
+    assert_eq!(r.status("angles"), Some(Status::Fail));
+    let d = &r.check("angles").unwrap().detail;
+    assert!(d.contains("3 of 4 triangles below"), "{d}");
+    // The smallest (5.71 degrees, twice): the first in order, the side over the x axis.
+    assert!(
+        d.contains("the smallest at (0.3333, 0.0000, 3.3333)"),
+        "{d}"
+    );
+    // Below every angle: PASS, no count.
+    let r = verify::check(&m, &opts(5.0));
+    assert_eq!(r.status("angles"), Some(Status::Pass));
+    assert!(!r.check("angles").unwrap().detail.contains("below"));
+}
