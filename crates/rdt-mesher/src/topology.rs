@@ -291,6 +291,17 @@ pub fn component_representatives(mesh: &meshio::TriMesh, per_component: usize) -
     out
 }
 
+/// The vertex directions of [`OCTAHEDRON`]: +x, -x, +y, -y (the equator), +z, -z (the poles).
+#[cfg(test)]
+pub(crate) const OCTAHEDRON_VERTICES: [glam::DVec3; 6] = [
+    glam::DVec3::X,
+    glam::DVec3::NEG_X,
+    glam::DVec3::Y,
+    glam::DVec3::NEG_Y,
+    glam::DVec3::Z,
+    glam::DVec3::NEG_Z,
+];
+
 /// The triangles of an outward-oriented octahedron: vertices 0 to 3 around the equator, 4 and 5
 /// the poles (a test fixture).
 #[cfg(test)]

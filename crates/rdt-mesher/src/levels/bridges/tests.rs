@@ -32,19 +32,14 @@ fn octahedra(xs: &[f64]) -> meshio::TriMesh {
     for &x in xs {
         let c = DVec3::new(x, 12.0, 12.0);
         let o = m.vertices.len() as u32;
-        for a in [
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ] {
-            m.vertices.push(c + 2.0 * a);
-        }
-        for (s, t) in [(0, 2), (2, 1), (1, 3), (3, 0)] {
-            m.triangles.push([o + s, o + t, o + 4]);
-            m.triangles.push([o + t, o + s, o + 5]);
+        let octahedron = crate::topology::OCTAHEDRON;
+        m.vertices
+            .extend(crate::topology::OCTAHEDRON_VERTICES.map(|a| c + 2.0 * a));
+        // Upper and lower triangle of each equator edge in turn (the order the tests ran with).
+        for k in 0..4 {
+            for t in [octahedron[k], octahedron[k + 4]] {
+                m.triangles.push(t.map(|v| o + v));
+            }
         }
     }
     m

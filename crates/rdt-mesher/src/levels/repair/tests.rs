@@ -65,16 +65,8 @@ fn a_hole_is_closed() {
 /// origin (a neck pinched to a vertex): 11 vertices (index 5 shared), 16 triangles; the
 /// upper one's vertices are 0..6.
 fn pinched() -> (Vec<DVec3>, Vec<[u32; 3]>) {
-    let oct = |c: DVec3| -> Vec<DVec3> {
-        vec![
-            c + DVec3::X,
-            c - DVec3::X,
-            c + DVec3::Y,
-            c - DVec3::Y,
-            c + DVec3::Z,
-            c - DVec3::Z,
-        ]
-    };
+    let oct =
+        |c: DVec3| -> Vec<DVec3> { crate::topology::OCTAHEDRON_VERTICES.map(|a| c + a).to_vec() };
     let faces = crate::topology::OCTAHEDRON;
     let mut vertices = oct(DVec3::Z);
     vertices[5] = DVec3::ZERO;
@@ -201,14 +193,7 @@ fn small_components_are_dropped_on_request() {
 fn rule_0_cuts_the_stars_of_the_separated_vertices_and_closes_them() {
     // An octahedron, its north pole (vertex 4) to be separated (as if its triangles bridged
     // two scan components): the star of the pole goes, the equator is closed.
-    let vertices = vec![
-        DVec3::X,
-        -DVec3::X,
-        DVec3::Y,
-        -DVec3::Y,
-        DVec3::Z,
-        -DVec3::Z,
-    ];
+    let vertices = crate::topology::OCTAHEDRON_VERTICES.to_vec();
     let triangles: Vec<[u32; 3]> = crate::topology::OCTAHEDRON.to_vec();
     let mut m = TriMesh {
         vertices,
