@@ -248,30 +248,11 @@ fn clear_components(
         while head < queue.len() {
             let c = queue[head];
             head += 1;
-            let (i, j, k) = (c % n, (c / n) % n, c / (n * n));
-            let mut visit = |d: usize| {
+            for d in neighbours6(c, n) {
                 if label[d] == NONE && !is_blocked(d) {
                     label[d] = comps;
                     queue.push(d);
                 }
-            };
-            if i > 0 {
-                visit(c - 1);
-            }
-            if i + 1 < n {
-                visit(c + 1);
-            }
-            if j > 0 {
-                visit(c - n);
-            }
-            if j + 1 < n {
-                visit(c + n);
-            }
-            if k > 0 {
-                visit(c - n * n);
-            }
-            if k + 1 < n {
-                visit(c + n * n);
             }
         }
         let m = queue.len();
