@@ -10,9 +10,20 @@ use delaunay3::VertexId;
 use glam::DVec3;
 use meshio::TriMesh;
 
-/// A facet's measures: smallest angle, r / sigma (and whether it is exact, or an upper bound
-/// from `crate::restricted::vertex_sizes`), distance ratio, bad.
-type Measure = (f64, Option<(f64, bool)>, Option<f64>, bool);
+/// A facet's measures: smallest angle, r / sigma, distance ratio, bad.
+type Measure = (f64, Option<RoverSigma>, Option<f64>, bool);
+
+/// A facet's r / sigma(c): exact, or bounds from sigma at its vertices
+/// (`crate::restricted::vertex_sizes`).
+#[derive(Clone, Copy, Debug)]
+enum RoverSigma {
+    Exact(f64),
+    Bounded { lower: f64, upper: f64 },
+}
+
+/// Facets whose r / sigma is evaluated exactly at a time when the maximum is made exact
+/// (large enough to run in parallel, small enough to stop soon after the bounds decide).
+const EXACT_CHUNK: usize = 4096;
 
 /// The extreme measures over the output facets.
 struct Extremes {
@@ -107,13 +118,20 @@ impl Mesher<'_> {
     /// (order-independent).
     fn extremes(&self, facets: &[RFacet]) -> Extremes {
         let (tri, criteria) = (&self.tri, &self.opts.criteria);
-        // r / sigma: an upper bound r / lb where the vertices give one, else exact; the
-        // bounded facets whose bound exceeds the largest exact value are then evaluated
-        // exactly, so the maximum is exact.
-        let r_over_sigma = |rf: &RFacet| -> Option<(f64, bool)> {
+        // r / sigma: bounds [r / ub, r / lb] where the vertices give them, else exact. The
+        // maximum is then made exact by evaluating the bounded facets in decreasing order of
+        // their upper bound r / lb, in chunks, until the next upper bound is not above the
+        // largest value known (exact values, and the lower bounds r / ub, each of which some
+        // exact value reaches). The result is the exact maximum, whatever the chunking.
+        let r_over_sigma = |rf: &RFacet| -> Option<RoverSigma> {
             match self.sigma_bounds(rf.oriented, rf.center) {
-                Some((lb, _)) => Some((rf.radius / lb, false)),
-                None => criteria.sigma_at(rf.center).map(|s| (rf.radius / s, true)),
+                Some((lb, ub)) => Some(RoverSigma::Bounded {
+                    lower: rf.radius / ub,
+                    upper: rf.radius / lb,
+                }),
+                None => criteria
+                    .sigma_at(rf.center)
+                    .map(|s| RoverSigma::Exact(rf.radius / s)),
             }
         };
         let measure = |rf: &RFacet| -> Measure {
@@ -133,29 +151,44 @@ impl Mesher<'_> {
             max_dist: None,
             all_good: true,
         };
+        // Largest exact value or lower bound: the maximum is at least this.
+        let mut known: Option<f64> = None;
         let mut bounded = Vec::new();
         for (i, &(angle, rs, dist, bad)) in measures.iter().enumerate() {
             ext.min_angle = ext.min_angle.min(angle);
             match rs {
-                Some((v, true)) => ext.max_rs = max_opt(ext.max_rs, Some(v)),
-                Some((v, false)) => bounded.push((i, v)),
+                Some(RoverSigma::Exact(v)) => {
+                    ext.max_rs = max_opt(ext.max_rs, Some(v));
+                    known = max_opt(known, Some(v));
+                }
+                Some(RoverSigma::Bounded { lower, upper }) => {
+                    known = max_opt(known, Some(lower));
+                    bounded.push((upper, i));
+                }
                 None => {}
             }
             ext.max_dist = max_opt(ext.max_dist, dist);
             ext.all_good &= !bad;
         }
-        let above = |v: f64| ext.max_rs.is_none_or(|m| v > m);
-        let exact: Vec<usize> = bounded
-            .into_iter()
-            .filter(|&(_, v)| above(v))
-            .map(|(i, _)| i)
-            .collect();
-        let values = self.policy.field(exact.len()).map(&exact, |&i| {
-            let rf = &facets[i];
-            criteria.sigma_at(rf.center).map(|s| rf.radius / s)
-        });
-        for v in values {
-            ext.max_rs = max_opt(ext.max_rs, v);
+        // Decreasing upper bound (then index: a total order).
+        bounded.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let mut next = 0;
+        while next < bounded.len() && known.is_none_or(|m| bounded[next].0 > m) {
+            let end = (next + EXACT_CHUNK).min(bounded.len());
+            let chunk: Vec<usize> = bounded[next..end]
+                .iter()
+                .take_while(|b| known.is_none_or(|m| b.0 > m))
+                .map(|b| b.1)
+                .collect();
+            next += chunk.len();
+            let values = self.policy.field(chunk.len()).map(&chunk, |&i| {
+                let rf = &facets[i];
+                criteria.sigma_at(rf.center).map(|s| rf.radius / s)
+            });
+            for v in values {
+                ext.max_rs = max_opt(ext.max_rs, v);
+                known = max_opt(known, v);
+            }
         }
         ext
     }
