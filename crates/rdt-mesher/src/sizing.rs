@@ -129,7 +129,10 @@ impl MedialAxisEstimate {
             radius: keep.radius * 3.0,
         };
         let cells: Vec<_> = tri.finite_cells().collect();
-        let centers: Vec<DVec3> = cells.iter().map(|&c| tri.circumcenter(c)).collect();
+        let centers: Vec<DVec3> = {
+            use rayon::prelude::*;
+            cells.par_iter().map(|&c| tri.circumcenter(c)).collect()
+        };
         let mut candidates: Vec<(DVec3, f64)> = Vec::new();
         // The lambda-medial vertices.
         for (&c, &cc) in cells

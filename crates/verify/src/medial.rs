@@ -74,7 +74,13 @@ impl MedialAxisEstimate {
             }
         }
         // The reference direction of a vertex: its sample's normal, if given.
-        let vertex_poles = dt.poles(|v| {
+        // The circumcenters in parallel (`Triangulation::poles` computes them on one thread).
+        let cells: Vec<delaunay3::CellId> = dt.finite_cells().collect();
+        let centers: Vec<DVec3> = {
+            use rayon::prelude::*;
+            cells.par_iter().map(|&c| dt.circumcenter(c)).collect()
+        };
+        let vertex_poles = delaunay3::poles::poles_from_centers(&dt, &cells, &centers, |v| {
             let s = sample_of_vertex[v.index()];
             normals.filter(|_| s != usize::MAX).map(|n| n[s])
         });

@@ -103,7 +103,13 @@ fn dm_source(
                 .unwrap_or(&mesh.vertices);
             match MedialAxisEstimate::new(samples, None) {
                 Ok(m) => {
-                    let sup = samples.iter().map(|&p| m.dm(p)).fold(0.0, f64::max);
+                    let sup = {
+                        use rayon::prelude::*;
+                        samples
+                            .par_iter()
+                            .map(|&p| m.dm(p))
+                            .reduce(|| 0.0, f64::max)
+                    };
                     let n = m.poles.len();
                     let m = Arc::new(m);
                     let f: DmFn = Arc::new(move |x| m.dm(x));
