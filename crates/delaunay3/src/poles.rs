@@ -62,73 +62,124 @@ impl Triangulation {
 /// [`Triangulation::poles`] from precomputed circumcenters: `centers[i]` is the
 /// circumcenter of the finite cell `cells[i]`, and `cells` are the finite cells in
 /// [`Triangulation::finite_cells`] order (ties between equally far Voronoi vertices go to the
-/// first in that order). Non-finite circumcenters (flat cells) are skipped.
+/// first in that order; the hull facets are those of every finite cell). Non-finite
+/// circumcenters (flat cells) are skipped.
 pub fn poles_from_centers(
     t: &Triangulation,
     cells: &[CellId],
     centers: &[DVec3],
     normal: impl Fn(VertexId) -> Option<DVec3>,
 ) -> Vec<VertexPoles> {
+    poles_of_range(t, cells, centers, normal, 0..t.num_vertices())
+}
+
+/// [`poles_from_centers`] for the vertices whose index is in `range` only (`out[i]` is vertex
+/// `range.start + i`): each vertex's poles depend on its own cells alone, visited in the same
+/// order, so the results are those of [`poles_from_centers`], bit for bit. Lets a caller
+/// split the vertices among threads (every call reads all of `cells`, and works on its own
+/// vertices).
+pub fn poles_of_range(
+    t: &Triangulation,
+    cells: &[CellId],
+    centers: &[DVec3],
+    normal: impl Fn(VertexId) -> Option<DVec3>,
+    range: std::ops::Range<usize>,
+) -> Vec<VertexPoles> {
     assert_eq!(cells.len(), centers.len(), "one circumcenter per cell");
     let nv = t.num_vertices();
+    assert!(range.start <= range.end && range.end <= nv, "vertex range");
+    let (lo, len) = (range.start, range.len());
+    // The local index of a vertex of the range.
+    let local = |v: VertexId| v.index().wrapping_sub(lo);
     let point = |v: VertexId| t.point(v);
-    // Pass 1: per vertex, its farthest Voronoi vertex and the outward direction of its hull
-    // facets.
-    let mut far = vec![(0.0f64, DVec3::ZERO); nv];
-    let mut hull_dir = vec![DVec3::ZERO; nv];
-    for (&c, &cc) in cells.iter().zip(centers) {
-        let vs = t.cell_vertices(c);
-        let pts = vs.map(point);
-        for k in 0..4 {
-            let v = vs[k].index();
-            if cc.is_finite() {
-                let d = (cc - pts[k]).length_squared();
-                if d > far[v].0 {
-                    far[v] = (d, cc);
-                }
-            }
-            if t.is_infinite(t.neighbor(c, k)) {
-                // Hull facet opposite vs[k]: its outward normal points away from vs[k].
-                let f: Vec<DVec3> = (0..4).filter(|&j| j != k).map(|j| pts[j]).collect();
-                let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
-                if n.dot(pts[k] - f[0]) > 0.0 {
-                    n = -n;
-                }
-                let n = n.normalize_or_zero();
-                for j in (0..4).filter(|&j| j != k) {
-                    hull_dir[vs[j].index()] += n;
-                }
-            }
-        }
-    }
-    // The reference direction per vertex, and whether a pole on its positive side is finite.
-    let reference: Vec<(DVec3, bool)> = t
-        .vertices()
-        .map(|v| {
-            if let Some(n) = normal(v) {
-                (n, true)
-            } else if hull_dir[v.index()] != DVec3::ZERO {
-                (hull_dir[v.index()], false)
-            } else {
-                (far[v.index()].1 - point(v), true)
-            }
-        })
-        .collect();
-    // Pass 2: the farthest Voronoi vertex on each side.
-    let mut out = vec![VertexPoles::default(); nv];
+    // Pass 1: per vertex, its farthest Voronoi vertex.
+    let mut far = vec![(0.0f64, DVec3::ZERO); len];
     for (&c, &cc) in cells.iter().zip(centers) {
         if !cc.is_finite() {
             continue;
         }
         for v in t.cell_vertices(c) {
+            let i = local(v);
+            if i < len {
+                let d = (cc - point(v)).length_squared();
+                if d > far[i].0 {
+                    far[i] = (d, cc);
+                }
+            }
+        }
+    }
+    // The outward direction of the hull facets at each vertex: the sum of their unit normals,
+    // added in the order of (finite cell, local index) as a scan of `cells` would (the
+    // facets are found from the infinite cells, without reading four neighbors per cell).
+    let mut hull: Vec<(CellId, usize)> = t
+        .live_cells()
+        .filter(|&c| t.is_infinite(c))
+        .filter_map(|c| {
+            let k = t
+                .cell_vertices(c)
+                .iter()
+                .position(|&v| v == VertexId::INFINITE)?;
+            let f = t.mirror_facet(crate::ids::Facet {
+                cell: c,
+                index: k as u8,
+            });
+            let vs = t.cell_vertices(f.cell);
+            vs.iter()
+                .any(|&v| local(v) < len)
+                .then_some((f.cell, f.index as usize))
+        })
+        .collect();
+    hull.sort_unstable_by_key(|&(c, k)| (c.0, k));
+    let mut hull_dir = vec![DVec3::ZERO; len];
+    for (c, k) in hull {
+        let vs = t.cell_vertices(c);
+        let pts = vs.map(point);
+        // Hull facet opposite vs[k]: its outward normal points away from vs[k].
+        let f: Vec<DVec3> = (0..4).filter(|&j| j != k).map(|j| pts[j]).collect();
+        let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
+        if n.dot(pts[k] - f[0]) > 0.0 {
+            n = -n;
+        }
+        let n = n.normalize_or_zero();
+        for j in (0..4).filter(|&j| j != k) {
+            let w = local(vs[j]);
+            if w < len {
+                hull_dir[w] += n;
+            }
+        }
+    }
+    // The reference direction per vertex, and whether a pole on its positive side is finite.
+    let reference: Vec<(DVec3, bool)> = (lo..lo + len)
+        .map(|i| {
+            let v = VertexId::from_index(i);
+            if let Some(n) = normal(v) {
+                (n, true)
+            } else if hull_dir[i - lo] != DVec3::ZERO {
+                (hull_dir[i - lo], false)
+            } else {
+                (far[i - lo].1 - point(v), true)
+            }
+        })
+        .collect();
+    // Pass 2: the farthest Voronoi vertex on each side.
+    let mut out = vec![VertexPoles::default(); len];
+    for (&c, &cc) in cells.iter().zip(centers) {
+        if !cc.is_finite() {
+            continue;
+        }
+        for v in t.cell_vertices(c) {
+            let i = local(v);
+            if i >= len {
+                continue;
+            }
             let p = point(v);
             let d = (cc - p).length_squared();
-            let (dir, plus_finite) = reference[v.index()];
+            let (dir, plus_finite) = reference[i];
             let side = (cc - p).dot(dir);
             let slot = if side > 0.0 && plus_finite {
-                &mut out[v.index()].plus
+                &mut out[i].plus
             } else if side < 0.0 {
-                &mut out[v.index()].minus
+                &mut out[i].minus
             } else {
                 continue;
             };
@@ -220,5 +271,17 @@ mod tests {
             |v| Some(t.point(v)),
         );
         assert_eq!(same, poles);
+        // Split in vertex ranges, the same poles (the hull vertices' directions included).
+        let cells: Vec<CellId> = t.finite_cells().collect();
+        let centers: Vec<DVec3> = cells.iter().map(|&c| t.circumcenter(c)).collect();
+        let nv = t.num_vertices();
+        for parts in [2, 3, 7] {
+            let step = nv.div_ceil(parts);
+            let split: Vec<VertexPoles> = (0..nv)
+                .step_by(step)
+                .flat_map(|a| poles_of_range(&t, &cells, &centers, |_| None, a..(a + step).min(nv)))
+                .collect();
+            assert_eq!(split, t.poles(|_| None), "{parts} ranges");
+        }
     }
 }

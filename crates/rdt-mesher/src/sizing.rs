@@ -128,11 +128,7 @@ impl MedialAxisEstimate {
             center: keep.center,
             radius: keep.radius * 3.0,
         };
-        let cells: Vec<_> = tri.finite_cells().collect();
-        let centers: Vec<DVec3> = {
-            use rayon::prelude::*;
-            cells.par_iter().map(|&c| tri.circumcenter(c)).collect()
-        };
+        let (cells, centers) = verify::medial::circumcenters(tri);
         let mut candidates: Vec<(DVec3, f64)> = Vec::new();
         // The lambda-medial vertices.
         for (&c, &cc) in cells
@@ -151,7 +147,7 @@ impl MedialAxisEstimate {
         let lambda_vertices = candidates.len();
         // The poles (a hull sample's Voronoi cell is unbounded: only its inner pole is finite).
         let mut poles = 0;
-        for vp in delaunay3::poles::poles_from_centers(tri, &cells, &centers, |_| None) {
+        for vp in verify::medial::poles_in_parallel(tri, &cells, &centers, |_| None) {
             for pole in [vp.plus, vp.minus].into_iter().flatten() {
                 if far.contains(pole.point) {
                     candidates.push((pole.point, pole.distance_squared.sqrt()));

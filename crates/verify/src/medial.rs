@@ -74,13 +74,8 @@ impl MedialAxisEstimate {
             }
         }
         // The reference direction of a vertex: its sample's normal, if given.
-        // The circumcenters in parallel (`Triangulation::poles` computes them on one thread).
-        let cells: Vec<delaunay3::CellId> = dt.finite_cells().collect();
-        let centers: Vec<DVec3> = {
-            use rayon::prelude::*;
-            cells.par_iter().map(|&c| dt.circumcenter(c)).collect()
-        };
-        let vertex_poles = delaunay3::poles::poles_from_centers(&dt, &cells, &centers, |v| {
+        let (cells, centers) = circumcenters(&dt);
+        let vertex_poles = poles_in_parallel(&dt, &cells, &centers, |v| {
             let s = sample_of_vertex[v.index()];
             normals.filter(|_| s != usize::MAX).map(|n| n[s])
         });
@@ -102,6 +97,39 @@ impl MedialAxisEstimate {
             .nearest(x, |i| (self.poles[i as usize] - x).length_squared())
             .map_or(f64::INFINITY, |(_, d2)| d2.sqrt())
     }
+}
+
+/// The finite cells of `dt` in [`Triangulation::finite_cells`] order and their
+/// circumcenters, computed in parallel.
+pub fn circumcenters(dt: &Triangulation) -> (Vec<delaunay3::CellId>, Vec<DVec3>) {
+    use rayon::prelude::*;
+    let cells: Vec<delaunay3::CellId> = dt.finite_cells().collect();
+    let centers = cells.par_iter().map(|&c| dt.circumcenter(c)).collect();
+    (cells, centers)
+}
+
+/// [`delaunay3::poles::poles_from_centers`] in parallel: the vertices split in ranges, one
+/// task each ([`delaunay3::poles::poles_of_range`]); the same poles, bit for bit, whatever
+/// the number of threads.
+pub fn poles_in_parallel(
+    dt: &Triangulation,
+    cells: &[delaunay3::CellId],
+    centers: &[DVec3],
+    normal: impl Fn(VertexId) -> Option<DVec3> + Sync,
+) -> Vec<delaunay3::VertexPoles> {
+    use rayon::prelude::*;
+    let nv = dt.num_vertices();
+    let parts = rayon::current_num_threads().clamp(1, nv.max(1));
+    let step = nv.div_ceil(parts).max(1);
+    let ranges: Vec<std::ops::Range<usize>> = (0..nv)
+        .step_by(step)
+        .map(|a| a..(a + step).min(nv))
+        .collect();
+    ranges
+        .into_par_iter()
+        .map(|r| delaunay3::poles::poles_of_range(dt, cells, centers, &normal, r))
+        .collect::<Vec<_>>()
+        .concat()
 }
 
 /// d_M estimates at the sample points themselves (see [`MedialAxisEstimate`]).
