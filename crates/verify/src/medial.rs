@@ -6,8 +6,6 @@ use delaunay3::{Triangulation, VertexId};
 use glam::DVec3;
 use thiserror::Error;
 
-use crate::bvh::{Aabb, Bvh};
-
 #[derive(Debug, Error, Clone, PartialEq)]
 /// Why d_M could not be estimated.
 pub enum MedialError {
@@ -33,7 +31,7 @@ pub enum MedialError {
 /// pole, an estimate of d_M(x) for points near S.
 pub struct MedialAxisEstimate {
     pub poles: Vec<DVec3>,
-    bvh: Bvh,
+    tree: kiddo::ImmutableKdTree<f64, 3>,
 }
 
 impl MedialAxisEstimate {
@@ -87,15 +85,21 @@ impl MedialAxisEstimate {
         if poles.is_empty() {
             return Err(MedialError::NoPoles);
         }
-        let bvh = Bvh::new(poles.iter().map(|&p| Aabb { min: p, max: p }).collect());
-        Ok(MedialAxisEstimate { poles, bvh })
+        let arr: Vec<[f64; 3]> = poles.iter().map(|p| p.to_array()).collect();
+        let tree = kiddo::ImmutableKdTree::new_from_slice(&arr).expect("finite poles");
+        Ok(MedialAxisEstimate { poles, tree })
     }
 
     /// Estimated d_M at `x`: the distance to the nearest pole.
     pub fn dm(&self, x: DVec3) -> f64 {
-        self.bvh
-            .nearest(x, |i| (self.poles[i as usize] - x).length_squared())
-            .map_or(f64::INFINITY, |(_, d2)| d2.sqrt())
+        let r = self
+            .tree
+            .query(&x.to_array())
+            .nearest_one::<kiddo::SquaredEuclidean<f64>>()
+            .execute();
+        // The exact squared distance to the pole found (the tree's own sum may round
+        // differently).
+        (self.poles[r.item as usize] - x).length()
     }
 }
 

@@ -21,14 +21,20 @@ pub(crate) fn against(
     surface: &dyn Surface,
     opts: &Options,
 ) {
-    let (normals, hausdorff) = hausdorff_check(r, mesh, bvh, surface, opts);
+    // The d_M source (a Delaunay triangulation of the sample: one thread for a while) beside
+    // the distances (parallel).
+    let ((normals, hausdorff), dm) = rayon::join(
+        || hausdorff_check(r, mesh, bvh, surface, opts),
+        || dm_source(mesh, surface, opts),
+    );
     let measured = r
         .geometry
         .as_ref()
         .is_some_and(|g| g.projection_failures == 0);
-
-    // d_M source.
-    let dm = dm_source(r, mesh, surface, opts);
+    let dm = dm.unwrap_or_else(|e| {
+        r.push("loose-epsilon", Status::Fail, e);
+        None
+    });
     let balls = certificate_checks(r, mesh, surface, opts, &dm, measured.then_some(hausdorff));
 
     normals_check(r, mesh, &normals);
@@ -78,12 +84,11 @@ fn hausdorff_check(
 /// The d_M function, its supremum and a description, from [`Options::dm`] (pushes a FAIL
 /// `loose-epsilon` check when the pole estimate fails).
 fn dm_source(
-    r: &mut Report,
     mesh: &TriMesh,
     surface: &dyn Surface,
     opts: &Options,
-) -> Option<(DmFn, f64, String)> {
-    match &opts.dm {
+) -> Result<Option<(DmFn, f64, String)>, String> {
+    Ok(match &opts.dm {
         DmSource::Auto => surface.dm_inf_hint().filter(|v| *v > 0.0).map(|v| {
             let f: DmFn = Arc::new(move |_| v);
             (f, v, format!("constant d_M^inf hint {v} of the surface"))
@@ -119,13 +124,10 @@ fn dm_source(
                         format!("Voronoi poles of {} samples ({n} poles)", samples.len()),
                     ))
                 }
-                Err(e) => {
-                    r.push("loose-epsilon", Status::Fail, e.to_string());
-                    None
-                }
+                Err(e) => return Err(e.to_string()),
             }
         }
-    }
+    })
 }
 
 /// The loose epsilon-sample certificate and theorem 4.7 (or SKIPs without d_M). Both PASS
