@@ -11,6 +11,7 @@
 //!   number, box overlaps) and the box/point [`bvh::Bvh`], both built by one median split.
 //! - [`rng`]: [`SplitMix64`], the generator behind every seeded choice in the workspace.
 //! - [`farthest`]: greedy farthest-point selection with lowest-index ties.
+//! - [`kdtree`]: [`kdtree::PointTree`], exact nearest-point queries over a fixed point set.
 //! - [`morton`]: Z-order keys, to run many spatial queries in a cache-friendly order.
 //! - [`SurfaceBall`]: a surface Delaunay ball B(c, r) of a restricted facet.
 //!
@@ -33,6 +34,7 @@ mod ball;
 pub mod bvh;
 pub mod closest;
 pub mod farthest;
+pub mod kdtree;
 pub mod morton;
 pub mod predicates;
 pub mod rng;

@@ -4,8 +4,8 @@
 use crate::{Criteria, Progress, Sizing};
 use crate::{MeshError, MeshOptions, MeshResult, mesh_with_progress};
 use delaunay3::Triangulation;
+use geom::kdtree::PointTree;
 use glam::DVec3;
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oracle::{BoundingSphere, Surface};
 use std::sync::Arc;
 
@@ -82,7 +82,7 @@ fn tet_circumcenter(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Option<DVec3> {
 /// unthinned union. A distance to a set minus a constant, clamped at 0, is 1-Lipschitz.
 pub struct MedialAxisEstimate {
     vertices: Vec<DVec3>,
-    tree: ImmutableKdTree<f64, 3>,
+    tree: PointTree,
     /// Lambda used.
     pub lambda: f64,
     /// Bound on the distance increase due to thinning, subtracted from every distance.
@@ -173,8 +173,7 @@ impl MedialAxisEstimate {
             // estimate is finite (it is then an over-estimate; the caller bounds sigma below).
             vertices.push(keep.center);
         }
-        let arr: Vec<[f64; 3]> = vertices.iter().map(|v| v.to_array()).collect();
-        let tree = ImmutableKdTree::new_from_slice(&arr).expect("finite points");
+        let tree = PointTree::new(&vertices);
         MedialAxisEstimate {
             vertices,
             tree,
@@ -188,12 +187,8 @@ impl MedialAxisEstimate {
 
     /// Estimated distance from `p` to the medial axis (>= 0).
     pub fn distance(&self, p: DVec3) -> f64 {
-        let r = self
-            .tree
-            .query(&p.to_array())
-            .nearest_one::<SquaredEuclidean<f64>>()
-            .execute();
-        (r.distance.sqrt() - self.thinning_error).max(0.0)
+        let d2 = self.tree.nearest(p).map_or(f64::INFINITY, |(_, d2)| d2);
+        (d2.sqrt() - self.thinning_error).max(0.0)
     }
 
     /// [`MedialAxisEstimate::distance`] at each of `pts`, in parallel, the queries run in

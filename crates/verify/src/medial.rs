@@ -31,7 +31,7 @@ pub enum MedialError {
 /// pole, an estimate of d_M(x) for points near S.
 pub struct MedialAxisEstimate {
     pub poles: Vec<DVec3>,
-    tree: kiddo::ImmutableKdTree<f64, 3>,
+    tree: geom::kdtree::PointTree,
 }
 
 impl MedialAxisEstimate {
@@ -85,21 +85,15 @@ impl MedialAxisEstimate {
         if poles.is_empty() {
             return Err(MedialError::NoPoles);
         }
-        let arr: Vec<[f64; 3]> = poles.iter().map(|p| p.to_array()).collect();
-        let tree = kiddo::ImmutableKdTree::new_from_slice(&arr).expect("finite poles");
+        let tree = geom::kdtree::PointTree::new(&poles);
         Ok(MedialAxisEstimate { poles, tree })
     }
 
     /// Estimated d_M at `x`: the distance to the nearest pole.
     pub fn dm(&self, x: DVec3) -> f64 {
-        let r = self
-            .tree
-            .query(&x.to_array())
-            .nearest_one::<kiddo::SquaredEuclidean<f64>>()
-            .execute();
-        // The exact squared distance to the pole found (the tree's own sum may round
-        // differently).
-        (self.poles[r.item as usize] - x).length()
+        self.tree
+            .nearest(x)
+            .map_or(f64::INFINITY, |(_, d2)| d2.sqrt())
     }
 }
 
