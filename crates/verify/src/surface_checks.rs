@@ -81,8 +81,8 @@ fn hausdorff_check(
     (normals, hausdorff)
 }
 
-/// The d_M function, its supremum and a description, from [`Options::dm`] (pushes a FAIL
-/// `loose-epsilon` check when the pole estimate fails).
+/// The d_M function, its supremum and a description, from [`Options::dm`]; the error's text
+/// when the pole estimate fails (the caller reports it as a FAILed `loose-epsilon`).
 fn dm_source(
     mesh: &TriMesh,
     surface: &dyn Surface,
