@@ -15,6 +15,8 @@
 
 use glam::DVec3;
 
+use crate::bvh::Aabb;
+
 /// Points per leaf at most.
 const LEAF: usize = 12;
 
@@ -24,22 +26,19 @@ const STACK: usize = 64;
 
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    lo: DVec3,
-    hi: DVec3,
+    bounds: Aabb,
     /// Leaf: first point; inner: index of the left child (the right one is next).
     first: u32,
     /// Leaf: number of points (> 0); inner: 0.
     count: u32,
 }
 
-impl Node {
-    /// Squared distance from `x` to the box (0 inside).
-    #[inline(always)]
-    fn distance_squared(&self, x: DVec3) -> f64 {
-        let d = (self.lo - x).max(x - self.hi).max(DVec3::ZERO);
-        d.length_squared()
-    }
-}
+/// A node not filled yet.
+const BLANK: Node = Node {
+    bounds: Aabb::EMPTY,
+    first: 0,
+    count: 0,
+};
 
 /// A static kd-tree of points for exact nearest-point queries.
 #[derive(Clone, Debug, Default)]
@@ -72,12 +71,7 @@ impl PointTree {
             .collect();
         let mut nodes = Vec::with_capacity(2 * points.len() / LEAF + 1);
         if !items.is_empty() {
-            nodes.push(Node {
-                lo: DVec3::ZERO,
-                hi: DVec3::ZERO,
-                first: 0,
-                count: 0,
-            });
+            nodes.push(BLANK);
             build(&mut items, 0, 0, &mut nodes);
         }
         PointTree {
@@ -107,7 +101,7 @@ impl PointTree {
         let mut best = (u32::MAX, f64::INFINITY);
         let mut stack = [(0.0f64, 0u32); STACK];
         let mut top = 1;
-        stack[0] = (self.nodes[0].distance_squared(x), 0);
+        stack[0] = (self.nodes[0].bounds.distance_squared(x), 0);
         while top > 0 {
             top -= 1;
             let (d, n) = stack[top];
@@ -125,8 +119,8 @@ impl PointTree {
                 }
             } else {
                 let (l, r) = (node.first, node.first + 1);
-                let dl = self.nodes[l as usize].distance_squared(x);
-                let dr = self.nodes[r as usize].distance_squared(x);
+                let dl = self.nodes[l as usize].bounds.distance_squared(x);
+                let dr = self.nodes[r as usize].bounds.distance_squared(x);
                 // The nearer child on top, visited first.
                 let (near, far) = if dl < dr {
                     ((dl, l), (dr, r))
@@ -148,20 +142,16 @@ impl PointTree {
 /// Fills node `id` (already allocated) over `items[first..]` (the slice given), splitting at
 /// the median of the widest extent.
 fn build(items: &mut [(DVec3, u32)], first: usize, id: usize, nodes: &mut Vec<Node>) {
-    let (lo, hi) = items.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), (p, _)| (lo.min(*p), hi.max(*p)),
-    );
+    let bounds = items.iter().fold(Aabb::EMPTY, |b, (p, _)| b.grow(*p));
     if items.len() <= LEAF {
         nodes[id] = Node {
-            lo,
-            hi,
+            bounds,
             first: first as u32,
             count: items.len() as u32,
         };
         return;
     }
-    let ext = hi - lo;
+    let ext = bounds.max - bounds.min;
     let axis = if ext.x >= ext.y && ext.x >= ext.z {
         0
     } else if ext.y >= ext.z {
@@ -172,17 +162,10 @@ fn build(items: &mut [(DVec3, u32)], first: usize, id: usize, nodes: &mut Vec<No
     let m = items.len() / 2;
     items.select_nth_unstable_by(m, |a, b| a.0[axis].total_cmp(&b.0[axis]));
     let left = nodes.len();
-    let blank = Node {
-        lo: DVec3::ZERO,
-        hi: DVec3::ZERO,
-        first: 0,
-        count: 0,
-    };
-    nodes.push(blank);
-    nodes.push(blank);
+    nodes.push(BLANK);
+    nodes.push(BLANK);
     nodes[id] = Node {
-        lo,
-        hi,
+        bounds,
         first: left as u32,
         count: 0,
     };

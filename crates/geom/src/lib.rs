@@ -8,7 +8,7 @@
 //!   crossing for the polyhedron oracle).
 //! - [`closest`]: closest point on a triangle (with the feature it lies on) and on a segment.
 //! - [`bvh`]: [`bvh::TriangleBvh`] (nearest triangle, segment crossings, generalized winding
-//!   number, box overlaps) and the box/point [`bvh::Bvh`], both built by one median split.
+//!   number, box overlaps) and the box [`bvh::Bvh`] (overlaps), both built by one median split.
 //! - [`rng`]: [`SplitMix64`], the generator behind every seeded choice in the workspace.
 //! - [`farthest`]: greedy farthest-point selection with lowest-index ties.
 //! - [`kdtree`]: [`kdtree::PointTree`], exact nearest-point queries over a fixed point set.

@@ -1,5 +1,5 @@
-//! The box BVH (ours): items known by their boxes only (e.g. points as degenerate boxes),
-//! over the shared median split of their box centres.
+//! The box BVH (ours): items known by their boxes only, over the shared median split of
+//! their box centres; overlap queries. (Nearest points: [`crate::kdtree::PointTree`].)
 
 use glam::DVec3;
 
@@ -83,43 +83,6 @@ impl Bvh {
             }
         });
     }
-
-    /// The item minimising `dist2(i)` (a squared distance from `p` that is at least the
-    /// squared distance from `p` to the item's box), with that value. Exact branch and bound:
-    /// ties go to the smaller item index. `None` for an empty tree.
-    pub fn nearest(&self, p: DVec3, dist2: impl Fn(u32) -> f64) -> Option<(u32, f64)> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let mut best: Option<(u32, f64)> = None;
-        let mut stack: Vec<(f64, u32)> = Vec::with_capacity(64);
-        stack.push((self.nodes[0].bounds.distance_squared(p), 0));
-        while let Some((d, n)) = stack.pop() {
-            if let Some((_, bd)) = best
-                && d > bd
-            {
-                continue;
-            }
-            let node = &self.nodes[n as usize];
-            if node.count > 0 {
-                for &i in &self.items[node.first as usize..(node.first + node.count) as usize] {
-                    if let Some((_, bd)) = best
-                        && self.boxes[i as usize].distance_squared(p) > bd
-                    {
-                        continue;
-                    }
-                    let di = dist2(i);
-                    super::keep_nearest(&mut best, i, di);
-                }
-            } else {
-                let (l, r) = (node.first, node.first + 1);
-                let dl = self.nodes[l as usize].bounds.distance_squared(p);
-                let dr = self.nodes[r as usize].bounds.distance_squared(p);
-                super::push_nearer_last(&mut stack, (dl, l), (dr, r));
-            }
-        }
-        best
-    }
 }
 
 #[cfg(test)]
@@ -128,7 +91,7 @@ mod tests {
     use crate::SplitMix64;
 
     #[test]
-    fn overlap_and_nearest_match_brute_force() {
+    fn overlap_matches_brute_force() {
         let mut r = SplitMix64(7);
         let mut u = || r.next_f64();
         let pts: Vec<DVec3> = (0..500).map(|_| DVec3::new(u(), u(), u())).collect();
@@ -154,16 +117,7 @@ mod tests {
                 .filter(|&i| boxes[i as usize].overlaps(&qb))
                 .collect();
             assert_eq!(got, want);
-            let (i, d) = bvh
-                .nearest(q, |i| boxes[i as usize].distance_squared(q))
-                .unwrap();
-            let bd = boxes
-                .iter()
-                .map(|b| b.distance_squared(q))
-                .fold(f64::INFINITY, f64::min);
-            assert_eq!(d, bd);
-            assert_eq!(boxes[i as usize].distance_squared(q), bd);
         }
-        assert!(Bvh::new(Vec::new()).nearest(DVec3::ZERO, |_| 0.0).is_none());
+        assert!(Bvh::new(Vec::new()).is_empty());
     }
 }
