@@ -170,7 +170,9 @@ impl Mesher<'_> {
             ext.max_dist = max_opt(ext.max_dist, dist);
             ext.all_good &= !bad;
         }
-        // Decreasing upper bound (then index: a total order).
+        // Those that may exceed what is known, by decreasing upper bound (then index: a
+        // total order).
+        bounded.retain(|b| known.is_none_or(|m| b.0 > m));
         bounded.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let mut next = 0;
         while next < bounded.len() && known.is_none_or(|m| bounded[next].0 > m) {
