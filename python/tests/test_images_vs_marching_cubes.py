@@ -23,7 +23,8 @@ and the test asserts:
 - two-sided distance within h + sigma: every MC vertex is within it of our mesh (those on voxel
   edges are exact points of the trilinear level set, the voxel-edge crossings of `cargo xtask
   regress`; Lewiner adds a few inside cells, 0.3% on mni-crop, and MC puts one at each node
-  equal to the iso value, which the Rust suite leaves out), and every vertex of ours (on the
+  equal to the iso value with an inside edge neighbour: the Rust suite and the mesher's
+  coverage keep those on the solid's boundary, not the punctures of the inside), and every vertex of ours (on the
   trilinear level set) within it of MC's triangles. The distances compared are upper bounds: exact
   point-to-triangle distances to candidate triangles (those around the k nearest vertices),
   made exact (trimesh.proximity) for the points beyond the bound and the farthest.
@@ -79,7 +80,7 @@ UP = 2
 # (case, size in voxels) -> what fails today (issue 14), measured 2026-12-04, session 17 (after the
 # coverage's stars, the bridged sub-voxel pieces and the fragment rule; scikit-image 0.26,
 # trimesh 5.2). strict=True: when one starts passing, the test fails until its entry is
-# removed here. Every distance is now within h + sigma but on `sheet` (below), and our count
+# removed here. Every distance is now within h + sigma, and our count
 # equals the voxel scan's on every case.
 # - "MC below the scan": nibabel's two volumes, where neither MC count is the trilinear level
 #   set's. Lewiner's at the voxels is not even invariant under f -> -f (the same level set;
@@ -90,19 +91,14 @@ UP = 2
 #   2026-12-04, session 18, scikit-image 0.26). The same trilinear function sampled finer
 #   gives more components: MC's count depends on the sampling of one surface, so it is not
 #   that surface's count.
-# - "S gap" (sheet only): MC vertices farther than h + sigma from our mesh, all at nodes whose
-#   value equals the iso value (MC puts a vertex there; the Rust regress leaves those out: a
-#   node at the iso value on a plateau is no surface of the regularized solid).
+# - "S gap" (sheet at 1 and 2 voxels, until session 20): MC vertices at tied nodes where the
+#   sheet ends on a plateau of ties, which the mesher's coverage left out; it now covers them.
 _MC = "issue 14: MC below the scan: MC {}, neg {}, up2 {}, scan {}, ours {}"
 XFAIL_ISSUE_14 = {
     **{("nib-anatomical@q30", k): _MC.format(93, 92, 94, 96, 96) for k in SIZES},
     **{("nib-anatomical@q60", k): _MC.format(268, 271, 279, 285, 285) + ", up4 283, up8 284, up16 284" for k in SIZES},
     **{("nib-example4d@q30", k): _MC.format(489, 534, 529, 539, 539) + ", up4 535, up8 538" for k in SIZES},
     **{("nib-example4d@q60", k): _MC.format(597, 586, 614, 624, 624) for k in SIZES},
-    ("sheet", 1): "issue 14: S gap: 1 MC vertex at 2.08 (bound 2), at a node of value 0 = iso (the Rust regress "
-    "leaves those out)",
-    ("sheet", 2): "issue 14: S gap: 6 MC vertices, up to 3.66 (bound 3), all at nodes of value 0 = iso (the Rust "
-    "regress leaves those out)",
 }
 
 IMAGES = os.path.join(FIXTURES, "images")

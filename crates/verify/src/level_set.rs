@@ -437,7 +437,8 @@ impl<'a> LevelSet<'a> {
         }
     }
 
-    /// The points of S on the voxel edges (each edge once; zero nodes included), in a fixed
+    /// The points of S on the voxel edges (each edge once; a tied node when it is on the
+    /// boundary of the regularized solid, [`Self::node_on_boundary`]), in a fixed
     /// order: the vertices of marching cubes at the same level.
     pub fn edge_crossings(&self) -> Vec<DVec3> {
         let b = 1i64 << STORED_FROM;
@@ -461,6 +462,41 @@ impl<'a> LevelSet<'a> {
         per_layer.concat()
     }
 
+    /// Whether node `(i, j, k)`, whose value is 0 (a tie with the iso value), is a point of the
+    /// boundary of the regularized solid: the inside reaches it (an edge neighbour is inside,
+    /// `< 0`: the interpolant is negative along that edge) and so does an outside with volume
+    /// (an edge neighbour is `> 0`, or one of the 8 cells around the node has no inside
+    /// corner: under the scan's convention, which puts a tie outside, that cell is outside).
+    /// Marching cubes puts a vertex at every tied node with an inside edge neighbour (its
+    /// crossing at `t = 0`); the nodes left out are the punctures of the inside (a point, a
+    /// line or a face of ties with no outside cell around it: `oracle`'s vanishing regions),
+    /// where the regularized solid has no surface, and the ties with no inside neighbour.
+    fn node_on_boundary(&self, i: i64, j: i64, k: i64) -> bool {
+        const STEPS: [(i64, i64, i64); 6] = [
+            (1, 0, 0),
+            (-1, 0, 0),
+            (0, 1, 0),
+            (0, -1, 0),
+            (0, 0, 1),
+            (0, 0, -1),
+        ];
+        let nb = STEPS.map(|(a, b, c)| self.node(i + a, j + b, k + c));
+        if !nb.iter().any(|&w| w < 0.0) {
+            return false;
+        }
+        if nb.iter().any(|&w| w > 0.0) {
+            return true;
+        }
+        // Every edge neighbour is inside or a tie: look for a cell around the node with no
+        // inside corner.
+        (0..8).any(|c: i64| {
+            let o = [i - (c & 1), j - ((c >> 1) & 1), k - ((c >> 2) & 1)];
+            (0..8).all(|d: i64| {
+                self.node(o[0] + (d & 1), o[1] + ((d >> 1) & 1), o[2] + ((d >> 2) & 1)) >= 0.0
+            })
+        })
+    }
+
     /// Crossings on the edges leaving the nodes `o + [0, b)^3` in the +x, +y, +z directions.
     fn block_crossings(&self, o: [i64; 3], b: i64, out: &mut Vec<DVec3>) {
         for k in o[2]..(o[2] + b).min(self.n[2] + 1) {
@@ -469,7 +505,9 @@ impl<'a> LevelSet<'a> {
                     let v = self.node(i, j, k);
                     let at = DVec3::new(i as f64, j as f64, k as f64);
                     if v == 0.0 {
-                        out.push(self.v2w.transform_point3(at));
+                        if self.node_on_boundary(i, j, k) {
+                            out.push(self.v2w.transform_point3(at));
+                        }
                         continue;
                     }
                     for (di, dj, dk) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {

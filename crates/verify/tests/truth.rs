@@ -389,3 +389,55 @@ fn failed_angles_count_the_triangles_below() {
     assert_eq!(r.status("angles"), Some(Status::Pass));
     assert!(!r.check("angles").unwrap().detail.contains("below"));
 }
+
+/// Tied nodes (value equal to the iso value) among the voxel-edge crossings: a tie that the
+/// inside and an outside with volume both reach is a point of S (marching cubes' vertex at
+/// `t = 0`), a puncture of the inside (a lone tie, a line of three) and a tie that no inside
+/// neighbour reaches are not.
+#[test]
+fn tied_nodes_are_crossings_only_on_the_solids_boundary() {
+    use verify::level_set::LevelSet;
+    let n = 12usize;
+    let idx = |i: usize, j: usize, k: usize| i + n * (j + n * k);
+    // Iso 1: a block of 2s (inside) in 0s, a lone 1 at its centre and a line of three 1s in
+    // it, a plateau of 1s beside it (the block's face at x = 8 touches it), and a 1 far off.
+    let mut v = vec![0.0f32; n * n * n];
+    for k in 2..9 {
+        for j in 2..9 {
+            for i in 2..8 {
+                v[idx(i, j, k)] = 2.0;
+            }
+        }
+    }
+    v[idx(4, 4, 4)] = 1.0;
+    for i in 4..7 {
+        v[idx(i, 6, 6)] = 1.0;
+    }
+    for k in 4..7 {
+        for j in 4..7 {
+            v[idx(8, j, k)] = 1.0;
+            v[idx(9, j, k)] = 1.0;
+        }
+    }
+    v[idx(1, 10, 10)] = 1.0;
+    let vol = Volume::new([n, n, n], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+    let s = ImageSurface::at_iso(vol, 1.0).unwrap();
+    let nodes: Vec<[i64; 3]> = LevelSet::new(&s)
+        .edge_crossings()
+        .into_iter()
+        .filter(|p| (*p - p.round()).abs().max_element() < 1e-12)
+        .map(|p| p.round().to_array().map(|x| x as i64))
+        .collect();
+    // The plateau's face at x = 8 touches the block; x = 9 and the far tie touch no inside.
+    let mut want: Vec<[i64; 3]> = (4..7)
+        .flat_map(|k| (4..7).map(move |j| [8, j, k]))
+        .collect();
+    let mut got = nodes.clone();
+    want.sort();
+    got.sort();
+    assert_eq!(got, want, "tied nodes among the crossings");
+    // Every other crossing is an exact point of S.
+    for p in LevelSet::new(&s).edge_crossings() {
+        assert!(s.value(p).abs() < 1e-12, "{p}");
+    }
+}

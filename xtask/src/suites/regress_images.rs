@@ -371,19 +371,13 @@ fn distances(
             false
         })
         .count();
-    // S -> mesh: every voxel-edge crossing between nodes of opposite signs (nodes at the iso
-    // value left out: on a plateau of them they are no surface of the regularized solid the
-    // mesher meshes, see the GUIDE's known limits).
+    // S -> mesh: every voxel-edge crossing between nodes of opposite signs, and every node at
+    // the iso value on the boundary of the regularized solid the mesher meshes (the tip of a
+    // sheet ending on a plateau of ties; not a puncture of the inside, see the GUIDE's known
+    // limits).
     let bvh = verify::intersect::triangle_bvh(&r.mesh);
     let dist = verify::distance::MeshDistance::new(&r.mesh, &bvh);
-    let mut pts = ls.edge_crossings();
-    let w2v = s.world_to_voxel();
-    pts.retain(|&p| {
-        // A node (the crossings are exact along their edge, so only a node's is integer on
-        // all three axes; 1e-9 voxel absorbs the round trip through the affine).
-        let u = w2v.transform_point3(p);
-        (u - u.round()).abs().max_element() > 1e-9
-    });
+    let pts = ls.edge_crossings();
     let far_s: Vec<(f64, DVec3)> = pts
         .par_iter()
         .filter_map(|p| {

@@ -59,17 +59,13 @@ impl Mesher<'_> {
         for (_, k, _) in self.restricted.iter() {
             k.iter().for_each(|v| used[v.index()] = true);
         }
-        let crossings: &Vec<DVec3> = self.scan.crossings.get_or_insert_with(|| {
-            let w2v = img.world_to_voxel();
-            let mut c = verify::level_set::LevelSet::new(img).edge_crossings();
-            // A node at the iso value is no crossing (on a plateau of them it is no surface of
-            // the regularized solid); only a node's point is integer on all three axes.
-            c.retain(|&p| {
-                let u = w2v.transform_point3(p);
-                (u - u.round()).abs().max_element() > 1e-9
-            });
-            c
-        });
+        // A node at the iso value is a crossing only where it is on the boundary of the
+        // regularized solid (the inside and an outside with volume both reach it: the tip of
+        // a sheet that ends on a plateau of ties); a puncture of the inside is none.
+        let crossings: &Vec<DVec3> = self
+            .scan
+            .crossings
+            .get_or_insert_with(|| verify::level_set::LevelSet::new(img).edge_crossings());
         let nearest = &mut self.scan.nearest;
         if nearest.len() != crossings.len() {
             *nearest = vec![(u32::MAX, f64::INFINITY); crossings.len()];
