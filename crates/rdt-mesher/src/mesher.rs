@@ -166,6 +166,10 @@ impl Mesher<'_> {
             if covered {
                 continue;
             }
+            // Images: scan components that no vertex reaches (ours, `crate::levels::missed`).
+            if self.reseed_missed()? {
+                continue;
+            }
             // Images: necks thinner than the sample (ours, `crate::levels::necks`).
             let t = std::time::Instant::now();
             let reseeded = self.reseed_necks()?;

@@ -206,6 +206,11 @@ pub struct Stats {
     pub cover_rounds: usize,
     /// Crossings inserted by the coverage rounds.
     pub cover_insertions: usize,
+    /// Rounds of reseeding of scan components with no vertex of Del_S(E) (images,
+    /// `crate::levels::missed`).
+    pub missed_rounds: usize,
+    /// Crossings inserted by those rounds.
+    pub missed_insertions: usize,
     /// Restricted facets queued (forced) by the neck reseeding because their vertices lie on
     /// different scan components (a bridge between two components).
     pub bridge_facets: usize,

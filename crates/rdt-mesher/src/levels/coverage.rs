@@ -212,14 +212,17 @@ fn stars(crossings: &[DVec3], far: &[(DVec3, f64)], radius: f64, taken: &[DVec3]
 }
 
 /// The cell of side `side` that holds `p`.
-fn cell_of(p: DVec3, side: f64) -> [i64; 3] {
+pub(super) fn cell_of(p: DVec3, side: f64) -> [i64; 3] {
     (p / side).floor().as_i64vec3().to_array()
 }
 
 /// A grid of cells of side `side` in which each item is listed in the 27 cells around the
 /// cell of its point, in the items' order: any point within `side` of an item's point finds
 /// the item in its own cell.
-fn spread_grid<T>(items: impl Iterator<Item = (DVec3, T)>, side: f64) -> FxHashMap<[i64; 3], Vec<T>>
+pub(super) fn spread_grid<T>(
+    items: impl Iterator<Item = (DVec3, T)>,
+    side: f64,
+) -> FxHashMap<[i64; 3], Vec<T>>
 where
     T: Copy,
 {

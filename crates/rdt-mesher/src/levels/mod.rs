@@ -1,6 +1,7 @@
 //! What runs after the queue of section 6.1 empties, level by level (as CGAL's surface mesher
 //! layers its refinement): on images, the coverage of the scan's crossings (`coverage`,
-//! ours) and the neck reseeding (`necks`, ours), the manifold patch
+//! ours), the reseeding of missed scan components (`missed`, ours) and the neck reseeding
+//! (`necks`, ours), the manifold patch
 //! of section 6.6.1 (`manifold`), and the final
 //! check of the scaffold (`scaffold`, ours), which may rebuild Del(E) without it; on sampled
 //! surfaces (images), the topological repair of what the patch leaves (`repair`, ours, with
@@ -14,6 +15,7 @@ mod coverage;
 mod holes;
 mod links;
 pub(crate) mod manifold;
+mod missed;
 pub(crate) mod necks;
 mod new_triangles;
 pub(crate) mod repair;

@@ -37,12 +37,30 @@ impl Labels {
 
     /// The component (index into the topology's pairs) of the point at voxel coordinates `v`,
     /// a point of S: the pair of the nearest inside and outside corners of its cell that
-    /// touch (the next nearest when they do not). `None` if no pair of corners touches.
+    /// touch (the next nearest when they do not). A point on a face, an edge or a node of the
+    /// grid (a crossing at a node whose value equals the iso value) is in several cells: when
+    /// the cell of `v.floor()` has no touching pair, the others are tried, in a fixed order.
+    /// `None` if no pair of corners touches.
     pub fn component_at(&self, v: DVec3) -> Option<usize> {
         if !v.is_finite() {
             return None;
         }
         let c = v.floor();
+        self.component_in_cell(v, c).or_else(|| {
+            // The other cells holding v: one step down on each axis where v is on a face.
+            let on = [0, 1, 2].map(|a| v[a] == c[a]);
+            (1..8usize)
+                .filter(|m| (0..3).all(|a| m & (1 << a) == 0 || on[a]))
+                .find_map(|m| {
+                    let d =
+                        DVec3::new((m & 1) as f64, ((m >> 1) & 1) as f64, ((m >> 2) & 1) as f64);
+                    self.component_in_cell(v, c - d)
+                })
+        })
+    }
+
+    /// [`Labels::component_at`] from the corners of the cell with origin `c`.
+    fn component_in_cell(&self, v: DVec3, c: DVec3) -> Option<usize> {
         // The corners by side, on the stack (8 in all).
         let mut ins = [(0.0f64, 0u32); 8];
         let mut outs = [(0.0f64, 0u32); 8];

@@ -178,6 +178,19 @@ mod tests {
     }
 
     #[test]
+    fn a_crossing_at_a_tied_node_has_its_component() {
+        // The block's corner voxel at the iso value: a point of S (an inside neighbour below,
+        // the background above) whose own cell, above it, has no inside corner; the cells
+        // below it name its component.
+        let s = block_with_ties(&[[7, 7, 7]]);
+        let t = s.topology();
+        assert_eq!(t.surface_components, 1);
+        let face = s.component_of(DVec3::new(1.5, 4.0, 4.0));
+        assert_eq!(face, Some(0));
+        assert_eq!(s.component_of(DVec3::splat(7.0)), face);
+    }
+
+    #[test]
     fn voxels_at_the_iso_value_inside_the_solid_vanish() {
         // One voxel, and a line of three, at the iso value: punctures, no surface.
         for ones in [vec![[4, 4, 4]], vec![[3, 4, 4], [4, 4, 4], [5, 4, 4]]] {

@@ -224,19 +224,43 @@ fn component_tet(
             }
         }
     }
-    // The deepest enclosed node among the candidate edges' ends.
-    let mut centre: Option<(f64, usize)> = None;
-    for &(p, _, q) in &cand {
-        for n in [p, q] {
-            if n == usize::MAX {
-                continue;
-            }
+    // The deepest enclosed node among the candidate edges' ends; when none is enclosed,
+    // among their edge neighbours. That happens where the ends are ties (nodes at the iso
+    // value, outside by the scan's convention): a cavity of a few voxels around one node
+    // strictly below the iso value, whose crossings sit at tied nodes next to it (the uint8
+    // MNI T1 at `--iso 171`). Without its node the seed was a tied node, the tip of one of the
+    // cavity's spikes, from which the refinement never reached the cavity.
+    let deepest = |nodes: &mut dyn Iterator<Item = usize>| {
+        let mut centre: Option<(f64, usize)> = None;
+        for n in nodes {
             let v = sign * s.node_value(n);
             if v > 0.0 && centre.is_none_or(|c| v > c.0) {
                 centre = Some((v, n));
             }
         }
-    }
+        centre
+    };
+    let ends = || {
+        cand.iter()
+            .flat_map(|&(p, _, q)| [p, q])
+            .filter(|&n| n != usize::MAX)
+    };
+    let nz = s.dims_isize()[2] as usize;
+    let centre = deepest(&mut ends()).or_else(|| {
+        deepest(&mut ends().flat_map(|n| {
+            let (x, y, z) = (n % nx, (n / nx) % ny, n / (nx * ny));
+            [
+                (x > 0).then(|| n - 1),
+                (x + 1 < nx).then(|| n + 1),
+                (y > 0).then(|| n - nx),
+                (y + 1 < ny).then(|| n + nx),
+                (z > 0).then(|| n - nx * ny),
+                (z + 1 < nz).then(|| n + nx * ny),
+            ]
+            .into_iter()
+            .flatten()
+        }))
+    });
     let mut pts: Vec<DVec3> = cand.into_iter().map(point).collect();
     if let Some((_, n)) = centre {
         // Crossings of rays from that node along the axes and body diagonals.
