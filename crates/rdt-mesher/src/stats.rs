@@ -195,6 +195,9 @@ pub struct Stats {
     pub refinement_insertions: usize,
     /// Points inserted by the rays of section 6.4.3.
     pub ray_insertions: usize,
+    /// Refinement points not inserted because a sample point lies closer to them than half
+    /// their ball's radius (an inexact construction, `crate::schedule::batch`).
+    pub unsound_centers: usize,
     /// Insertions forced by the manifold patch.
     pub manifold_insertions: usize,
     /// Rounds of neck reseeding (images: scan components split in Del_S(E), see
