@@ -140,17 +140,9 @@ impl Mesher<'_> {
             return Ok(false);
         }
         self.stats.cover_rounds += 1;
-        let mut any = false;
-        for p in pts {
-            if self.budget_exceeded() {
-                break;
-            }
-            if self.insert(p, None)? {
-                self.stats.cover_insertions += 1;
-                any = true;
-            }
-        }
-        Ok(any)
+        let inserted = self.insert_points(pts)?;
+        self.stats.cover_insertions += inserted;
+        Ok(inserted > 0)
     }
 }
 

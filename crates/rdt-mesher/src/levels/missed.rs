@@ -113,16 +113,8 @@ impl Mesher<'_> {
             .copied()
             .collect();
         self.stats.missed_rounds += 1;
-        let mut any = false;
-        for p in pts {
-            if self.budget_exceeded() {
-                break;
-            }
-            if self.insert(p, None)? {
-                self.stats.missed_insertions += 1;
-                any = true;
-            }
-        }
-        Ok(any)
+        let inserted = self.insert_points(pts)?;
+        self.stats.missed_insertions += inserted;
+        Ok(inserted > 0)
     }
 }

@@ -58,6 +58,21 @@ impl ScanCache {
 }
 
 impl Mesher<'_> {
+    /// Insert `pts` in order (points of S found by a level's round) until a budget is
+    /// exhausted; returns how many were new vertices.
+    pub(crate) fn insert_points(&mut self, pts: Vec<DVec3>) -> Result<usize, MeshError> {
+        let mut inserted = 0;
+        for p in pts {
+            if self.budget_exceeded() {
+                break;
+            }
+            if self.insert(p, None)? {
+                inserted += 1;
+            }
+        }
+        Ok(inserted)
+    }
+
     /// Rebuild Del(E) from the samples alone (the scaffold dropped) and re-scan it: the
     /// refinement then resumes as the paper's algorithm.
     pub(crate) fn drop_scaffold(&mut self) -> Result<(), MeshError> {

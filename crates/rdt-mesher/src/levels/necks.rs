@@ -93,17 +93,9 @@ impl Mesher<'_> {
             self.scan.rings_seen.insert(label, (margin, pieces));
         }
         self.t_oracle += t.elapsed();
-        let mut any = bridges > 0;
-        for p in pts {
-            if self.budget_exceeded() {
-                break;
-            }
-            if self.insert(p, None)? {
-                self.stats.neck_insertions += 1;
-                any = true;
-            }
-        }
-        Ok(any)
+        let inserted = self.insert_points(pts)?;
+        self.stats.neck_insertions += inserted;
+        Ok(bridges > 0 || inserted > 0)
     }
 
     /// Queue (forced, as the manifold patch does) the restricted facets whose vertices lie on
