@@ -20,7 +20,6 @@
 
 use crate::error::MeshError;
 use crate::state::Mesher;
-use delaunay3::VertexId;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -50,22 +49,14 @@ impl Mesher<'_> {
         // their three vertices on it. The repair's `separate` rule cuts every vertex of a
         // facet that bridges two components, so a component whose every vertex is on such a
         // facet can vanish whole (measured: the MNI crop at iso 171, 1 mm, component 49).
-        let n = self.tri.num_vertices();
-        let mut used = vec![false; n];
-        for (_, k, _) in self.restricted.iter() {
-            k.iter().for_each(|v| used[v.index()] = true);
-        }
-        let tri = &self.tri;
-        let label: Vec<u32> = (0..n)
-            .into_par_iter()
-            .map(|v| {
-                used[v]
-                    .then(|| img.component_of(tri.point(VertexId::from_index(v))))
-                    .flatten()
-                    .filter(|&c| c < nc)
-                    .map_or(u32::MAX, |c| c as u32)
-            })
+        // The labels are kept per vertex between rounds (`necks`' cache): each vertex is
+        // labelled once in the run.
+        let label: Vec<u32> = self
+            .vertex_labels(img)
+            .into_iter()
+            .map(|l| l.filter(|&c| c < nc).map_or(u32::MAX, |c| c as u32))
             .collect();
+        let n = label.len();
         let mut mixed = vec![false; n];
         for (_, k, _) in self.restricted.iter() {
             let l = label[k[0].index()];
@@ -75,7 +66,7 @@ impl Mesher<'_> {
         }
         let mut has = vec![false; nc];
         for v in 0..n {
-            if used[v] && !mixed[v] && label[v] != u32::MAX {
+            if !mixed[v] && label[v] != u32::MAX {
                 has[label[v] as usize] = true;
             }
         }

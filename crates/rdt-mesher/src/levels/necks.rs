@@ -119,7 +119,7 @@ impl Mesher<'_> {
     /// where the scan gives none). Each vertex's is computed once, in parallel (each
     /// independently: the result does not depend on the thread count), and kept in
     /// [`crate::levels::ScanCache::labels`].
-    fn vertex_labels(&mut self, img: &ImageSurface) -> Vec<Option<usize>> {
+    pub(super) fn vertex_labels(&mut self, img: &ImageSurface) -> Vec<Option<usize>> {
         let n = self.tri.num_vertices();
         let mut used = vec![false; n];
         for (_, k, _) in self.restricted.iter() {
