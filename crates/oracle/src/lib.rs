@@ -38,6 +38,7 @@
 pub mod catalog;
 mod error;
 pub mod expr;
+mod grid;
 pub mod image;
 mod imls;
 pub mod implicit;

@@ -25,6 +25,16 @@ fn t1_crop() -> Input<'static> {
     .unwrap()
 }
 
+/// An `n`^3 image of 1-unit voxels at the identity affine, meshed at `iso`.
+fn cube_image(n: usize, voxels: oracle::image::Voxels, iso: f64, name: &str) -> Input<'static> {
+    let vol = oracle::image::Volume::new([n; 3], voxels, glam::DAffine3::IDENTITY).unwrap();
+    let opts = oracle::image::ImageOptions {
+        iso: Some(iso),
+        ..Default::default()
+    };
+    Input::image(oracle::image::ImageSurface::new(vol, &opts).unwrap(), name)
+}
+
 #[test]
 fn every_scan_component_is_accounted_for_and_a_removed_piece_is_missed() {
     let input = t1_crop();
@@ -101,20 +111,7 @@ fn voxels_at_the_iso_value_inside_the_solid_are_not_surfaces() {
     for c in 0..8 {
         v[idx(10 + (c & 1), 10 + ((c >> 1) & 1), 9 + (c >> 2))] = 0.0;
     }
-    let vol = oracle::image::Volume::new(
-        [n; 3],
-        oracle::image::Voxels::F32(v),
-        glam::DAffine3::IDENTITY,
-    )
-    .unwrap();
-    let opts = oracle::image::ImageOptions {
-        iso: Some(1.0),
-        ..Default::default()
-    };
-    let input = Input::image(
-        oracle::image::ImageSurface::new(vol, &opts).unwrap(),
-        "block",
-    );
+    let input = cube_image(n, oracle::image::Voxels::F32(v), 1.0, "block");
     assert_eq!(input.components, Some(2));
     let req = Request {
         size: SizeRequest::Size(1.0),
@@ -174,20 +171,7 @@ fn a_flat_cavity_at_voxels_equal_to_the_iso_value_is_meshed() {
     v[idx(11, 10, 10)] = 180;
     v[idx(10, 10, 9)] = 173;
     v[idx(10, 10, 11)] = 172;
-    let vol = oracle::image::Volume::new(
-        [n; 3],
-        oracle::image::Voxels::U8(v),
-        glam::DAffine3::IDENTITY,
-    )
-    .unwrap();
-    let opts = oracle::image::ImageOptions {
-        iso: Some(171.0),
-        ..Default::default()
-    };
-    let input = Input::image(
-        oracle::image::ImageSurface::new(vol, &opts).unwrap(),
-        "flat cavity",
-    );
+    let input = cube_image(n, oracle::image::Voxels::U8(v), 171.0, "flat cavity");
     assert_eq!(input.components, Some(2));
     for size in [1.0, 2.0, 4.0] {
         let req = Request {

@@ -209,18 +209,7 @@ fn blocked_cells(
 
 /// The 6-neighbours of cell `c` of the `n³` grid (x fastest) that are in the grid.
 fn neighbours6(c: usize, n: usize) -> impl Iterator<Item = usize> {
-    let (i, j, k) = (c % n, (c / n) % n, c / (n * n));
-    let nn = n * n;
-    [
-        (i > 0).then(|| c - 1),
-        (i + 1 < n).then(|| c + 1),
-        (j > 0).then(|| c - n),
-        (j + 1 < n).then(|| c + n),
-        (k > 0).then(|| c - nn),
-        (k + 1 < n).then(|| c + nn),
-    ]
-    .into_iter()
-    .flatten()
+    crate::grid::neighbours6(c, [n; 3])
 }
 
 /// The 6-connected components of the clear cells of the `n³` grid (breadth-first, in index

@@ -245,22 +245,9 @@ fn component_tet(
             .flat_map(|&(p, _, q)| [p, q])
             .filter(|&n| n != usize::MAX)
     };
-    let nz = s.dims_isize()[2] as usize;
-    let centre = deepest(&mut ends()).or_else(|| {
-        deepest(&mut ends().flat_map(|n| {
-            let (x, y, z) = (n % nx, (n / nx) % ny, n / (nx * ny));
-            [
-                (x > 0).then(|| n - 1),
-                (x + 1 < nx).then(|| n + 1),
-                (y > 0).then(|| n - nx),
-                (y + 1 < ny).then(|| n + nx),
-                (z > 0).then(|| n - nx * ny),
-                (z + 1 < nz).then(|| n + nx * ny),
-            ]
-            .into_iter()
-            .flatten()
-        }))
-    });
+    let dims = s.dims_isize().map(|d| d as usize);
+    let centre = deepest(&mut ends())
+        .or_else(|| deepest(&mut ends().flat_map(|n| crate::grid::neighbours6(n, dims))));
     let mut pts: Vec<DVec3> = cand.into_iter().map(point).collect();
     if let Some((_, n)) = centre {
         // Crossings of rays from that node along the axes and body diagonals.
