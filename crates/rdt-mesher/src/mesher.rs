@@ -48,6 +48,7 @@ fn after_refinement(out: &mut MeshResult, surface: &dyn Surface, opts: &MeshOpti
     let t_bridges = t.elapsed().as_secs_f64();
     let t = Instant::now();
     crate::levels::components::apply(out, surface, opts);
+    crate::levels::skinny::apply(out, surface, opts);
     let t_components = t.elapsed().as_secs_f64();
     let st = &mut out.stats;
     st.time_repair_s = t_repair;

@@ -214,6 +214,17 @@ pub struct Stats {
     pub missed_rounds: usize,
     /// Crossings inserted by those rounds.
     pub missed_insertions: usize,
+    /// Edge flips of skinny triangles after the topological decisions (images,
+    /// `crate::levels::skinny`).
+    pub skinny_flips: usize,
+    /// Edge collapses of skinny triangles after the topological decisions.
+    pub skinny_collapses: usize,
+    /// Vertices of skinny triangles moved on S after the topological decisions.
+    pub skinny_moves: usize,
+    /// Triangles below the angle bound before those edits (images with a resolution).
+    pub skinny_before: usize,
+    /// Triangles below the angle bound after them.
+    pub skinny_after: usize,
     /// Restricted facets queued (forced) by the neck reseeding because their vertices lie on
     /// different scan components (a bridge between two components).
     pub bridge_facets: usize,

@@ -35,8 +35,13 @@ pub fn triangle_bvh(mesh: &TriMesh) -> TriangleBvh {
 
 /// Do triangles `i` and `j` (both non-degenerate) intersect improperly?
 pub fn pair_intersects(mesh: &TriMesh, i: usize, j: usize) -> bool {
-    let (ti, tj) = (mesh.triangles[i], mesh.triangles[j]);
-    let p = |v: u32| mesh.vertices[v as usize];
+    triangles_intersect(&mesh.vertices, mesh.triangles[i], mesh.triangles[j])
+}
+
+/// [`pair_intersects`] for two triangles given by their corners' indices into `vertices`
+/// (triangles not, or not yet, in a mesh: a local edit tested before it is made).
+pub fn triangles_intersect(vertices: &[DVec3], ti: [u32; 3], tj: [u32; 3]) -> bool {
+    let p = |v: u32| vertices[v as usize];
     let shared: Vec<(usize, usize)> = (0..3)
         .flat_map(|a| (0..3).map(move |b| (a, b)))
         .filter(|&(a, b)| ti[a] == tj[b])

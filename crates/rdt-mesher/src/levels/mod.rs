@@ -20,6 +20,7 @@ pub(crate) mod necks;
 mod new_triangles;
 pub(crate) mod repair;
 pub(crate) mod scaffold;
+pub(crate) mod skinny;
 mod tubes;
 
 use crate::error::MeshError;

@@ -609,6 +609,12 @@ pub(super) fn measure_angles(out: &mut crate::MeshResult, opts: &crate::MeshOpti
     let st = &mut out.stats;
     st.min_angle_deg = min_angle;
     let bound = opts.criteria.min_angle_deg;
+    if min_angle >= bound {
+        // Edits after the decisions (`skinny`) can bring every triangle back over the bound.
+        st.unmet
+            .retain(|u| !matches!(u, crate::Unmet::Angle { .. }));
+        return;
+    }
     let mut has_angle = false;
     for u in st.unmet.iter_mut() {
         if let crate::Unmet::Angle { min_angle_deg, .. } = u {
