@@ -125,7 +125,7 @@ impl Grid {
     }
 }
 
-/// On an image (a run with a resolution h): [`improve`] with the run's angle bound and
+/// On an image (a run with a resolution h) with topological decisions: [`improve`] with the run's angle bound and
 /// collapses and moves up to h / 2, its edits counted in the figures (`skinny_flips`,
 /// `skinny_collapses`, `skinny_moves`), the vertices, facets, smallest angle and largest r / sigma measured
 /// again.
@@ -137,6 +137,10 @@ pub(crate) fn apply(
     let Some(h) = opts.resolution else {
         return;
     };
+    if out.stats.topology_decisions.is_empty() {
+        // Every triangle is a restricted facet, judged by the refinement.
+        return;
+    }
     let bound = opts.criteria.min_angle_deg;
     let e = improve(&mut out.mesh, &mut out.balls, surface, bound, 0.5 * h);
     let st = &mut out.stats;
