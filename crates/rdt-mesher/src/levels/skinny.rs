@@ -13,7 +13,8 @@
 //! - **move** one of its corners to S: from its position, all or half of the way to the mean
 //!   of its neighbours, then along its star's normal to the nearest crossing of S (the
 //!   oracle's intersection oracle, section 6.4.2), so every vertex stays a point of S (or,
-//!   for the repair's centroid vertices, becomes one);
+//!   for the repair's centroid vertices, becomes one), on an image on the same component of
+//!   the voxel scan;
 //! - **flip** one of its edges, when the two triangles at it are nearly coplanar.
 //!
 //! An edit is made only when all of these hold (the invariants the output keeps):
@@ -415,7 +416,7 @@ impl<'s> Work<'s> {
             .into_iter()
             .min_by(|x, y| x.distance_squared(q).total_cmp(&y.distance_squared(q)))?;
         let old = self.verts[v as usize];
-        if n == DVec3::ZERO || p.distance(old) > max_move || p == old {
+        if n == DVec3::ZERO || p.distance(old) > max_move || p == old || !self.same_part(v, p) {
             return None;
         }
         let w = self.verts.len() as u32;
@@ -438,6 +439,27 @@ impl<'s> Work<'s> {
             create,
             kind: Kind::Move,
         })
+    }
+
+    /// On an image, does `p` lie on the voxel scan's component of vertex `v` (or, when `v`
+    /// is on none, such as a closing's centroid vertex, on one of its neighbours')? A move
+    /// must not carry a vertex to another component of S (a speck within half a voxel):
+    /// that would join the two (the repair's rule 0).
+    fn same_part(&self, v: u32, p: DVec3) -> bool {
+        let Some(img) = self.surface.as_image() else {
+            return true;
+        };
+        let to = img.component_of(p);
+        match img.component_of(self.verts[v as usize]) {
+            Some(c) => to == Some(c),
+            None => {
+                to.is_some()
+                    && self
+                        .neighbours(v)
+                        .iter()
+                        .any(|&u| img.component_of(self.verts[u as usize]) == to)
+            }
+        }
     }
 
     /// Collapse vertex `b` into its neighbour `a`, if the link condition holds.
