@@ -144,6 +144,39 @@ fn skinny_moves_keep_each_vertex_on_its_scan_component() {
 }
 
 #[test]
+fn verify_counts_the_specks_the_repair_dropped_as_dropped() {
+    // The same phantom through the pipeline: its 2 specks whose only pieces were slivers are
+    // `dropped` in the mesher's decisions and in `verify`'s accounting, which PASSes.
+    let p = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/images/phantom_i16_32.nii.gz"
+    );
+    let mut io = rdt_mesher::pipeline::InputOptions::default();
+    io.image.iso = Some(3.0);
+    let input = rdt_mesher::pipeline::Input::open(p, &io).expect("the fixture opens");
+    let req = rdt_mesher::pipeline::Request {
+        size: rdt_mesher::pipeline::SizeRequest::Size(12.0),
+        ..Default::default()
+    };
+    let out = rdt_mesher::pipeline::run(&input, &req).expect("meshing succeeds");
+    let said = out
+        .stats
+        .component_decisions
+        .iter()
+        .filter(|d| d.kind == ComponentKind::Dropped)
+        .count();
+    let rep = out.report.expect("verified");
+    let acc = rep.scan_components.as_ref().expect("an image's accounting");
+    assert_eq!((said, acc.dropped, acc.missed), (2, 2, 0));
+    assert_eq!(
+        rep.status("components-sampled"),
+        Some(verify::Status::Pass),
+        "{:?}",
+        rep.check("components-sampled")
+    );
+}
+
+#[test]
 fn min_component_drops_specks_and_reports_them() {
     let s = crop(190.5);
     let all = run(&s, 2.0, Some(1.0), None);

@@ -137,8 +137,10 @@ pub struct Options {
     /// Delaunay ball radius of the facet nearest to the seed (the mesh's own scale there; see
     /// the `components-sampled` check).
     pub seed_tolerance: Option<f64>,
-    /// Images: a vertex of each mesh piece removed on request (`--min-component`); their
-    /// voxel-scan components count as dropped, not missed ([`scan_components::account`]).
+    /// Images: a point of each mesh piece removed by a stated rule (`--min-component`, or
+    /// the mesher's repair dropping a sliver: a piece with no interior vertex); when no mesh
+    /// vertex lies on their voxel-scan components, those count as dropped, not missed
+    /// ([`scan_components::account`]).
     pub dropped_points: Vec<DVec3>,
 }
 

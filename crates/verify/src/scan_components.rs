@@ -34,7 +34,8 @@ pub enum Fate {
     Split,
     /// Mesh vertices on it but no piece of its own: part of a neighbour's piece.
     Joined,
-    /// Removed on request (`--min-component`).
+    /// Removed by a stated rule of the mesher (`--min-component`, a sliver piece), passed in
+    /// `Options::dropped_points`.
     Dropped,
     /// No mesh piece and not removed on request.
     Missed,
@@ -123,8 +124,9 @@ impl ScanComponents {
     }
 }
 
-/// The accounting of `mesh` against `image`'s voxel scan; `dropped`: a vertex of each mesh
-/// piece removed on request (their components count as dropped, not missed).
+/// The accounting of `mesh` against `image`'s voxel scan; `dropped`: a point of each mesh
+/// piece removed by a stated rule (their components count as dropped, not missed, when no
+/// vertex of the mesh is on them).
 pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) -> ScanComponents {
     let topo = image.topology();
     let n = topo.component_seeds.len();

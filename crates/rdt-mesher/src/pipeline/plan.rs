@@ -453,7 +453,10 @@ pub fn data_support(
 
 /// The verifier's options common to both modes: the mesh's surface balls, the certified
 /// `epsilon`, the requested angle bound (less 1e-9 for rounding), the control points as
-/// component seeds, the request's seed, and a vertex of each component dropped on request.
+/// component seeds, the request's seed, and a point of each component dropped by a stated
+/// rule (`--min-component`, or the repair's sliver rule: a piece with no interior vertex, a
+/// component the size does not resolve), so that `verify` counts them as dropped, as the
+/// mesher's `component_decisions` do.
 fn verify_options(
     input: &Input,
     request: &Request,
@@ -474,6 +477,7 @@ fn verify_options(
             .iter()
             .filter_map(|d| match d.kind {
                 crate::DecisionKind::DropSmallComponent { vertex, .. } => Some(vertex),
+                crate::DecisionKind::DropSliver => Some(d.center),
                 _ => None,
             })
             .collect(),
