@@ -125,6 +125,15 @@ pub trait Surface: Send + Sync {
         0.0
     }
 
+    /// Whether S near `p` is the surface the input data shows: `None` (the default) for
+    /// backends where S is given everywhere (functions, images, meshes). A point set answers
+    /// `Some(true)` where its value is the IMLS quotient of the data alone and `Some(false)`
+    /// beyond (an extrapolation, the far field's sign boundary), where no theorem speaks of
+    /// S. `verify` measures the theorems' figures (normals, theorem 4.7) where it holds.
+    fn data_defined(&self, _p: DVec3) -> Option<bool> {
+        None
+    }
+
     /// The image behind the surface, when it is one: its value is a trilinear interpolant
     /// of grid values, so `verify` measures distances to S exactly, cell by cell, instead of
     /// trusting [`Surface::project`]. Default `None`.
@@ -167,6 +176,9 @@ impl<S: Surface + ?Sized> Surface for &S {
     }
     fn normal_uncertainty_deg(&self, p: DVec3) -> f64 {
         (**self).normal_uncertainty_deg(p)
+    }
+    fn data_defined(&self, p: DVec3) -> Option<bool> {
+        (**self).data_defined(p)
     }
     fn as_image(&self) -> Option<&crate::image::ImageSurface> {
         (**self).as_image()

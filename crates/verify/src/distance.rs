@@ -115,7 +115,24 @@ pub struct Geometry {
     pub bounding_radius: f64,
     /// hausdorff / bounding radius.
     pub hausdorff_relative: f64,
+    /// On the facets given as trusted ([`crate::Options::trusted_facets`]), measured in
+    /// the same pass; `normals` is then measured on them only.
+    pub trusted: Option<TrustedPart>,
     pub normals: NormalDeviation,
+}
+
+/// The figures of the trusted facets (a point set's facets within the data's band: S
+/// elsewhere is the far field's sign boundary, not a surface the data shows).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct TrustedPart {
+    /// Trusted facets, and all facets.
+    pub facets: usize,
+    pub of: usize,
+    /// Their mesh -> S maximum, the S -> mesh maximum of the points of S found for their
+    /// samples, and the larger of the two.
+    pub mesh_to_surface_max: f64,
+    pub surface_to_mesh_max: f64,
+    pub hausdorff: f64,
 }
 
 /// Angle between each facet's normal and the surface gradient at its three vertices.
@@ -245,11 +262,14 @@ fn mesh_samples(
     measure: &Measure<'_>,
     per_edge: usize,
     dist: Option<&MeshDistance<'_>>,
-) -> (Acc, Acc, Counts) {
+    trusted: Option<&[bool]>,
+) -> (Acc, Acc, Counts, [Acc; 2]) {
     const CHUNK: usize = 1024;
     struct Chunk {
         m2s: Acc,
         s2m: Acc,
+        /// `m2s` and `s2m` of the trusted facets' samples.
+        trusted: [Acc; 2],
         n: Counts,
         /// Largest lower bound of the chunk's samples.
         floor: f64,
@@ -259,12 +279,15 @@ fn mesh_samples(
     let per_chunk: Vec<Chunk> = mesh
         .triangles
         .par_chunks(CHUNK)
-        .map(|tris| {
+        .enumerate()
+        .map(|(k, tris)| {
             let (mut m2s, mut s2m, mut n) = (Acc::default(), Acc::default(), Counts::default());
+            let mut tr = [Acc::default(), Acc::default()];
             let mut pts = Vec::new();
             let mut measured: Vec<(DVec3, f64)> = Vec::new();
             let mut floor = f64::NEG_INFINITY;
-            for t in tris {
+            for (i, t) in tris.iter().enumerate() {
+                let is_trusted = trusted.is_some_and(|m| m.get(k * CHUNK + i) == Some(&true));
                 let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
                 let edge = (b - a).length().max((c - b).length()).max((a - c).length());
                 pts.clear();
@@ -277,8 +300,15 @@ fn mesh_samples(
                             floor = floor.max(lower);
                             n.corrected += (flag == Flag::Corrected) as usize;
                             n.bounded += (flag == Flag::Bounded) as usize;
+                            if is_trusted {
+                                tr[0].add(p, d);
+                            }
                             if let Some(dd) = dist {
-                                s2m.add(q, dd.nearest(q).map_or(f64::INFINITY, |x| x.1));
+                                let e = dd.nearest(q).map_or(f64::INFINITY, |x| x.1);
+                                s2m.add(q, e);
+                                if is_trusted {
+                                    tr[1].add(q, e);
+                                }
                             }
                         }
                         None => n.fails += 1,
@@ -293,6 +323,7 @@ fn mesh_samples(
             Chunk {
                 m2s,
                 s2m,
+                trusted: tr,
                 n,
                 floor,
                 candidates,
@@ -300,6 +331,7 @@ fn mesh_samples(
         })
         .collect();
     let (mut m2s, mut s2m, mut n) = (Acc::default(), Acc::default(), Counts::default());
+    let mut tr = [Acc::default(), Acc::default()];
     let floor = per_chunk
         .iter()
         .map(|c| c.floor)
@@ -307,6 +339,8 @@ fn mesh_samples(
     for c in &per_chunk {
         m2s.merge(&c.m2s);
         s2m.merge(&c.s2m);
+        tr[0].merge(&c.trusted[0]);
+        tr[1].merge(&c.trusted[1]);
         n.fails += c.n.fails;
         n.corrected += c.n.corrected;
         n.bounded += c.n.bounded;
@@ -337,7 +371,7 @@ fn mesh_samples(
             m2s.argmax = Some(p);
         }
     }
-    (m2s, s2m, n)
+    (m2s, s2m, n, tr)
 }
 
 /// S -> mesh statistics of the given samples of S (exact nearest triangle).
@@ -365,18 +399,29 @@ pub fn mesh_to_surface(
     surface: &dyn Surface,
     per_edge: usize,
 ) -> (DistanceStats, usize) {
-    let (m2s, _, n) = mesh_samples(mesh, &Measure::new(surface), per_edge, None);
+    let (m2s, _, n, _) = mesh_samples(mesh, &Measure::new(surface), per_edge, None, None);
     (m2s.stats(), n.fails)
 }
 
 /// Normal deviation of the facets against the surface gradient.
 pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviation {
+    normal_deviation_on(mesh, surface, None)
+}
+
+/// [`normal_deviation`] on the facets `facets` marks (all when `None`).
+pub fn normal_deviation_on(
+    mesh: &TriMesh,
+    surface: &dyn Surface,
+    facets: Option<&[bool]>,
+) -> NormalDeviation {
     // Per facet: (angle, the surface's normal uncertainty) at each vertex, and "faces inward".
     type PerFacet = ([Option<(f64, f64)>; 3], bool);
     let per: Vec<PerFacet> = mesh
         .triangles
         .par_iter()
-        .map(|t| {
+        .enumerate()
+        .filter(|(i, _)| facets.is_none_or(|m| m.get(*i) == Some(&true)))
+        .map(|(_, t)| {
             let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
             let n = (b - a).cross(c - a).normalize_or_zero();
             let mut out = [None; 3];
@@ -426,6 +471,25 @@ pub fn normal_deviation(mesh: &TriMesh, surface: &dyn Surface) -> NormalDeviatio
     nd
 }
 
+/// The facets where S is the surface the data shows ([`Surface::data_defined`] at their
+/// corners and centroid); `None` when the surface makes no such distinction or every facet
+/// is one.
+fn data_defined_facets(mesh: &TriMesh, surface: &dyn Surface) -> Option<Vec<bool>> {
+    let first = mesh.vertices.first()?;
+    surface.data_defined(*first)?;
+    let ok = |p: DVec3| surface.data_defined(p) == Some(true);
+    let at_vertex: Vec<bool> = mesh.vertices.par_iter().map(|&p| ok(p)).collect();
+    let mask: Vec<bool> = mesh
+        .triangles
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            t.iter().all(|&i| at_vertex[i as usize]) && ok((a + b + c) / 3.0)
+        })
+        .collect();
+    mask.iter().any(|&t| !t).then_some(mask)
+}
+
 /// Compute [`Geometry`]. `surface_samples`: dense samples of S; if `None`, the points of S on
 /// the voxel edges for an image ([`LevelSet::edge_crossings`]), else the points of S found
 /// for the mesh samples (they cover only the parts of S near the mesh).
@@ -448,6 +512,8 @@ pub(crate) fn geometry_labelled(
     surface_samples: Option<&[DVec3]>,
     label: Option<&str>,
 ) -> Geometry {
+    let trusted = data_defined_facets(mesh, surface);
+    let trusted = trusted.as_deref();
     let dist = MeshDistance::new(mesh, bvh);
     let measure = Measure::new(surface);
     let own = match (&measure, surface_samples) {
@@ -455,7 +521,13 @@ pub(crate) fn geometry_labelled(
         _ => None,
     };
     let given = surface_samples.or(own.as_deref());
-    let (m2s, s2m, n) = mesh_samples(mesh, &measure, per_edge, given.is_none().then_some(&dist));
+    let (m2s, s2m, n, tr) = mesh_samples(
+        mesh,
+        &measure,
+        per_edge,
+        Some(&dist).filter(|_| given.is_none() || trusted.is_some()),
+        trusted,
+    );
     let (surface_to_mesh, source, covering) = match (given, &measure) {
         (Some(s), Measure::LevelSet(ls)) if surface_samples.is_none() => (
             surface_to_mesh(&dist, s),
@@ -499,6 +571,16 @@ pub(crate) fn geometry_labelled(
         hausdorff,
         bounding_radius,
         hausdorff_relative: hausdorff / bounding_radius,
-        normals: normal_deviation(mesh, surface),
+        trusted: trusted.map(|m| {
+            let [a, b] = tr.map(|x| x.stats().max);
+            TrustedPart {
+                facets: m.iter().filter(|&&t| t).count(),
+                of: mesh.triangles.len(),
+                mesh_to_surface_max: a,
+                surface_to_mesh_max: b,
+                hausdorff: a.max(b),
+            }
+        }),
+        normals: normal_deviation_on(mesh, surface, trusted),
     }
 }

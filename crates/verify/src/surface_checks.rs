@@ -76,9 +76,26 @@ fn hausdorff_check(
         },
     );
     let normals = g.normals.clone();
-    let hausdorff = g.hausdorff;
+    // The theorems speak of S where it is known: on a point set, the trusted facets.
+    let hausdorff = g.trusted.as_ref().map_or(g.hausdorff, |t| t.hausdorff);
     r.geometry = Some(g);
     (normals, hausdorff)
+}
+
+/// On a point set with facets outside the data's band: where the figure was measured and
+/// why the rest has no guarantee (appended to the theorem checks' lines).
+fn trusted_note(r: &Report) -> String {
+    match r.geometry.as_ref().and_then(|g| g.trusted.as_ref()) {
+        Some(t) if t.facets < t.of => format!(
+            "; measured on the {} of {} facets where S is the surface the data shows; the \
+             other {} (beyond the data: S there is an extrapolation or the far field's sign \
+             boundary) have no guarantee",
+            t.facets,
+            t.of,
+            t.of - t.facets
+        ),
+        _ => String::new(),
+    }
 }
 
 /// The d_M function, its supremum and a description, from [`Options::dm`]; the error's text
@@ -172,10 +189,18 @@ fn certificate_checks(
         opts.max_listed,
     );
     let (status, detail) = epsilon_verdict(&cert, opts.epsilon_derived);
+    let note = trusted_note(r);
+    let detail = match status {
+        Status::Pass => format!(
+            "{detail}{}",
+            note.replacen("measured on", "they apply on", 1)
+        ),
+        _ => detail,
+    };
     r.push("loose-epsilon", status, detail);
     let hb = certificate::hausdorff_bound(cert.eps_achieved, *sup, hausdorff.unwrap_or(f64::NAN));
     let figures = format!(
-        "measured Hausdorff {:.3e} vs 4.5 eps^2 d_M^sup = {:.3e} (eps {:.4}, d_M^sup {:.4})",
+        "measured Hausdorff {:.3e} vs 4.5 eps^2 d_M^sup = {:.3e} (eps {:.4}, d_M^sup {:.4}){note}",
         hb.hausdorff, hb.bound, hb.eps, hb.dm_sup
     );
     let (status, detail) = if hausdorff.is_none() {
@@ -273,8 +298,12 @@ fn normals_check(r: &mut Report, mesh: &TriMesh, normals: &NormalDeviation) {
         .filter(|e| e.is_finite());
     let mut measured = format!(
         "facet normal vs surface gradient at vertices: max {:.3} deg (as lines {:.3} deg), \
-         mean {:.3} deg, {} facets facing inward",
-        normals.max_deg, normals.max_line_deg, normals.mean_deg, normals.inverted_facets
+         mean {:.3} deg, {} facets facing inward{}",
+        normals.max_deg,
+        normals.max_line_deg,
+        normals.mean_deg,
+        normals.inverted_facets,
+        trusted_note(r)
     );
     if normals.max_uncertainty_deg > 0.0 {
         measured += &format!(
@@ -283,7 +312,11 @@ fn normals_check(r: &mut Report, mesh: &TriMesh, normals: &NormalDeviation) {
             normals.max_uncertainty_deg, normals.max_excess_line_deg
         );
     }
-    let facets = mesh.triangles.len();
+    let facets = r
+        .geometry
+        .as_ref()
+        .and_then(|g| g.trusted.as_ref())
+        .map_or(mesh.triangles.len(), |t| t.facets);
     match rho.and_then(certificate::normal_bound_deg) {
         // Whatever the sampling, a mesh whose facets mostly face inward is inside out.
         _ if facets > 0 && 2 * normals.inverted_facets > facets => r.push(

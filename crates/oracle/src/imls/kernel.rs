@@ -158,6 +158,12 @@ impl PointSetSurface {
         )
     }
 
+    /// Is the value at `x` the plain IMLS quotient (the `true` of `value_from_sums`)?
+    pub(super) fn plain_imls_at(&self, x: DVec3) -> bool {
+        let s = self.sums_impl::<false>(x);
+        band_weight(s.band2) >= 1.0 && s.den >= MIN_WEIGHT
+    }
+
     /// Diagnostics: at `x`, the total plain kernel weight `Σ φ_i(x)` (below 1 the value
     /// blends into the far field), the smallest distance to a point in band radii, squared
     /// (`∞` if none; 0 without the band), and the number of points whose support contains `x`.

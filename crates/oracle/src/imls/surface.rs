@@ -48,6 +48,13 @@ impl Surface for PointSetSurface {
             .collect()
     }
 
+    /// Where the value is the plain IMLS quotient (within the data's band, kernel weight at
+    /// least `MIN_WEIGHT`): the points where `Surface::value` takes no far-field term.
+    fn data_defined(&self, x: DVec3) -> Option<bool> {
+        let inside = x.is_finite() && (x - self.sphere.center).length() < self.sphere.radius;
+        Some(inside && self.plain_imls_at(x))
+    }
+
     fn gradient(&self, x: DVec3) -> DVec3 {
         if !x.is_finite() {
             return DVec3::NAN;
