@@ -152,9 +152,9 @@ fn a_clean_scan_is_the_same_with_and_without_the_rule() {
 /// closed, so about a third of it lies beyond the data, where S is an extrapolation and then
 /// the far field's sign boundary: no theorem speaks of it, and there the facets face against
 /// the oracle's gradient and lie far from its projection. The certificate measures the
-/// theorems' figures (normals, theorem 4.7) on the facets where S is the data's surface, says
-/// how many it left out, and passes; measured on every facet it FAILed both (a false alarm:
-/// the same mesh, 2026-12-05).
+/// distances and the theorems' figures (normals, theorem 4.7) on the facets where S is the
+/// data's surface, says how many it left out, and passes; measured on every facet it FAILed
+/// both (a false alarm: the same mesh, 2026-12-05).
 #[test]
 fn the_theorems_are_checked_where_the_data_defines_s() {
     let mut rng = oracle::roots::SplitMix64(2);
@@ -182,7 +182,6 @@ fn the_theorems_are_checked_where_the_data_defines_s() {
         .as_ref()
         .expect("a point set tells where S is the data's");
     assert!(3 * t.facets > t.of && 4 * t.facets < 3 * t.of, "{t:?}");
-    assert!(t.hausdorff < 0.1 * g.hausdorff, "{t:?} vs {}", g.hausdorff);
     for name in ["theorem-4.7", "normals"] {
         let c = rep.check(name).unwrap();
         assert_eq!(c.status, Status::Pass, "{c:?}");
@@ -191,6 +190,7 @@ fn the_theorems_are_checked_where_the_data_defines_s() {
             "{c:?}"
         );
     }
-    // Every facet, as before: the figures over the whole mesh exceed both bounds.
-    assert!(g.hausdorff > rep.hausdorff_bound.as_ref().unwrap().bound);
+    let h = rep.check("hausdorff").unwrap();
+    assert!(h.detail.contains("are not measured"), "{h:?}");
+    assert!(g.hausdorff < rep.hausdorff_bound.as_ref().unwrap().bound);
 }

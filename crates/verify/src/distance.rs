@@ -115,24 +115,20 @@ pub struct Geometry {
     pub bounding_radius: f64,
     /// hausdorff / bounding radius.
     pub hausdorff_relative: f64,
-    /// On the facets given as trusted ([`crate::Options::trusted_facets`]), measured in
-    /// the same pass; `normals` is then measured on them only.
+    /// On a surface that tells where it is the data's ([`Surface::data_defined`]): the
+    /// facets measured, those whose corners and centroid lie there. Every figure above, and
+    /// `normals`, is then of these facets only: beyond the data S is an extrapolation or the
+    /// far field's sign boundary, and a distance to it means nothing (not measured).
     pub trusted: Option<TrustedPart>,
     pub normals: NormalDeviation,
 }
 
-/// The figures of the trusted facets (a point set's facets within the data's band: S
-/// elsewhere is the far field's sign boundary, not a surface the data shows).
+/// The facets where S is the data's surface (see [`Geometry::trusted`]).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct TrustedPart {
-    /// Trusted facets, and all facets.
+    /// Facets measured, and all facets.
     pub facets: usize,
     pub of: usize,
-    /// Their mesh -> S maximum, the S -> mesh maximum of the points of S found for their
-    /// samples, and the larger of the two.
-    pub mesh_to_surface_max: f64,
-    pub surface_to_mesh_max: f64,
-    pub hausdorff: f64,
 }
 
 /// Angle between each facet's normal and the surface gradient at its three vertices.
@@ -263,13 +259,11 @@ fn mesh_samples(
     per_edge: usize,
     dist: Option<&MeshDistance<'_>>,
     trusted: Option<&[bool]>,
-) -> (Acc, Acc, Counts, [Acc; 2]) {
+) -> (Acc, Acc, Counts) {
     const CHUNK: usize = 1024;
     struct Chunk {
         m2s: Acc,
         s2m: Acc,
-        /// `m2s` and `s2m` of the trusted facets' samples.
-        trusted: [Acc; 2],
         n: Counts,
         /// Largest lower bound of the chunk's samples.
         floor: f64,
@@ -282,12 +276,13 @@ fn mesh_samples(
         .enumerate()
         .map(|(k, tris)| {
             let (mut m2s, mut s2m, mut n) = (Acc::default(), Acc::default(), Counts::default());
-            let mut tr = [Acc::default(), Acc::default()];
             let mut pts = Vec::new();
             let mut measured: Vec<(DVec3, f64)> = Vec::new();
             let mut floor = f64::NEG_INFINITY;
             for (i, t) in tris.iter().enumerate() {
-                let is_trusted = trusted.is_some_and(|m| m.get(k * CHUNK + i) == Some(&true));
+                if trusted.is_some_and(|m| m.get(k * CHUNK + i) != Some(&true)) {
+                    continue;
+                }
                 let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
                 let edge = (b - a).length().max((c - b).length()).max((a - c).length());
                 pts.clear();
@@ -300,15 +295,8 @@ fn mesh_samples(
                             floor = floor.max(lower);
                             n.corrected += (flag == Flag::Corrected) as usize;
                             n.bounded += (flag == Flag::Bounded) as usize;
-                            if is_trusted {
-                                tr[0].add(p, d);
-                            }
                             if let Some(dd) = dist {
-                                let e = dd.nearest(q).map_or(f64::INFINITY, |x| x.1);
-                                s2m.add(q, e);
-                                if is_trusted {
-                                    tr[1].add(q, e);
-                                }
+                                s2m.add(q, dd.nearest(q).map_or(f64::INFINITY, |x| x.1));
                             }
                         }
                         None => n.fails += 1,
@@ -323,7 +311,6 @@ fn mesh_samples(
             Chunk {
                 m2s,
                 s2m,
-                trusted: tr,
                 n,
                 floor,
                 candidates,
@@ -331,7 +318,6 @@ fn mesh_samples(
         })
         .collect();
     let (mut m2s, mut s2m, mut n) = (Acc::default(), Acc::default(), Counts::default());
-    let mut tr = [Acc::default(), Acc::default()];
     let floor = per_chunk
         .iter()
         .map(|c| c.floor)
@@ -339,8 +325,6 @@ fn mesh_samples(
     for c in &per_chunk {
         m2s.merge(&c.m2s);
         s2m.merge(&c.s2m);
-        tr[0].merge(&c.trusted[0]);
-        tr[1].merge(&c.trusted[1]);
         n.fails += c.n.fails;
         n.corrected += c.n.corrected;
         n.bounded += c.n.bounded;
@@ -371,7 +355,7 @@ fn mesh_samples(
             m2s.argmax = Some(p);
         }
     }
-    (m2s, s2m, n, tr)
+    (m2s, s2m, n)
 }
 
 /// S -> mesh statistics of the given samples of S (exact nearest triangle).
@@ -399,7 +383,7 @@ pub fn mesh_to_surface(
     surface: &dyn Surface,
     per_edge: usize,
 ) -> (DistanceStats, usize) {
-    let (m2s, _, n, _) = mesh_samples(mesh, &Measure::new(surface), per_edge, None, None);
+    let (m2s, _, n) = mesh_samples(mesh, &Measure::new(surface), per_edge, None, None);
     (m2s.stats(), n.fails)
 }
 
@@ -521,11 +505,11 @@ pub(crate) fn geometry_labelled(
         _ => None,
     };
     let given = surface_samples.or(own.as_deref());
-    let (m2s, s2m, n, tr) = mesh_samples(
+    let (m2s, s2m, n) = mesh_samples(
         mesh,
         &measure,
         per_edge,
-        Some(&dist).filter(|_| given.is_none() || trusted.is_some()),
+        given.is_none().then_some(&dist),
         trusted,
     );
     let (surface_to_mesh, source, covering) = match (given, &measure) {
@@ -571,15 +555,9 @@ pub(crate) fn geometry_labelled(
         hausdorff,
         bounding_radius,
         hausdorff_relative: hausdorff / bounding_radius,
-        trusted: trusted.map(|m| {
-            let [a, b] = tr.map(|x| x.stats().max);
-            TrustedPart {
-                facets: m.iter().filter(|&&t| t).count(),
-                of: mesh.triangles.len(),
-                mesh_to_surface_max: a,
-                surface_to_mesh_max: b,
-                hausdorff: a.max(b),
-            }
+        trusted: trusted.map(|m| TrustedPart {
+            facets: m.iter().filter(|&&t| t).count(),
+            of: mesh.triangles.len(),
         }),
         normals: normal_deviation_on(mesh, surface, trusted),
     }

@@ -76,8 +76,7 @@ fn hausdorff_check(
         },
     );
     let normals = g.normals.clone();
-    // The theorems speak of S where it is known: on a point set, the trusted facets.
-    let hausdorff = g.trusted.as_ref().map_or(g.hausdorff, |t| t.hausdorff);
+    let hausdorff = g.hausdorff;
     r.geometry = Some(g);
     (normals, hausdorff)
 }
@@ -473,5 +472,15 @@ fn hausdorff_detail(g: &distance::Geometry) -> String {
         "); S->mesh max {:.3e} mean {:.3e} ({})",
         g.surface_to_mesh.max, g.surface_to_mesh.mean, g.surface_samples_source
     );
+    if let Some(t) = g.trusted.as_ref().filter(|t| t.facets < t.of) {
+        s += &format!(
+            "; on the {} of {} facets where S is the surface the data shows: the other {} \
+             (beyond the data: S there is an extrapolation or the far field's sign boundary) \
+             are not measured",
+            t.facets,
+            t.of,
+            t.of - t.facets
+        );
+    }
     s
 }
