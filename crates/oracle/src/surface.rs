@@ -23,7 +23,7 @@ use glam::DVec3;
 /// | required | [`bounding_sphere`](Surface::bounding_sphere), [`value`](Surface::value) | everything |
 /// | oracles (section 6.4.2) | [`crossing`](Surface::crossing) (bipolar), [`crossings`](Surface::crossings) (intersection), [`tolerance`](Surface::tolerance), [`crossing_step`](Surface::crossing_step), [`gradient`](Surface::gradient) | the mesher |
 /// | hints P1 / P2 (section 6.4.3) | [`seed_points`](Surface::seed_points), [`dm_inf_hint`](Surface::dm_inf_hint) | initialization, default sizing |
-/// | verification support | [`project`](Surface::project), [`normal_uncertainty_deg`](Surface::normal_uncertainty_deg) | `verify` only |
+/// | verification support | [`project`](Surface::project), [`normal_uncertainty_deg`](Surface::normal_uncertainty_deg), [`data_defined`](Surface::data_defined) | `verify` only |
 ///
 /// ```
 /// use glam::DVec3;
