@@ -422,9 +422,19 @@ impl<'s> Work<'s> {
         let w = self.verts.len() as u32;
         self.verts.push(p);
         self.star.push(Vec::new());
+        self.replace_vertex(v, w, &[], Kind::Move)
+    }
+
+    /// The edit that gives the triangles of `v`'s star but those of `skip` the vertex `w`
+    /// instead (and removes the whole star), if no triangle turns by more than
+    /// [`MAX_TURN_DEG`].
+    fn replace_vertex(&self, v: u32, w: u32, skip: &[u32], kind: Kind) -> Option<Edit> {
         let turn = MAX_TURN_DEG.to_radians().cos();
         let mut create = Vec::new();
         for &t in &self.star[v as usize] {
+            if skip.contains(&t) {
+                continue;
+            }
             let old = self.tris[t as usize];
             let new = old.map(|u| if u == v { w } else { u });
             if normal(&self.verts, new).dot(normal(&self.verts, old)) < turn {
@@ -437,7 +447,7 @@ impl<'s> Work<'s> {
         Some(Edit {
             remove,
             create,
-            kind: Kind::Move,
+            kind,
         })
     }
 
@@ -477,26 +487,7 @@ impl<'s> Work<'s> {
         if c == d || common != want {
             return None;
         }
-        let turn = MAX_TURN_DEG.to_radians().cos();
-        let mut create = Vec::new();
-        for &t in &self.star[b as usize] {
-            if t == t1 || t == t2 {
-                continue;
-            }
-            let old = self.tris[t as usize];
-            let new = old.map(|v| if v == b { a } else { v });
-            if normal(&self.verts, new).dot(normal(&self.verts, old)) < turn {
-                return None;
-            }
-            create.push(new);
-        }
-        let mut remove = self.star[b as usize].clone();
-        remove.sort_unstable();
-        Some(Edit {
-            remove,
-            create,
-            kind: Kind::Collapse,
-        })
+        self.replace_vertex(b, a, &[t1, t2], Kind::Collapse)
     }
 
     /// The smallest angle `e` creates, if it is larger than the smallest angle of the

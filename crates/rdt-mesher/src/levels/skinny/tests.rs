@@ -19,24 +19,8 @@ impl oracle::Surface for Sphere {
 
 /// The octahedron subdivided `levels` times, its vertices on the unit sphere (outward).
 fn sphere_mesh(levels: usize) -> TriMesh {
-    let mut vertices = vec![
-        DVec3::X,
-        DVec3::NEG_X,
-        DVec3::Y,
-        DVec3::NEG_Y,
-        DVec3::Z,
-        DVec3::NEG_Z,
-    ];
-    let mut triangles: Vec<[u32; 3]> = vec![
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
+    let mut vertices = crate::topology::OCTAHEDRON_VERTICES.to_vec();
+    let mut triangles = crate::topology::OCTAHEDRON.to_vec();
     for _ in 0..levels {
         let mut mid = std::collections::HashMap::new();
         let mut split = |a: u32, b: u32, v: &mut Vec<DVec3>| {
