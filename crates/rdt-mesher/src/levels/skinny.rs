@@ -9,7 +9,8 @@
 //! (at most [`PASSES`]), and the one whose created triangles have the largest smallest angle
 //! is made:
 //! - **collapse** one of its edges shorter than `max_move` (half a voxel) into one of its
-//!   ends;
+//!   ends, or into the crossing of S nearest to its midpoint (along the mean normal of its
+//!   two triangles);
 //! - **move** one of its corners to S: from its position, all or half of the way to the mean
 //!   of its neighbours, then along its star's normal to the nearest crossing of S (the
 //!   oracle's intersection oracle, section 6.4.2), so every vertex stays a point of S (or,
@@ -337,6 +338,7 @@ impl<'s> Work<'s> {
             if self.verts[a as usize].distance(self.verts[b as usize]) <= max_move {
                 candidates.push(self.collapse(b, a));
                 candidates.push(self.collapse(a, b));
+                candidates.push(self.collapse_to_middle(a, b, max_move));
             }
         }
         // The exact tests only for the best gains, in decreasing order (ties: the first).
@@ -409,41 +411,57 @@ impl<'s> Work<'s> {
             .map(|&u| self.verts[u as usize].distance(q))
             .sum::<f64>()
             / link.len() as f64;
+        let p = self.project_along(q, n, reach)?;
+        let old = self.verts[v as usize];
+        if p.distance(old) > max_move || p == old || !self.same_part(v, p) {
+            return None;
+        }
+        let w = self.add_vertex(p);
+        self.replace_vertices(&[v], w, &[], Kind::Move)
+    }
+
+    /// The crossing of S nearest to `q` on the segment of half-length `reach` along `n`.
+    fn project_along(&self, q: DVec3, n: DVec3, reach: f64) -> Option<DVec3> {
+        if n == DVec3::ZERO {
+            return None;
+        }
         let mut hits = Vec::new();
         self.surface
             .crossings(q - reach * n, q + reach * n, &mut hits);
-        let p = hits
-            .into_iter()
-            .min_by(|x, y| x.distance_squared(q).total_cmp(&y.distance_squared(q)))?;
-        let old = self.verts[v as usize];
-        if n == DVec3::ZERO || p.distance(old) > max_move || p == old || !self.same_part(v, p) {
-            return None;
-        }
-        let w = self.verts.len() as u32;
-        self.verts.push(p);
-        self.star.push(Vec::new());
-        self.replace_vertex(v, w, &[], Kind::Move)
+        hits.into_iter()
+            .min_by(|x, y| x.distance_squared(q).total_cmp(&y.distance_squared(q)))
     }
 
-    /// The edit that gives the triangles of `v`'s star but those of `skip` the vertex `w`
-    /// instead (and removes the whole star), if no triangle turns by more than
-    /// [`MAX_TURN_DEG`].
-    fn replace_vertex(&self, v: u32, w: u32, skip: &[u32], kind: Kind) -> Option<Edit> {
+    /// A new vertex at `p` (unreferenced until an edit that uses it is made).
+    fn add_vertex(&mut self, p: DVec3) -> u32 {
+        self.verts.push(p);
+        self.star.push(Vec::new());
+        self.verts.len() as u32 - 1
+    }
+
+    /// The edit that gives the triangles of the stars of `vs` but those of `skip` the vertex
+    /// `w` in place of any of `vs` (and removes the whole stars), if no triangle turns by
+    /// more than [`MAX_TURN_DEG`].
+    fn replace_vertices(&self, vs: &[u32], w: u32, skip: &[u32], kind: Kind) -> Option<Edit> {
         let turn = MAX_TURN_DEG.to_radians().cos();
+        let mut remove: Vec<u32> = vs
+            .iter()
+            .flat_map(|&v| self.star[v as usize].iter().copied())
+            .collect();
+        remove.sort_unstable();
+        remove.dedup();
         let mut create = Vec::new();
-        for &t in &self.star[v as usize] {
+        for &t in &remove {
             if skip.contains(&t) {
                 continue;
             }
             let old = self.tris[t as usize];
-            let new = old.map(|u| if u == v { w } else { u });
+            let new = old.map(|u| if vs.contains(&u) { w } else { u });
             if normal(&self.verts, new).dot(normal(&self.verts, old)) < turn {
                 return None;
             }
             create.push(new);
         }
-        let mut remove = self.star[v as usize].clone();
-        remove.sort_unstable();
         Some(Edit {
             remove,
             create,
@@ -472,22 +490,44 @@ impl<'s> Work<'s> {
         }
     }
 
-    /// Collapse vertex `b` into its neighbour `a`, if the link condition holds.
-    fn collapse(&self, b: u32, a: u32) -> Option<Edit> {
+    /// Collapse the edge `a b` into the crossing of S nearest to its midpoint along the
+    /// mean normal of its two triangles, if the link condition holds and neither end moves
+    /// by more than `max_move`.
+    fn collapse_to_middle(&mut self, a: u32, b: u32, max_move: f64) -> Option<Edit> {
+        let (t1, t2) = self.collapsible(a, b)?;
+        let (pa, pb) = (self.verts[a as usize], self.verts[b as usize]);
+        let n = (normal(&self.verts, self.tris[t1 as usize])
+            + normal(&self.verts, self.tris[t2 as usize]))
+        .normalize_or_zero();
+        let mid = 0.5 * (pa + pb);
+        let p = self.project_along(mid, n, max_move)?;
+        if p.distance(pa).max(p.distance(pb)) > max_move || !self.same_part(a, p) {
+            return None;
+        }
+        let w = self.add_vertex(p);
+        self.replace_vertices(&[a, b], w, &[t1, t2], Kind::Collapse)
+    }
+
+    /// The two triangles at the edge `a b` when it may be collapsed: the link condition
+    /// (the ends share exactly the two opposite vertices).
+    fn collapsible(&self, a: u32, b: u32) -> Option<(u32, u32)> {
         let (t1, t2) = (self.with_edge(a, b)?, self.with_edge(b, a)?);
         let (c, d) = (self.third(t1, a, b), self.third(t2, a, b));
-        let (na, nb) = (self.neighbours(a), self.neighbours(b));
-        let common: Vec<u32> = na
-            .iter()
-            .copied()
+        let nb = self.neighbours(b);
+        let common: Vec<u32> = self
+            .neighbours(a)
+            .into_iter()
             .filter(|v| nb.binary_search(v).is_ok())
             .collect();
         let mut want = [c, d];
         want.sort_unstable();
-        if c == d || common != want {
-            return None;
-        }
-        self.replace_vertex(b, a, &[t1, t2], Kind::Collapse)
+        (c != d && common == want).then_some((t1, t2))
+    }
+
+    /// Collapse vertex `b` into its neighbour `a`, if the link condition holds.
+    fn collapse(&self, b: u32, a: u32) -> Option<Edit> {
+        let (t1, t2) = self.collapsible(a, b)?;
+        self.replace_vertices(&[b], a, &[t1, t2], Kind::Collapse)
     }
 
     /// The smallest angle `e` creates, if it is larger than the smallest angle of the
