@@ -27,10 +27,10 @@ pub(crate) fn against(
         || hausdorff_check(r, mesh, bvh, surface, opts),
         || dm_source(mesh, surface, opts),
     );
-    let measured = r
-        .geometry
-        .as_ref()
-        .is_some_and(|g| g.projection_failures == 0);
+    // Measured: every sample projected, and some facet lies where S is the data's surface.
+    let measured = r.geometry.as_ref().is_some_and(|g| {
+        g.projection_failures == 0 && g.trusted.as_ref().is_none_or(|t| t.facets > 0)
+    });
     let dm = dm.unwrap_or_else(|e| {
         r.push("loose-epsilon", Status::Fail, e);
         None
@@ -59,10 +59,20 @@ fn hausdorff_check(
         opts.surface_samples.as_deref(),
         opts.surface_samples_source.as_deref(),
     );
-    let detail = hausdorff_detail(&g);
+    // A point set's mesh with no facet where S is the data's surface has no figure at all.
+    let nothing = g.trusted.as_ref().is_some_and(|t| t.facets == 0);
+    let detail = if nothing {
+        format!(
+            "not measured: none of the {} facets lies where S is the surface the data shows",
+            mesh.triangles.len()
+        )
+    } else {
+        hausdorff_detail(&g)
+    };
     // A sample with no point of S found has no distance: the figure would leave it out
     // silently, so it fails the check as much as a distance above the limit.
     let status = match opts.max_hausdorff {
+        _ if nothing => Status::Skipped,
         _ if g.projection_failures > 0 => Status::Fail,
         Some(m) => pass_fail(g.hausdorff <= m),
         None => Status::Info,
@@ -205,7 +215,10 @@ fn certificate_checks(
     let (status, detail) = if hausdorff.is_none() {
         (
             Status::Skipped,
-            format!("{figures}; not measured: the Hausdorff distance has unmeasured samples"),
+            format!(
+                "{figures}; not measured: a Hausdorff sample has no point of S, or no facet lies \
+                 where S is the surface the data shows"
+            ),
         )
     } else if !cert.passed() {
         (
@@ -289,6 +302,18 @@ fn epsilon_verdict(cert: &certificate::EpsilonCertificate, derived: bool) -> (St
 
 /// Normals, against lemma 3.1 when the certificate gives rho < 1/7.
 fn normals_check(r: &mut Report, mesh: &TriMesh, normals: &NormalDeviation) {
+    if r.geometry
+        .as_ref()
+        .and_then(|g| g.trusted.as_ref())
+        .is_some_and(|t| t.facets == 0)
+    {
+        r.push(
+            "normals",
+            Status::Skipped,
+            "not measured: no facet lies where S is the surface the data shows".into(),
+        );
+        return;
+    }
     // Normals, against lemma 3.1 when the certificate gives rho = max r / d_M(c) < 1/7.
     let rho = r
         .certificate

@@ -317,3 +317,43 @@ fn the_drop_rule_takes_bubbles_and_never_data() {
     }
     assert!(droppable_components(&off, &s.points, Some(&normals), &opts).is_empty());
 }
+
+/// A mesh with no facet where a point set's S is the data's surface (the source moved by twice
+/// its diagonal, away from the data) has no distance, normal or theorem 4.7 figure:
+/// those checks SKIP as not measured, even with a Hausdorff limit asked (they must not PASS
+/// on an empty measure), and `data-support` is what FAILs it.
+#[test]
+fn nothing_is_measured_where_the_data_does_not_define_s() {
+    let m = bunny();
+    let d = diagonal(&m);
+    let spec = ScanSpec {
+        points: 20_000,
+        noise: 0.002,
+        seed: 7,
+        ..Default::default()
+    };
+    let s = simulate(&m, &spec);
+    let surface = oracle::pointset::PointSetSurface::new(
+        &s.points,
+        s.normals.as_deref(),
+        &oracle::pointset::PointSetParams::scan(),
+    )
+    .unwrap();
+    let mut off = m.clone();
+    for v in off.vertices.iter_mut() {
+        *v += DVec3::X * 2.0 * d;
+    }
+    let opts = verify::Options {
+        max_hausdorff: Some(0.01 * d),
+        dm: verify::DmSource::Constant(0.01 * d),
+        ..Default::default()
+    };
+    let r = verify::check_against(&off, &surface, &opts);
+    let t = r.geometry.as_ref().unwrap().trusted.as_ref().unwrap();
+    assert_eq!(t.facets, 0, "{t:?}");
+    for name in ["hausdorff", "normals", "theorem-4.7"] {
+        assert_eq!(r.status(name), Some(Status::Skipped), "{:?}", r.check(name));
+    }
+    let ds = data_support(&off, &s.points, &SupportOptions::default()).unwrap();
+    assert!(!ds.passed(), "{}", ds.detail());
+}
