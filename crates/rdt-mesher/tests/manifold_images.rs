@@ -78,7 +78,7 @@ fn the_t1_crop_is_a_closed_manifold_after_repair_and_not_before() {
 #[test]
 fn skinny_triangles_of_the_decisions_are_edited_on_the_t1_crop() {
     // An integer iso on the uint8 T1 (ties) at 1 voxel: 145 triangles below 30 degrees after
-    // the decisions, 52 after the edits (2026-12-05). The output stays a closed manifold
+    // the decisions, 50 after the edits (2026-12-05). The output stays a closed manifold
     // without self-intersections, with the same pieces, and its figures are the mesh's.
     let s = crop(171.0);
     let r = run(&s, 1.0, Some(1.0), None);
