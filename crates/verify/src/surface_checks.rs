@@ -91,8 +91,9 @@ fn hausdorff_check(
     (normals, hausdorff)
 }
 
-/// On a point set with facets outside the data's band: where the figure was measured and
-/// why the rest has no guarantee (appended to the theorem checks' lines).
+/// On a point set with facets where S is not the data's surface ([`Surface::data_defined`]):
+/// where the figure was measured and why the rest has no guarantee (appended to the theorem
+/// checks' lines).
 fn trusted_note(r: &Report) -> String {
     match r.geometry.as_ref().and_then(|g| g.trusted.as_ref()) {
         Some(t) if t.facets < t.of => format!(
