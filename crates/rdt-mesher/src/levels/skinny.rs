@@ -170,9 +170,10 @@ pub(crate) fn improve(
     max_move: f64,
 ) -> Edits {
     let mut edits = Edits::default();
+    use rayon::prelude::*;
     let below = |m: &TriMesh| {
         m.triangles
-            .iter()
+            .par_iter()
             .filter(|t| angle(&m.vertices, **t) < bound_deg)
             .count()
     };
@@ -201,12 +202,13 @@ pub(crate) fn improve(
     let mut tried = rustc_hash::FxHashMap::<u32, u32>::default();
     for _ in 0..PASSES {
         bad.retain(|&(_, t)| w.alive[t as usize]);
-        bad.extend(
-            (scanned as u32..w.tris.len() as u32)
-                .filter(|&t| w.alive[t as usize])
-                .map(|t| (angle(&w.verts, w.tris[t as usize]), t))
-                .filter(|&(a, _)| a < bound_deg),
-        );
+        let fresh: Vec<(f64, u32)> = (scanned as u32..w.tris.len() as u32)
+            .into_par_iter()
+            .filter(|&t| w.alive[t as usize])
+            .map(|t| (angle(&w.verts, w.tris[t as usize]), t))
+            .filter(|&(a, _)| a < bound_deg)
+            .collect();
+        bad.extend(fresh);
         scanned = w.tris.len();
         bad.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
         let before = edits.made();
@@ -273,8 +275,9 @@ impl<'s> Work<'s> {
         for (i, t) in tris.iter().enumerate() {
             t.iter().for_each(|&v| star[v as usize].push(i as u32));
         }
+        use rayon::prelude::*;
         let boxes = tris
-            .iter()
+            .par_iter()
             .map(|t| Aabb::from_points(&t.map(|v| verts[v as usize])))
             .collect();
         Work {
