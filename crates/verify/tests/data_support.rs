@@ -7,7 +7,7 @@ use meshio::TriMesh;
 use verify::data_support::{
     data_support, data_support_oriented, droppable_components, mesh_samples,
 };
-use verify::scan_sim::{ScanSpec, diagonal, simulate};
+use verify::scan_sim::{Scan, ScanSpec, diagonal, simulate};
 use verify::{Status, SupportOptions};
 
 fn bunny() -> TriMesh {
@@ -24,6 +24,17 @@ fn scan(m: &TriMesh, hole: f64) -> Vec<DVec3> {
         ..Default::default()
     };
     simulate(m, &spec).points
+}
+
+/// The scan of [`scan`] without a hole, with its exact normals.
+fn scan_with_normals(m: &TriMesh) -> Scan {
+    let spec = ScanSpec {
+        points: 20_000,
+        noise: 0.002,
+        seed: 7,
+        ..Default::default()
+    };
+    simulate(m, &spec)
 }
 
 /// An octahedron of circumradius `r` at `c`, outward.
@@ -206,13 +217,7 @@ fn exact_mesh_data_and_the_report_check() {
 fn a_bubble_within_the_band_fails_on_orientation() {
     let m = bunny();
     let d = diagonal(&m);
-    let spec = ScanSpec {
-        points: 20_000,
-        noise: 0.002,
-        seed: 7,
-        ..Default::default()
-    };
-    let s = simulate(&m, &spec);
+    let s = scan_with_normals(&m);
     let normals = s.normals.clone().expect("the scan's exact normals");
     let opts = SupportOptions::default();
     let good = data_support_oriented(&m, &s.points, Some(&normals), &opts).unwrap();
@@ -252,13 +257,7 @@ fn a_bubble_within_the_band_fails_on_orientation() {
 fn the_drop_rule_takes_bubbles_and_never_data() {
     let m = bunny();
     let d = diagonal(&m);
-    let spec = ScanSpec {
-        points: 20_000,
-        noise: 0.002,
-        seed: 7,
-        ..Default::default()
-    };
-    let s = simulate(&m, &spec);
+    let s = scan_with_normals(&m);
     let normals = s.normals.clone().expect("the scan's exact normals");
     let opts = SupportOptions::default();
     assert!(droppable_components(&m, &s.points, Some(&normals), &opts).is_empty());
@@ -326,13 +325,7 @@ fn the_drop_rule_takes_bubbles_and_never_data() {
 fn nothing_is_measured_where_the_data_does_not_define_s() {
     let m = bunny();
     let d = diagonal(&m);
-    let spec = ScanSpec {
-        points: 20_000,
-        noise: 0.002,
-        seed: 7,
-        ..Default::default()
-    };
-    let s = simulate(&m, &spec);
+    let s = scan_with_normals(&m);
     let surface = oracle::pointset::PointSetSurface::new(
         &s.points,
         s.normals.as_deref(),
