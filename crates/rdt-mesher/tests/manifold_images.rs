@@ -7,18 +7,23 @@
 use oracle::image::{ImageOptions, ImageSurface, LoadOptions};
 use rdt_mesher::{ComponentKind, Criteria, DecisionKind, MeshOptions, MeshResult, mesh};
 
-fn crop(iso: f64) -> ImageSurface {
-    let p = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/images/mni_t1_crop56.nii.gz"
+/// `fixtures/images/NAME.nii.gz` at `iso`, every seed point kept (as the pipeline does).
+fn fixture(name: &str, iso: f64) -> ImageSurface {
+    let p = format!(
+        "{}/../../fixtures/images/{name}.nii.gz",
+        env!("CARGO_MANIFEST_DIR")
     );
     let opts = ImageOptions {
         iso: Some(iso),
         ..Default::default()
     };
-    ImageSurface::open(p, &LoadOptions::default(), &opts)
+    ImageSurface::open(&p, &LoadOptions::default(), &opts)
         .expect("the fixture opens")
         .with_seed_budget(None)
+}
+
+fn crop(iso: f64) -> ImageSurface {
+    fixture("mni_t1_crop56", iso)
 }
 
 fn run(s: &ImageSurface, sigma: f64, resolution: Option<f64>, min: Option<f64>) -> MeshResult {
@@ -114,17 +119,7 @@ fn skinny_moves_keep_each_vertex_on_its_scan_component() {
     // The noisy phantom (6 mm voxels) at 2 voxels: specks of 6 crossing edges lie within half
     // a voxel of larger components. A move that projected a vertex onto such a speck joined
     // it to its neighbour's piece (verify: `joined`, where the mesher said `dropped`).
-    let p = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/images/phantom_i16_32.nii.gz"
-    );
-    let opts = ImageOptions {
-        iso: Some(3.0),
-        ..Default::default()
-    };
-    let s = ImageSurface::open(p, &LoadOptions::default(), &opts)
-        .expect("the fixture opens")
-        .with_seed_budget(None);
+    let s = fixture("phantom_i16_32", 3.0);
     let r = run(&s, 12.0, Some(6.0), None);
     assert!(r.stats.skinny_moves > 0);
     let acc = verify::scan_components::account(&r.mesh, &s, &[]);
@@ -329,17 +324,7 @@ fn component_decisions_account_for_every_scan_component() {
     // The 2 mm template at iso 171.2: a one-voxel speck at (38, -38, -38) lies at a trilinear
     // saddle within a twentieth of a voxel of the large component (the bridge rounds stop at
     // an eighth of a voxel), so Del_S(E) joins them; the repair separates them (rule 0).
-    let p = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/images/mni_t1_half.nii.gz"
-    );
-    let opts = ImageOptions {
-        iso: Some(171.2),
-        ..Default::default()
-    };
-    let s = ImageSurface::open(p, &LoadOptions::default(), &opts)
-        .expect("the fixture opens")
-        .with_seed_budget(None);
+    let s = fixture("mni_t1_half", 171.2);
     let speck = s
         .component_of(glam::DVec3::new(38.1, -38.0, -38.0))
         .expect("the speck is a scan component");
