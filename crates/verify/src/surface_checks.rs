@@ -224,7 +224,7 @@ fn certificate_checks(
     } else if !cert.passed() {
         (
             Status::Info,
-            format!("{figures}; no guarantee: the loose epsilon-sample certificate failed"),
+            format!("{figures}; no guarantee: the loose epsilon-sample certificate does not hold"),
         )
     } else if hb.applicable {
         (pass_fail(hb.holds), figures)
@@ -250,7 +250,8 @@ const DM_HINT: &str = "give one (verify: --dm poles or --dm VALUE; mesh: --epsil
                        Options::dm)";
 
 /// The `loose-epsilon` line: FAIL when the certificate fails (a facet over the requested
-/// eps, a facet without ball, d_M undefined), PASS when it holds with eps < epsilon_1 (the
+/// eps, a facet without ball, d_M undefined) and an eps was requested or derived (INFO "no
+/// guarantee" when none was: nothing promised fails), PASS when it holds with eps < epsilon_1 (the
 /// range of theorems 4.4 to 4.7), INFO "no guarantee" when it holds only above. A facet over
 /// a `derived` eps (sigma / d_M^inf, not asked for) at or above epsilon_1 is INFO too: no
 /// theorem applies at that eps, so nothing promised fails (the facets are still counted;
@@ -274,6 +275,35 @@ fn epsilon_verdict(cert: &certificate::EpsilonCertificate, derived: bool) -> (St
         && cert.facets_without_ball == 0
         && cert.undefined_dm == 0
         && cert.requested_eps.is_some_and(|e| e >= e1);
+    // Nothing asked (no eps, derived or given): a facet without a ball or a ball without
+    // d_M means the certificate does not hold, and no theorem speaks of this mesh; that is
+    // no guarantee, not a failure of anything promised (a marching-cubes mesh, the
+    // triangles of a topological decision). `--epsilon E` asks, and then it FAILs.
+    if !cert.passed() && cert.requested_eps.is_none() {
+        let mut why = Vec::new();
+        if cert.facets_without_ball > 0 {
+            why.push(format!(
+                "{} facets have no surface Delaunay ball (no crossing of S on the line through \
+                 their circumcentre orthogonal to them: they are not facets of the restricted \
+                 Delaunay triangulation of the mesh's vertices)",
+                cert.facets_without_ball
+            ));
+        }
+        if cert.undefined_dm > 0 {
+            why.push(format!(
+                "d_M is not positive and finite at {} ball centres",
+                cert.undefined_dm
+            ));
+        }
+        return (
+            Status::Info,
+            format!(
+                "{figures}; no guarantee: the certificate does not hold ({}), so no theorem \
+                 speaks of this mesh; nothing was asked (--epsilon E asks, and FAILs on it)",
+                why.join("; ")
+            ),
+        );
+    }
     if !cert.passed() && only_over_derived {
         (
             Status::Info,
@@ -315,10 +345,13 @@ fn normals_check(r: &mut Report, mesh: &TriMesh, normals: &NormalDeviation) {
         );
         return;
     }
-    // Normals, against lemma 3.1 when the certificate gives rho = max r / d_M(c) < 1/7.
+    // Normals, against lemma 3.1 when the certificate gives rho = max r / d_M(c) < 1/7:
+    // only when every facet has its ball and d_M (else rho is a max over part of the mesh,
+    // 0 over none, and bounds nothing).
     let rho = r
         .certificate
         .as_ref()
+        .filter(|c| c.balls > 0 && c.facets_without_ball == 0 && c.undefined_dm == 0)
         .map(|c| c.eps_achieved)
         .filter(|e| e.is_finite());
     let mut measured = format!(
@@ -362,9 +395,10 @@ fn normals_check(r: &mut Report, mesh: &TriMesh, normals: &NormalDeviation) {
             Status::Info,
             format!(
                 "{measured}; no guarantee: {}",
-                match rho {
-                    Some(e) => format!("the certificate's rho = {e:.4} is not below 1/7"),
-                    None => "no certificate (no d_M)".into(),
+                match (rho, &r.certificate) {
+                    (Some(e), _) => format!("the certificate's rho = {e:.4} is not below 1/7"),
+                    (None, Some(_)) => "the certificate does not hold (see loose-epsilon)".into(),
+                    (None, None) => "no certificate (no d_M)".into(),
                 }
             ),
         ),

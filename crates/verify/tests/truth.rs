@@ -273,6 +273,51 @@ fn loose_epsilon_never_passes_above_its_range() {
     assert_status(&r, "theorem-4.7", Status::Pass);
 }
 
+/// A mesh that is not the restricted Delaunay triangulation of its vertices (here a sphere of
+/// radius 1.5 checked against the unit sphere: no facet's orthogonal line meets S near it,
+/// as with a marching-cubes mesh or a repaired region) has no certificate. Nothing asked:
+/// INFO "no guarantee", not a failure (the old FAIL was a false alarm that made `verify`
+/// exit non-zero on any other mesher's output), and no lemma-3.1 bound on the normals.
+/// Asked with an eps: FAIL.
+#[test]
+fn facets_without_ball_fail_only_a_certificate_that_was_asked() {
+    let m = uv_sphere(DVec3::ZERO, 1.5, 24, 48);
+    let r = check_against(&m, &UnitSphere, &quiet());
+    let c = r.certificate.as_ref().unwrap();
+    assert!(c.facets_without_ball > 0 && !c.passed(), "{}", r.summary());
+    assert_eq!(
+        r.status("loose-epsilon"),
+        Some(Status::Info),
+        "{}",
+        r.summary()
+    );
+    let d = &r.check("loose-epsilon").unwrap().detail;
+    assert!(
+        d.contains("no guarantee") && d.contains("no surface Delaunay ball"),
+        "{d}"
+    );
+    assert_ne!(r.status("theorem-4.7"), Some(Status::Pass));
+    // Lemma 3.1 needs the certificate: no bound from the rho of no ball (it was 0 degrees,
+    // and a FAIL).
+    assert_eq!(r.status("normals"), Some(Status::Info), "{}", r.summary());
+    assert!(r.check("normals").unwrap().detail.contains("does not hold"));
+    // The mesh is 0.5 from S: the coverage check fails, rightly.
+    assert_eq!(r.failures(), ["components-sampled"], "{}", r.summary());
+    for eps in [0.09, 5.0] {
+        let asked = Options {
+            epsilon: Some(eps),
+            ..quiet()
+        };
+        let r = check_against(&m, &UnitSphere, &asked);
+        assert_eq!(
+            r.status("loose-epsilon"),
+            Some(Status::Fail),
+            "{}",
+            r.summary()
+        );
+    }
+}
+
 #[test]
 fn components_threshold_is_the_local_scale() {
     // A sphere meshed coarsely: the threshold is twice the nearest facet's ball radius, not
