@@ -87,6 +87,85 @@ fn every_scan_component_is_accounted_for_and_a_removed_piece_is_missed() {
     );
 }
 
+/// `scan-topology` holds the mesh's pieces to the scan's components one to one: PASS on the
+/// crop at 2 mm (every component one piece), FAIL when a component has a second piece (the
+/// smallest piece copied, moved by a hundredth of a voxel so it stays on its component),
+/// naming where the extra piece is; a removed piece is `components-sampled`'s failure, not
+/// this one's.
+#[test]
+fn a_component_in_two_pieces_fails_scan_topology_and_names_the_extra_piece() {
+    let input = t1_crop();
+    let req = Request {
+        size: SizeRequest::Size(2.0),
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+    let rep = out.report.as_ref().unwrap();
+    assert_eq!(
+        rep.status("scan-topology"),
+        Some(Status::Pass),
+        "{}",
+        rep.summary()
+    );
+    let piece = smallest_piece(&out.mesh);
+    let shift = glam::DVec3::splat(0.01);
+    let mut mesh = out.mesh.clone();
+    let base = mesh.vertices.len() as u32;
+    let copied: Vec<[u32; 3]> = out
+        .mesh
+        .triangles
+        .iter()
+        .filter(|t| piece.contains(&t[0]))
+        .map(|t| t.map(|v| base + piece.iter().position(|&p| p == v).unwrap() as u32))
+        .collect();
+    mesh.vertices
+        .extend(piece.iter().map(|&v| out.mesh.vertices[v as usize] + shift));
+    mesh.triangles.extend(copied);
+    let opts = verify::Options {
+        self_intersections: false,
+        ..Default::default()
+    };
+    let r = verify::check_against(&mesh, input.surface(), &opts);
+    let acc = r.scan_components.as_ref().unwrap();
+    assert_eq!((acc.split, acc.missed), (1, 0), "{}", acc.summary());
+    assert_eq!(
+        r.status("scan-topology"),
+        Some(Status::Fail),
+        "{}",
+        r.summary()
+    );
+    let split = acc
+        .components
+        .iter()
+        .find(|c| c.fate == Fate::Split)
+        .unwrap();
+    let extra = glam::DVec3::from_array(split.other_pieces_at[0]);
+    assert!(
+        piece
+            .iter()
+            .any(|&v| (out.mesh.vertices[v as usize] + shift).distance(extra) < 1e-9),
+        "the extra piece's vertex {extra} is on the copy"
+    );
+    assert!(
+        r.check("scan-topology")
+            .unwrap()
+            .detail
+            .contains("split into 2 pieces")
+    );
+    // The piece removed instead: missed, which `components-sampled` FAILs; the pieces left
+    // are still one per component.
+    let mut mesh = out.mesh.clone();
+    mesh.triangles.retain(|t| !piece.contains(&t[0]));
+    let r = verify::check_against(&mesh, input.surface(), &opts);
+    assert_eq!(r.status("components-sampled"), Some(Status::Fail));
+    assert_eq!(
+        r.status("scan-topology"),
+        Some(Status::Pass),
+        "{}",
+        r.summary()
+    );
+}
+
 #[test]
 fn voxels_at_the_iso_value_inside_the_solid_are_not_surfaces() {
     // A 12^3 block at 2 in a background of 0, meshed at iso 1: five single voxels and a line

@@ -43,6 +43,9 @@ pub enum Fate {
     Vanishing,
 }
 
+/// Extra pieces of a split component listed (with a vertex each).
+pub const LISTED_PIECES: usize = 4;
+
 /// One scan component and its mesh pieces.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct ScanComponent {
@@ -54,6 +57,9 @@ pub struct ScanComponent {
     pub crossing_edges: usize,
     /// Mesh pieces assigned to it.
     pub pieces: usize,
+    /// A vertex of each of its pieces but the largest (at most [`LISTED_PIECES`], largest
+    /// first; split components only): where the extra pieces are.
+    pub other_pieces_at: Vec<[f64; 3]>,
     /// What happened to it.
     pub fate: Fate,
 }
@@ -132,6 +138,8 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
     let n = topo.component_seeds.len();
     let pieces = crate::topology::vertex_components(mesh);
     let mut per = vec![0usize; n];
+    // Per component, its pieces as (vertex count, a vertex).
+    let mut where_: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
     let mut touched = vec![false; n];
     let mut unassigned = 0;
     for piece in &pieces {
@@ -150,7 +158,10 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
             .iter()
             .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
         {
-            Some(&(c, _)) => per[c] += 1,
+            Some(&(c, _)) => {
+                per[c] += 1;
+                where_[c].push((piece.len(), piece[0]));
+            }
             _ => unassigned += 1,
         }
     }
@@ -176,6 +187,15 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
                 seed: topo.component_seeds[i].to_array(),
                 crossing_edges: topo.component_edges.get(i).copied().unwrap_or(0),
                 pieces: per[i],
+                other_pieces_at: {
+                    let mut w = where_[i].clone();
+                    w.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
+                    w.iter()
+                        .skip(1)
+                        .take(LISTED_PIECES)
+                        .map(|&(_, v)| mesh.vertices[v].to_array())
+                        .collect()
+                },
                 fate,
             })
         })

@@ -487,6 +487,7 @@ fn components_sampled_check(
             far_seeds - cov.uncovered
         );
         let status = pass_fail(acc.missed == 0 && cov.uncovered == 0);
+        scan_topology_check(r, &acc);
         r.scan_components = Some(acc);
         (status, detail)
     } else if seeds.is_empty() {
@@ -499,6 +500,69 @@ fn components_sampled_check(
 }
 
 /// The `hausdorff` line: each side's figure, what it is and how it was measured.
+/// Images: the scan's components against the mesh's pieces, one to one (the part of the
+/// paper's homeomorphism, theorem 4.4 and after, that the voxel scan can check: the trilinear
+/// level set's components are known exactly). A component in two pieces (*split*), one with
+/// no piece of its own (*joined* to a neighbour's) or a piece on no component is a wrong
+/// topology whatever the sampling: FAIL, with where. Components dropped on request or of
+/// zero volume are excused; a missed one fails `components-sampled`.
+fn scan_topology_check(r: &mut Report, acc: &crate::scan_components::ScanComponents) {
+    use crate::scan_components::Fate;
+    let wrong: Vec<String> = acc
+        .components
+        .iter()
+        .filter(|c| matches!(c.fate, Fate::Split | Fate::Joined))
+        .take(3)
+        .map(|c| {
+            let at = |p: &[f64; 3]| format!("({:.4}, {:.4}, {:.4})", p[0], p[1], p[2]);
+            let what = match c.fate {
+                Fate::Split => format!(
+                    "split into {} pieces, the smaller at {}",
+                    c.pieces,
+                    c.other_pieces_at
+                        .iter()
+                        .map(at)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                _ => "joined to a neighbour's piece".to_string(),
+            };
+            format!(
+                "the component at {} ({} voxel edges crossed) {what}",
+                at(&c.seed),
+                c.crossing_edges
+            )
+        })
+        .collect();
+    let bad = acc.split + acc.joined + acc.unassigned_pieces;
+    let detail = if bad == 0 {
+        format!(
+            "{} mesh pieces for the voxel scan's {} components: one piece each (the scan's \
+             components of the trilinear level set{})",
+            acc.mesh_pieces,
+            acc.scan,
+            if acc.dropped + acc.vanishing + acc.missed > 0 {
+                ", but those dropped, of zero volume or missed"
+            } else {
+                ""
+            }
+        )
+    } else {
+        format!(
+            "{} mesh pieces for the voxel scan's {} components: {} split, {} joined to a \
+             neighbour's piece, {} pieces on no component: not the topology of S{}{}",
+            acc.mesh_pieces,
+            acc.scan,
+            acc.split,
+            acc.joined,
+            acc.unassigned_pieces,
+            if wrong.is_empty() { "" } else { "; " },
+            wrong.join("; ")
+        )
+    };
+    r.push("scan-topology", pass_fail(bad == 0), detail);
+}
+
 fn hausdorff_detail(g: &distance::Geometry) -> String {
     let mut s = format!(
         "two-sided {:.3e} ({:.3e} of the bounding radius); mesh->S max {:.3e} mean {:.3e} \
