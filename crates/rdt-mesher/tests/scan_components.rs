@@ -166,6 +166,56 @@ fn a_component_in_two_pieces_fails_scan_topology_and_names_the_extra_piece() {
     );
 }
 
+/// nibabel's `anatomical.nii` (2 mm voxels) at iso 9444.5, `--size 1` (half a voxel): a
+/// piece of the largest component, on the image's border and reached by a face saddle 7
+/// above the iso value, is refined to a hundredth of a voxel at its tip; every tube from the
+/// tip's triangles crossed the piece itself, and it stayed split (`scan-topology` FAIL). The
+/// bridges now also try each piece's triangles nearest the other piece (`mutual_anchors`).
+#[test]
+fn a_piece_refined_to_a_tip_at_the_join_is_bridged_from_its_side() {
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/images/nibabel_anatomical.nii.gz"
+    );
+    let image = oracle::image::ImageOptions {
+        iso: Some(9444.5),
+        ..Default::default()
+    };
+    let opts = InputOptions {
+        image,
+        ..Default::default()
+    };
+    let input = Input::open(file, &opts).unwrap();
+    let req = Request {
+        size: SizeRequest::Size(1.0),
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+    let rep = out.report.as_ref().unwrap();
+    let acc = rep.scan_components.as_ref().unwrap();
+    assert_eq!(
+        (acc.scan, acc.meshed, acc.split),
+        (285, 285, 0),
+        "{}",
+        acc.summary()
+    );
+    assert_eq!(
+        rep.status("scan-topology"),
+        Some(Status::Pass),
+        "{}",
+        rep.summary()
+    );
+    for s in [
+        "closed",
+        "edge-manifold",
+        "vertex-manifold",
+        "oriented",
+        "self-intersections",
+    ] {
+        assert_eq!(rep.status(s), Some(Status::Pass), "{s}: {}", rep.summary());
+    }
+}
+
 #[test]
 fn voxels_at_the_iso_value_inside_the_solid_are_not_surfaces() {
     // A 12^3 block at 2 in a background of 0, meshed at iso 1: five single voxels and a line

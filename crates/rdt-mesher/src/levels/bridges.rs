@@ -142,7 +142,14 @@ fn bridge_splits(
                 };
                 // Below a voxel, only the nearest pairs (wide failures: 60 ms each on the T1).
                 let wide = bbox.0.distance(bbox.1) >= h;
-                if let Some(d) = bridge(out, img, &ps[i], &ps[j], &join, criteria, wide) {
+                let made = bridge(out, img, &ps[i], &ps[j], &join, criteria, wide).or_else(|| {
+                    let keep = wide
+                        && !super::components::is_fragment(&out.mesh, &ps[i], &ps[0], h, criteria);
+                    let anchors =
+                        mutual_anchors(&out.mesh, &ps[i], &ps[j], join.via).filter(|_| keep)?;
+                    bridge_from(out, img, &ps[i], &ps[j], &join, criteria, wide, anchors)
+                });
+                if let Some(d) = made {
                     let (ri, rj) = (root_of(&merged, i), root_of(&merged, j));
                     merged[ri.max(rj)] = ri.min(rj);
                     decisions.push(d);
@@ -218,7 +225,46 @@ fn bridge(
     criteria: &crate::Criteria,
     wide: bool,
 ) -> Option<TopologyDecision> {
-    let (pairs, region) = candidate_pairs(&out.mesh, a, b, j, wide);
+    bridge_from(out, img, a, b, j, criteria, wide, [j.via; 2])
+}
+
+/// A second try for [`bridge`], for a piece the fragment rule would keep (over a voxel
+/// across, not hanging at the component's largest piece: `components::is_fragment`; a
+/// fragment is better dropped than tied by a tube of needles): where a piece is refined far below the size at the join (a
+/// sub-voxel tip reaching for a face saddle, its triangles a hundredth of a voxel), the
+/// triangles of that piece nearest the join are all on its tip, and every tube from them to
+/// the other piece crosses the piece itself (`nibabel_anatomical` at iso 9444.5, `--size 1`:
+/// a piece of 946 triangles on the image's border, 1.4 mm from the rest of its component).
+/// The anchors are then, for each piece, the centroid of the other piece's triangle nearest
+/// the join: the candidates face each other across the gap.
+fn mutual_anchors(mesh: &meshio::TriMesh, a: &[u32], b: &[u32], via: DVec3) -> Option<[DVec3; 2]> {
+    let nearest_centroid = |piece: &[u32]| -> Option<DVec3> {
+        let mut on = vec![false; mesh.vertices.len()];
+        piece.iter().for_each(|&v| on[v as usize] = true);
+        mesh.triangles
+            .iter()
+            .filter(|t| on[t[0] as usize])
+            .map(|t| t.iter().map(|&v| mesh.vertices[v as usize]).sum::<DVec3>() / 3.0)
+            .min_by(|x, y| x.distance_squared(via).total_cmp(&y.distance_squared(via)))
+    };
+    let (ca, cb) = (nearest_centroid(a)?, nearest_centroid(b)?);
+    Some([cb, ca])
+}
+
+/// [`bridge`] with the candidate triangles of `a` taken nearest `anchors[0]` and those of `b`
+/// nearest `anchors[1]`.
+#[allow(clippy::too_many_arguments)]
+fn bridge_from(
+    out: &mut MeshResult,
+    img: &ImageSurface,
+    a: &[u32],
+    b: &[u32],
+    j: &Join,
+    criteria: &crate::Criteria,
+    wide: bool,
+    anchors: [DVec3; 2],
+) -> Option<TopologyDecision> {
+    let (pairs, region) = candidate_pairs(&out.mesh, a, b, j, anchors, wide);
     // The candidates in order (pairs, then variants), evaluated in parallel a chunk at a time
     // (each independently of the others: the choice below is the sequential one): the first
     // within sigma that crosses nothing is taken; the oversized ones are kept for later.
@@ -289,7 +335,8 @@ fn bridge(
 }
 
 /// The candidate pairs of triangles (squared distance between centroids, triangle of `a`,
-/// triangle of `b`): those among the [`NEAR`] triangles of each piece nearest the join first,
+/// triangle of `b`): those among the [`NEAR`] triangles of each piece nearest its anchor (the
+/// join, or see [`mutual_anchors`]) first,
 /// then, `with_wide`, the others among the [`NEAR_WIDE`] nearest, each group by increasing
 /// distance; and the region of the triangles that may cross their tubes.
 fn candidate_pairs(
@@ -297,6 +344,7 @@ fn candidate_pairs(
     a: &[u32],
     b: &[u32],
     j: &Join,
+    anchors: [DVec3; 2],
     with_wide: bool,
 ) -> (Vec<(f64, usize, usize)>, Region) {
     // Which piece each vertex is on (1: a, 2: b), and each piece's triangles by distance to
@@ -310,7 +358,14 @@ fn candidate_pairs(
         .par_iter()
         .enumerate()
         .filter(|(_, t)| side[t[0] as usize] != 0)
-        .map(|(k, t)| (side[t[0] as usize], centroid(t).distance_squared(j.via), k))
+        .map(|(k, t)| {
+            let tag = side[t[0] as usize];
+            (
+                tag,
+                centroid(t).distance_squared(anchors[usize::from(tag - 1)]),
+                k,
+            )
+        })
         .collect();
     let near = |tag: u8| {
         let mut v: Vec<(f64, usize)> = tagged

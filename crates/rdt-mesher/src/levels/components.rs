@@ -190,6 +190,20 @@ fn drop_fragments(
 
 /// The distance from a point to the nearest of some vertices of a mesh (the largest piece of
 /// a split component: the fragment rule).
+/// Whether the fragment rule would drop `piece`, a piece of a scan component whose largest
+/// piece is `largest` (module docs): its box diagonal is below `h`, or it hangs within
+/// `h + sigma` of `largest`.
+pub(super) fn is_fragment(
+    mesh: &meshio::TriMesh,
+    piece: &[u32],
+    largest: &[u32],
+    h: f64,
+    criteria: &crate::Criteria,
+) -> bool {
+    let (_, size) = bbox(piece.iter().map(|&v| mesh.vertices[v as usize]));
+    size < h || NearestVertex::new(mesh, largest).holds(mesh, piece, h, criteria)
+}
+
 struct NearestVertex(Option<kiddo::ImmutableKdTree<f64, 3>>);
 
 impl NearestVertex {
