@@ -14,12 +14,17 @@
 //!
 //! Invariant: `local[x + 1]` (the infinite vertex, `u32::MAX`, wraps to index 0) is
 //! `base + (local id of x)` for the boundary vertices of the current star and below `base`
-//! for every other vertex.
+//! for every other vertex, including those of an earlier star that overflowed (its ids reach
+//! `MAX_LOCAL + 2`: consecutive bases are [`STRIDE`] apart).
 
 use crate::ids::VertexId;
 
 /// Largest number of boundary vertices handled by the table (`half` has `s * s` entries).
 pub(crate) const MAX_LOCAL: usize = 128;
+
+/// Local ids a star may write: the overflow is seen after a whole facet, so an overflowing
+/// star writes ids up to `MAX_LOCAL + 2`. Consecutive stars' ranges are this far apart.
+const STRIDE: u32 = MAX_LOCAL as u32 + 3;
 
 /// Scratch space of [`StarLinks::link`], reused across insertions.
 #[derive(Clone, Default)]
@@ -52,11 +57,13 @@ impl StarLinks {
         if self.local.len() < n_vertices + 1 {
             self.local.resize(n_vertices + 1, 0);
         }
-        if self.base > u32::MAX - 2 * MAX_LOCAL as u32 {
+        if self.base > u32::MAX - 2 * STRIDE {
             self.local.iter_mut().for_each(|l| *l = 0);
             self.base = 0;
         }
-        self.base += MAX_LOCAL as u32 + 1;
+        // Every id written by the last star, overflowing or not, is below `STRIDE`, so its
+        // slots are now below `base`: fresh for this star.
+        self.base += STRIDE;
         let base = self.base;
         if self.verts.len() < MAX_LOCAL + 3 {
             self.verts.resize(MAX_LOCAL + 3, VertexId::NONE);
@@ -161,5 +168,38 @@ mod tests {
         assert!(s.link(facets2.iter().copied(), 40, &mut out));
         let last: Vec<u32> = s.vertices().map(|x| x.1).collect();
         assert_eq!(last, vec![3, 2, 3, 3]);
+    }
+
+    /// A star that overflows [`MAX_LOCAL`] in a facet of three new vertices writes local ids
+    /// up to `MAX_LOCAL + 2`; the next star must still see those vertices as fresh. (With a
+    /// stride of `MAX_LOCAL + 1` between stars they read as the next star's ids 0 and 1, and
+    /// its cells were linked wrong: a corrupt triangulation, found on the noisy phantom at
+    /// iso 4.5, `--size 18`.)
+    #[test]
+    fn a_star_after_an_overflowing_one_is_linked_right() {
+        let v = |i: u32| VertexId(i);
+        let mut s = StarLinks::default();
+        let mut out = Vec::new();
+        // 42 facets of three new vertices (126), one with two (128), one with three more:
+        // ids 128, 129 and 130 are written before the overflow is seen.
+        let mut big: Vec<[VertexId; 3]> = (0..42)
+            .map(|k| [v(3 * k), v(3 * k + 1), v(3 * k + 2)])
+            .collect();
+        big.push([v(126), v(127), v(0)]);
+        big.push([v(128), v(129), v(130)]);
+        assert!(!s.link(big.iter().copied(), 200, &mut out));
+        // A tetrahedron's boundary on vertices 129, 130 (ids 129 and 130 above) and two others.
+        let facets = [[1, 3, 2], [0, 2, 3], [0, 3, 1], [0, 1, 2]]
+            .map(|f| f.map(|i| v([129, 130, 150, 151][i])));
+        assert!(s.link(facets.iter().copied(), 200, &mut out));
+        for (k, n) in out.iter().enumerate() {
+            for (f, &nf) in n.iter().enumerate() {
+                let (k2, f2) = ((nf / 4) as usize, (nf % 4) as usize);
+                assert_ne!(k2, k, "facet {k} linked to itself");
+                assert_eq!(out[k2][f2], (k * 4 + f) as u32, "symmetric");
+            }
+        }
+        let verts: Vec<VertexId> = s.vertices().map(|x| x.0).collect();
+        assert_eq!(verts, [130, 151, 150, 129].map(v));
     }
 }

@@ -290,3 +290,44 @@ fn real_nifti_fixture_closed_manifold() {
         assert!(r.quality.as_ref().unwrap().volume > 0.0);
     }
 }
+
+/// The noisy phantom at iso 4.5 (414 components), `--size 18` (3 voxels): the scaffold
+/// points inserted far outside the seeds' hull make stars of more than 128 boundary
+/// vertices, and the next insertion linked its star wrong (`delaunay3::star`'s local ids):
+/// a corrupt triangulation and a "neighbor symmetry" panic at the first full scan. Found by
+/// a sweep of the fixtures at 0.5, 0.75, 1.5 and 3 voxels. Sizes 17 to 18.5 panicked.
+#[test]
+fn phantom_at_three_voxels_does_not_corrupt_the_triangulation() {
+    use rdt_mesher::pipeline::{Input, InputOptions, Request, SizeRequest, run};
+    let opts = InputOptions {
+        image: ImageOptions {
+            iso: Some(4.5),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let file = fixture("phantom_i16_32.nii.gz");
+    let input = Input::open(file.to_str().unwrap(), &opts).unwrap();
+    for size in [17.0, 18.0] {
+        let req = Request {
+            size: SizeRequest::Size(size),
+            ..Default::default()
+        };
+        let out = run(&input, &req).unwrap();
+        let rep = out.report.as_ref().unwrap();
+        for c in [
+            "closed",
+            "edge-manifold",
+            "vertex-manifold",
+            "oriented",
+            "scan-topology",
+        ] {
+            assert_eq!(
+                rep.status(c),
+                Some(verify::Status::Pass),
+                "size {size}, {c}: {}",
+                rep.summary()
+            );
+        }
+    }
+}
