@@ -141,3 +141,26 @@ fn two_boxes_sharing_an_edge_at_a_fine_size_have_no_self_intersection() {
     let input = open("boxes_shared_edge.off", false);
     closed_manifold(&input, 0.25, "boxes_shared_edge exact x0.25");
 }
+
+/// The data the remesh must stay near is the boundary of the solid it meshes: the interior
+/// membrane of `sphere_membrane.off` is no part of {w > 1/2}'s surface, so `data-support`
+/// must not ask the output to cover it (it FAILed at every size: "2 data components, 1 not
+/// covered", the membrane's 4,851 samples).
+#[test]
+fn an_interior_membrane_is_not_data_the_remesh_must_cover() {
+    for smooth in [false, true] {
+        let input = open("sphere_membrane.off", smooth);
+        let req = Request {
+            size: SizeRequest::Size(input.default_size.unwrap()),
+            ..Default::default()
+        };
+        let out = run(&input, &req).expect("meshing");
+        let r = out.report.as_ref().expect("verified");
+        assert_eq!(
+            r.status("data-support"),
+            Some(verify::Status::Pass),
+            "smooth {smooth}: {}",
+            r.summary()
+        );
+    }
+}

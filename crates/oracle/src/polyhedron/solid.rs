@@ -36,6 +36,15 @@ impl PolyhedronSurface {
         self.outward_at(p, n).is_some()
     }
 
+    /// Whether `p`, a point of the input triangles, lies on the boundary of the solid
+    /// {w > 1/2} (the test of [`Self::on_boundary`] on the triangle nearest to `p`): false
+    /// on an interior membrane or the inner sheet of overlapping shells, which the solid's
+    /// surface does not follow.
+    pub fn bounds_solid_at(&self, p: DVec3) -> bool {
+        let (_, k, _, _) = self.bvh.closest(p);
+        self.on_boundary(k as usize, p)
+    }
+
     /// At a point `p` of a triangle with unit normal `n`: `Some(±n)`, the side where
     /// `1/2 − w` is positive (outside the solid), if `1/2 − w` has opposite signs at
     /// `p ± δ n` (`δ` 1e-6 of the bounding box diagonal); `None` if the triangle is not on

@@ -598,6 +598,22 @@ impl Input<'static> {
             .flatten();
         let size = poly.suggested_size();
         let sharp_edges = poly.sharp_edges(SHARP_DEG);
+        // The data the output must stay near: samples of the input triangles, on a broken
+        // mesh only those on the boundary of the solid {w > 1/2} that is meshed (an interior
+        // membrane or the inner sheet of overlapping shells is not part of S: `data-support`
+        // FAILed `sphere_membrane.off` at every size, its membrane "not covered").
+        let mut support = verify::data_support::mesh_samples(mesh, MESH_SUPPORT_SAMPLES);
+        if !poly.is_watertight() {
+            use rayon::prelude::*;
+            let kept: Vec<_> = support
+                .par_iter()
+                .copied()
+                .filter(|&p| poly.bounds_solid_at(p))
+                .collect();
+            if !kept.is_empty() {
+                support = kept;
+            }
+        }
         let pstats = poly.stats().clone();
         let mut notes = vec![format!(
             "polyhedron: {} vertices, {} triangles, {}; {} sharp edges (normals > {SHARP_DEG} deg apart); suggested size {size:.5} (bbox diagonal / 50)",
@@ -636,10 +652,7 @@ impl Input<'static> {
         input.stats.polyhedron = Some(pstats);
         input.sharp_edges = sharp_edges;
         input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);
-        input.support_data = Some(verify::data_support::mesh_samples(
-            mesh,
-            MESH_SUPPORT_SAMPLES,
-        ));
+        input.support_data = Some(support);
         input.source_topology = source_topology;
         Ok(input)
     }
