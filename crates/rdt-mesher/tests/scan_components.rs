@@ -25,6 +25,15 @@ fn t1_crop() -> Input<'static> {
     .unwrap()
 }
 
+/// `input` meshed at a constant size, verified.
+fn run_at(input: &Input, size: f64) -> rdt_mesher::pipeline::Outcome {
+    let req = Request {
+        size: SizeRequest::Size(size),
+        ..Default::default()
+    };
+    run(input, &req).unwrap()
+}
+
 /// An `n`^3 image of 1-unit voxels at the identity affine, meshed at `iso`.
 fn cube_image(n: usize, voxels: oracle::image::Voxels, iso: f64, name: &str) -> Input<'static> {
     let vol = oracle::image::Volume::new([n; 3], voxels, glam::DAffine3::IDENTITY).unwrap();
@@ -38,11 +47,7 @@ fn cube_image(n: usize, voxels: oracle::image::Voxels, iso: f64, name: &str) -> 
 #[test]
 fn every_scan_component_is_accounted_for_and_a_removed_piece_is_missed() {
     let input = t1_crop();
-    let req = Request {
-        size: SizeRequest::Size(2.0),
-        ..Default::default()
-    };
-    let out = run(&input, &req).unwrap();
+    let out = run_at(&input, 2.0);
     let rep = out.report.as_ref().unwrap();
     let acc = rep.scan_components.as_ref().expect("images are accounted");
     assert_eq!(
@@ -95,11 +100,7 @@ fn every_scan_component_is_accounted_for_and_a_removed_piece_is_missed() {
 #[test]
 fn a_component_in_two_pieces_fails_scan_topology_and_names_the_extra_piece() {
     let input = t1_crop();
-    let req = Request {
-        size: SizeRequest::Size(2.0),
-        ..Default::default()
-    };
-    let out = run(&input, &req).unwrap();
+    let out = run_at(&input, 2.0);
     let rep = out.report.as_ref().unwrap();
     assert_eq!(
         rep.status("scan-topology"),
@@ -186,11 +187,7 @@ fn a_piece_refined_to_a_tip_at_the_join_is_bridged_from_its_side() {
         ..Default::default()
     };
     let input = Input::open(file, &opts).unwrap();
-    let req = Request {
-        size: SizeRequest::Size(1.0),
-        ..Default::default()
-    };
-    let out = run(&input, &req).unwrap();
+    let out = run_at(&input, 1.0);
     let rep = out.report.as_ref().unwrap();
     let acc = rep.scan_components.as_ref().unwrap();
     assert_eq!(
@@ -242,11 +239,7 @@ fn voxels_at_the_iso_value_inside_the_solid_are_not_surfaces() {
     }
     let input = cube_image(n, oracle::image::Voxels::F32(v), 1.0, "block");
     assert_eq!(input.components, Some(2));
-    let req = Request {
-        size: SizeRequest::Size(1.0),
-        ..Default::default()
-    };
-    let out = run(&input, &req).unwrap();
+    let out = run_at(&input, 1.0);
     let rep = out.report.as_ref().unwrap();
     let acc = rep.scan_components.as_ref().unwrap();
     assert_eq!(
@@ -303,11 +296,7 @@ fn a_flat_cavity_at_voxels_equal_to_the_iso_value_is_meshed() {
     let input = cube_image(n, oracle::image::Voxels::U8(v), 171.0, "flat cavity");
     assert_eq!(input.components, Some(2));
     for size in [1.0, 2.0, 4.0] {
-        let req = Request {
-            size: SizeRequest::Size(size),
-            ..Default::default()
-        };
-        let out = run(&input, &req).unwrap();
+        let out = run_at(&input, size);
         let rep = out.report.as_ref().unwrap();
         let acc = rep.scan_components.as_ref().unwrap();
         assert_eq!(

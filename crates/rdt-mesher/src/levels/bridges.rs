@@ -142,12 +142,22 @@ fn bridge_splits(
                 };
                 // Below a voxel, only the nearest pairs (wide failures: 60 ms each on the T1).
                 let wide = bbox.0.distance(bbox.1) >= h;
-                let made = bridge(out, img, &ps[i], &ps[j], &join, criteria, wide).or_else(|| {
+                let made = bridge(
+                    out,
+                    img,
+                    &ps[i],
+                    &ps[j],
+                    &join,
+                    criteria,
+                    wide,
+                    [join.via; 2],
+                )
+                .or_else(|| {
                     let keep = wide
                         && !super::components::is_fragment(&out.mesh, &ps[i], &ps[0], h, criteria);
                     let anchors =
                         mutual_anchors(&out.mesh, &ps[i], &ps[j], join.via).filter(|_| keep)?;
-                    bridge_from(out, img, &ps[i], &ps[j], &join, criteria, wide, anchors)
+                    bridge(out, img, &ps[i], &ps[j], &join, criteria, wide, anchors)
                 });
                 if let Some(d) = made {
                     let (ri, rj) = (root_of(&merged, i), root_of(&merged, j));
@@ -210,28 +220,10 @@ fn find_join(
     None
 }
 
-/// Replace a triangle of piece `a` and one of piece `b` near the join by a tube between
-/// their loops: of the [`NEAR`] triangles of each piece nearest `j.via`, the pairs by
-/// increasing distance between their centroids, each with 0 to [`MAX_RINGS`] rings of points
-/// of S and either zipper (`tube_with_rings`), the first tube whose circumballs are within
-/// sigma and which intersects no other triangle (then, `wide`, the wider pairs). `None` (the
-/// mesh unchanged) when there is none.
-fn bridge(
-    out: &mut MeshResult,
-    img: &ImageSurface,
-    a: &[u32],
-    b: &[u32],
-    j: &Join,
-    criteria: &crate::Criteria,
-    wide: bool,
-) -> Option<TopologyDecision> {
-    bridge_from(out, img, a, b, j, criteria, wide, [j.via; 2])
-}
-
 /// A second try for [`bridge`], for a piece the fragment rule would keep (over a voxel
 /// across, not hanging at the component's largest piece: `components::is_fragment`; a
-/// fragment is better dropped than tied by a tube of needles): where a piece is refined far below the size at the join (a
-/// sub-voxel tip reaching for a face saddle, its triangles a hundredth of a voxel), the
+/// fragment is better dropped than tied by a tube of needles): where a piece is refined far
+/// below the size at the join (a sub-voxel tip reaching for a face saddle, its triangles a hundredth of a voxel), the
 /// triangles of that piece nearest the join are all on its tip, and every tube from them to
 /// the other piece crosses the piece itself (`nibabel_anatomical` at iso 9444.5, `--size 1`:
 /// a piece of 946 triangles on the image's border, 1.4 mm from the rest of its component).
@@ -251,10 +243,15 @@ fn mutual_anchors(mesh: &meshio::TriMesh, a: &[u32], b: &[u32], via: DVec3) -> O
     Some([cb, ca])
 }
 
-/// [`bridge`] with the candidate triangles of `a` taken nearest `anchors[0]` and those of `b`
-/// nearest `anchors[1]`.
+/// Replace a triangle of piece `a` and one of piece `b` near the join by a tube between
+/// their loops: of the [`NEAR`] triangles of `a` nearest `anchors[0]` and of `b` nearest
+/// `anchors[1]` (both the join `j.via` first; then see [`mutual_anchors`]), the pairs by
+/// increasing distance between their centroids, each with 0 to [`MAX_RINGS`] rings of points
+/// of S and either zipper (`tube_with_rings`), the first tube whose circumballs are within
+/// sigma and which intersects no other triangle (then, `wide`, the wider pairs). `None` (the
+/// mesh unchanged) when there is none.
 #[allow(clippy::too_many_arguments)]
-fn bridge_from(
+fn bridge(
     out: &mut MeshResult,
     img: &ImageSurface,
     a: &[u32],

@@ -116,7 +116,16 @@ fn a_split_is_bridged_within_sigma_else_oversized_up_to_the_cap_else_left() {
         };
         let (a, b): (Vec<u32>, Vec<u32>) = ((0..6).collect(), (6..12).collect());
         let criteria = crate::Criteria::uniform(sigma);
-        let Some(d) = bridge(&mut out, &img, &a, &b, &join, &criteria, true) else {
+        let Some(d) = bridge(
+            &mut out,
+            &img,
+            &a,
+            &b,
+            &join,
+            &criteria,
+            true,
+            [join.via; 2],
+        ) else {
             // Left split only when every tube is over the cap.
             none += 1;
             assert!(
