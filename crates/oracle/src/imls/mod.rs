@@ -209,8 +209,10 @@ impl PointSetParams {
 /// What [`PointSetSurface::new`] computed.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointSetStats {
-    /// Input points.
+    /// Points used: the input's, exact duplicates merged.
     pub points: usize,
+    /// Input points equal to an earlier one (merged; the first keeps its normal).
+    pub duplicates: usize,
     /// Whether the normals were estimated (no input normals).
     pub estimated_normals: bool,
     /// Components of the kNN graph (one orientation tree each).
@@ -300,6 +302,19 @@ impl PointSetSurface {
         params: &PointSetParams,
     ) -> Result<Self, PointSetError> {
         validate(points, normals, params)?;
+        // Exact duplicates (merged scans, repeated rows) are one point: as separate points
+        // they are each other's nearest neighbours at distance 0, which shrinks the spacing,
+        // the kernel radius and the PCA neighbourhoods (2,000 sphere points given three times
+        // meshed to genus 25). The first of each keeps its normal.
+        let (kept, duplicates) = distinct_points(points);
+        let (points, normals): (Vec<DVec3>, Option<Vec<DVec3>>) = (
+            kept.iter().map(|&i| points[i]).collect(),
+            normals.map(|ns| kept.iter().map(|&i| ns[i]).collect()),
+        );
+        if points.len() < MIN_POINTS {
+            return Err(PointSetError::TooFewPoints(points.len()));
+        }
+        let (points, normals) = (&points[..], normals.as_deref());
         let n = points.len();
         let coords: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
         let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
@@ -340,6 +355,7 @@ impl PointSetSurface {
         };
         let stats = PointSetStats {
             points: n,
+            duplicates,
             estimated_normals: estimated,
             components: roots.len(),
             median_spacing: med_spacing,
@@ -611,6 +627,18 @@ fn validate(
         return Err(PointSetError::Coplanar { ratio });
     }
     Ok(())
+}
+
+/// The indices of the first occurrence of each distinct point (bitwise equal coordinates,
+/// `-0.0` as `0.0`), in input order, and the number of the others.
+fn distinct_points(points: &[DVec3]) -> (Vec<usize>, usize) {
+    let key = |p: &DVec3| p.to_array().map(|c| (c + 0.0).to_bits());
+    let mut seen = std::collections::HashSet::with_capacity(points.len());
+    let kept: Vec<usize> = (0..points.len())
+        .filter(|&i| seen.insert(key(&points[i])))
+        .collect();
+    let duplicates = points.len() - kept.len();
+    (kept, duplicates)
 }
 
 /// The `k` nearest neighbours of each point (without the point itself, robust to duplicates:

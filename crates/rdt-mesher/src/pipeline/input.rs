@@ -528,6 +528,8 @@ impl Input<'static> {
         let dm = ps.dm_inf_hint();
         let ps_stats = ps.stats().clone();
         let normals = ps.normals().to_vec();
+        // The data, as the surface uses it (duplicates merged), beside its normals.
+        let support = ps.points().to_vec();
         let mut input = Input::with(
             Held::Owned(Box::new(ps)),
             name,
@@ -539,12 +541,16 @@ impl Input<'static> {
             points: cloud.points.len(),
             normals_given: had_normals,
         });
-        input.support_data = Some(cloud.points.clone());
+        input.support_data = Some(support);
         input.support_normals = Some(normals);
         let st = ps_stats;
         input.notes.push(format!(
-            "point set: {} points, normals {}; suggested size {size:.5}; surface trusted within the data's band (median {:.3e} = 2 x spacing {:.3e} + 3 x noise {:.3e}), far-field sign beyond",
+            "point set: {} points{}, normals {}; suggested size {size:.5}; surface trusted within the data's band (median {:.3e} = 2 x spacing {:.3e} + 3 x noise {:.3e}), far-field sign beyond",
             cloud.points.len(),
+            match st.duplicates {
+                0 => String::new(),
+                d => format!(" ({d} equal to an earlier point, merged)"),
+            },
             if had_normals {
                 "given"
             } else {
