@@ -189,15 +189,7 @@ fn sparse_point_sets_still_mesh_to_closed_manifolds() {
 /// patch stalled.)
 #[test]
 fn repeated_points_give_the_mesh_of_the_points_given_once() {
-    let n = 2000;
-    let once: Vec<DVec3> = (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let t = i as f64 * 2.399_963_229_728_653;
-            let r = (1.0 - z * z).sqrt();
-            DVec3::new(r * t.cos(), r * t.sin(), z)
-        })
-        .collect();
+    let once = oracle::implicit::fibonacci_sphere(2000);
     let thrice: Vec<DVec3> = once.iter().chain(&once).chain(&once).copied().collect();
     let mesh = |points: Vec<DVec3>| {
         let cloud = oracle::pointset::PointCloud {

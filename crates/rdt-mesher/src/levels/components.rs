@@ -152,12 +152,12 @@ fn drop_fragments(
         let mut near_largest: Option<NearestVertex> = None;
         for p in &ps[1..] {
             let (center, size) = bbox(p.iter().map(|&v| mesh.vertices[v as usize]));
-            let mut hanging = || {
+            let hanging = || {
                 near_largest
                     .get_or_insert_with(|| NearestVertex::new(mesh, &ps[0]))
                     .holds(mesh, p, h, criteria)
             };
-            if size < h || hanging() {
+            if fragment_rule(size, h, hanging) {
                 p.iter().for_each(|&v| dead[v as usize] = true);
                 found.push((center, size, p.clone()));
             }
@@ -188,8 +188,6 @@ fn drop_fragments(
     out_d
 }
 
-/// The distance from a point to the nearest of some vertices of a mesh (the largest piece of
-/// a split component: the fragment rule).
 /// Whether the fragment rule would drop `piece`, a piece of a scan component whose largest
 /// piece is `largest` (module docs): its box diagonal is below `h`, or it hangs within
 /// `h + sigma` of `largest`.
@@ -201,9 +199,19 @@ pub(super) fn is_fragment(
     criteria: &crate::Criteria,
 ) -> bool {
     let (_, size) = bbox(piece.iter().map(|&v| mesh.vertices[v as usize]));
-    size < h || NearestVertex::new(mesh, largest).holds(mesh, piece, h, criteria)
+    fragment_rule(size, h, || {
+        NearestVertex::new(mesh, largest).holds(mesh, piece, h, criteria)
+    })
 }
 
+/// The fragment rule on a piece whose box diagonal is `size`: below `h`, or `hanging` (every
+/// vertex within `h + sigma` of the largest piece; evaluated only when needed).
+fn fragment_rule(size: f64, h: f64, hanging: impl FnOnce() -> bool) -> bool {
+    size < h || hanging()
+}
+
+/// The distance from a point to the nearest of some vertices of a mesh (the largest piece of
+/// a split component: the fragment rule).
 struct NearestVertex(Option<kiddo::ImmutableKdTree<f64, 3>>);
 
 impl NearestVertex {
