@@ -117,6 +117,35 @@ fn a_ten_to_one_density_scan_keeps_its_genus_within_the_bound() {
 }
 
 #[test]
+fn a_spurious_handle_fails_data_support() {
+    // The scan table's fandisk row at 0.5% noise with estimated normals: the output is one
+    // closed manifold of genus 1 where the model has genus 0, a tunnel at about
+    // (4.77, 15.77, -0.03) a fifth of the data's band across. Until the handle rule, verify
+    // PASSed it (a point set has no genus to compare with).
+    let spec = ScanSpec {
+        points: 40_000,
+        noise: 0.005,
+        normals: false,
+        seed: 0,
+        ..Default::default()
+    };
+    let (_, out, _) = mesh_model_scan("fandisk", &spec, 0.006);
+    let r = out.report.as_ref().unwrap();
+    assert_eq!(r.topology.as_ref().unwrap().genera(), vec![Some(1)]);
+    assert_eq!(
+        r.check("data-support").unwrap().status,
+        Status::Fail,
+        "{}",
+        r.summary()
+    );
+    let ds = r.data_support.as_ref().unwrap();
+    let h = &ds.unsupported_handles[0];
+    let at = DVec3::from_array(h.at);
+    assert!(at.distance(DVec3::new(4.77, 15.77, -0.03)) < 0.3, "{h:?}");
+    assert!(h.radius < 0.5 * h.band, "{h:?}");
+}
+
+#[test]
 fn a_missing_patch_is_bridged_and_flagged() {
     let spec = ScanSpec {
         points: 15_000,

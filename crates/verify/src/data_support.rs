@@ -32,8 +32,12 @@
 //!   the check then runs on the mesh written and lists them
 //!   ([`DataSupport::dropped_components`]).
 //!
+//! - A closed mesh's handles that the data does not show (a tunnel smaller than the band, or
+//!   facing against the data normals): [`handles`], [`DataSupport::unsupported_handles`].
+//!
 //! Invariants: deterministic (parallel maps collected in order, sequential reductions); the
-//! check FAILs iff some mesh component is unsupported or some data component is uncovered.
+//! check FAILs iff some mesh component is unsupported, some data component is uncovered or
+//! some handle is unsupported.
 
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -45,7 +49,9 @@ use crate::distance::{MeshDistance, triangle_samples};
 use crate::topology::{Dsu, vertex_components};
 
 mod drop_rule;
+mod handles;
 pub use drop_rule::{Droppable, MAX_DROP_TRIES, droppable_components};
+pub use handles::UnsupportedHandle;
 
 /// Parameters of the data-support check.
 #[derive(Clone, Debug, PartialEq)]
@@ -161,12 +167,17 @@ pub struct DataSupport {
     /// not the mesher's). The check is on the mesh without them; they are listed so that
     /// the change is not silent.
     pub dropped_components: Vec<ComponentSupport>,
+    /// Handles of the mesh the data does not show, smallest first (see [`handles`]).
+    pub unsupported_handles: Vec<UnsupportedHandle>,
+    pub unsupported_handles_total: usize,
 }
 
 impl DataSupport {
     /// Every mesh component supported and every data component covered.
     pub fn passed(&self) -> bool {
-        self.unsupported_components == 0 && self.uncovered_data_components == 0
+        self.unsupported_components == 0
+            && self.uncovered_data_components == 0
+            && self.unsupported_handles_total == 0
     }
 
     /// The check's one-line detail.
@@ -245,6 +256,10 @@ impl DataSupport {
                 self.dropped_components.len(),
                 list.join("; ")
             );
+        }
+        if let Some(h) = self.unsupported_handles.first() {
+            s += "; ";
+            s += &h.describe(self.unsupported_handles_total);
         }
         s += &format!("; {} data components", self.data_components_total);
         if self.uncovered_data_components > 0 {
@@ -343,6 +358,11 @@ impl DataBand {
             .nearest_one::<SquaredEuclidean<f64>>()
             .execute()
             .item as usize
+    }
+
+    /// The band radius of the data point nearest to `x`.
+    pub fn band_at(&self, x: DVec3) -> f64 {
+        self.band[self.nearest(x)]
     }
 
     /// Is `x` within the band of its nearest data point? Also the distance to it.
@@ -446,7 +466,13 @@ pub fn data_support_oriented(
     }
     let band = DataBand::new(data, opts)?;
     let normals = normals.filter(|n| n.len() == data.len());
-    let (components, _, per_tri) = component_measures(mesh, &band, normals);
+    let (components, _, per_tri, agree) = component_measures(mesh, &band, normals);
+    let handles = handles::unsupported_handles(
+        mesh,
+        &|x| band.band_at(x),
+        agree.as_deref(),
+        opts.min_agreement,
+    );
     let total_area: f64 = per_tri.iter().map(|x| x.0).sum();
     let supported_area: f64 = per_tri.iter().map(|x| x.0 * x.1).sum();
     let unsupported_components = components
@@ -494,17 +520,25 @@ pub fn data_support_oriented(
         min_share: opts.min_share,
         min_agreement: normals.is_some().then_some(opts.min_agreement),
         dropped_components: Vec::new(),
+        unsupported_handles_total: handles.len(),
+        unsupported_handles: handles.into_iter().take(ml.max(1)).collect(),
     })
 }
 
 /// Every component of `mesh` (in the order of [`vertex_components`]) with its support, the
-/// component of each triangle, and each triangle's (area, supported share).
+/// component of each triangle, each triangle's (area, supported share) and, with normals,
+/// its area-weighted agreement.
 #[allow(clippy::type_complexity)]
 fn component_measures(
     mesh: &TriMesh,
     band: &DataBand,
     normals: Option<&[DVec3]>,
-) -> (Vec<ComponentSupport>, Vec<usize>, Vec<(f64, f64)>) {
+) -> (
+    Vec<ComponentSupport>,
+    Vec<usize>,
+    Vec<(f64, f64)>,
+    Option<Vec<f64>>,
+) {
     let v = &mesh.vertices;
     let (per_tri, agree) = per_triangle(mesh, band, normals);
     // Mesh components (vertex-connected).
@@ -547,7 +581,7 @@ fn component_measures(
             }
         })
         .collect();
-    (components, comp_of_triangle, per_tri)
+    (components, comp_of_triangle, per_tri, agree)
 }
 
 /// Which data points the mesh covers: within their band of it (or twice their spacing,

@@ -50,6 +50,7 @@ pub mod medial;
 pub mod quality;
 pub mod scan_components;
 pub mod scan_sim;
+pub mod short_loops;
 mod surface_checks;
 pub mod topology;
 

@@ -51,6 +51,11 @@ pub struct ScansArgs {
     /// `mesh --keep-unsupported`); by default the pipeline drops them when no data is lost.
     #[arg(long)]
     pub keep_unsupported: bool,
+    /// Write each row's scan (`NAME.xyz`: `x y z`, with `nx ny nz` when the normals are
+    /// given) and output mesh (`NAME.ply`) into this directory, to re-run or inspect a row
+    /// with `mesh` and `verify`.
+    #[arg(long)]
+    pub save: Option<PathBuf>,
 }
 
 /// A model of `fixtures/models` and its genus.
@@ -184,6 +189,7 @@ fn run_row(
     spec: &ScanSpec,
     size: f64,
     keep_unsupported: bool,
+    save: Option<&std::path::Path>,
 ) -> Result<Row> {
     let path = root().join(format!("fixtures/models/{model}.ply"));
     let source = meshio::read(&path).with_context(|| format!("reading {}", path.display()))?;
@@ -202,6 +208,9 @@ fn run_row(
         ..Default::default()
     };
     let out = plan(&input, &req)?.execute(&mut |_| {})?;
+    if let Some(dir) = save {
+        save_row(dir, &name, &scan.points, scan.normals.as_deref(), &out.mesh)?;
+    }
     let dropped = out
         .stats
         .topology_decisions
@@ -271,6 +280,31 @@ fn run_row(
     })
 }
 
+/// `--save`: the scan as `DIR/NAME.xyz` and the output as `DIR/NAME.ply`.
+fn save_row(
+    dir: &std::path::Path,
+    name: &str,
+    points: &[DVec3],
+    normals: Option<&[DVec3]>,
+    mesh: &TriMesh,
+) -> Result<()> {
+    use std::fmt::Write as _;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut xyz = String::with_capacity(points.len() * 64);
+    for (i, p) in points.iter().enumerate() {
+        let _ = write!(xyz, "{} {} {}", p.x, p.y, p.z);
+        if let Some(n) = normals {
+            let _ = write!(xyz, " {} {} {}", n[i].x, n[i].y, n[i].z);
+        }
+        xyz.push('\n');
+    }
+    let path = dir.join(format!("{name}.xyz"));
+    std::fs::write(&path, xyz).with_context(|| format!("writing {}", path.display()))?;
+    let path = dir.join(format!("{name}.ply"));
+    meshio::write(&path, mesh).with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
 fn markdown(rows: &[Row], points: usize, size: f64) -> String {
     let mut s = format!(
         "{points} points per scan, `--size` {}% of the diagonal; Hausdorff: two-sided, to the source mesh, % of the diagonal.\n\n",
@@ -330,7 +364,14 @@ pub fn run(a: &ScansArgs) -> Result<()> {
         {
             continue;
         }
-        let r = run_row(model, genus, &spec, a.size, a.keep_unsupported)?;
+        let r = run_row(
+            model,
+            genus,
+            &spec,
+            a.size,
+            a.keep_unsupported,
+            a.save.as_deref(),
+        )?;
         outln!(
             "{:<34} {:>6} V  comps {}  dropped {:?}  genus {:?}  H {:.3}% (<= {:.2}%; to {:.3}% at {:?}, from {:.3}% at {:?})  verify {}  {:.1} s  {}",
             r.name,

@@ -52,7 +52,7 @@ pub fn droppable_components(
         return Vec::new();
     };
     let normals = normals.filter(|n| n.len() == data.len());
-    let (comps, comp_of_triangle, _) = component_measures(mesh, &band, normals);
+    let (comps, comp_of_triangle, _, _) = component_measures(mesh, &band, normals);
     let mut candidates: Vec<usize> = (0..comps.len())
         .filter(|&k| !comps[k].supported(opts.min_share, opts.min_agreement))
         .collect();
