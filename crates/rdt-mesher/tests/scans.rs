@@ -23,6 +23,16 @@ fn mesh_model_scan(
     spec: &ScanSpec,
     size: f64,
 ) -> (verify::scan_sim::Scan, rdt_mesher::pipeline::Outcome, f64) {
+    mesh_model_scan_with(name, spec, size, false)
+}
+
+/// [`mesh_model_scan`], keeping what the data does not support if `keep_unsupported`.
+fn mesh_model_scan_with(
+    name: &str,
+    spec: &ScanSpec,
+    size: f64,
+    keep_unsupported: bool,
+) -> (verify::scan_sim::Scan, rdt_mesher::pipeline::Outcome, f64) {
     let source = model(name);
     let diag = diagonal(&source);
     let scan = simulate(&source, spec);
@@ -33,6 +43,7 @@ fn mesh_model_scan(
     let input = Input::point_cloud(cloud, "scan", "scan".into()).unwrap();
     let req = Request {
         size: SizeRequest::Size(size * diag),
+        keep_unsupported,
         ..Default::default()
     };
     let out = plan(&input, &req).unwrap().execute(&mut |_| {}).unwrap();
@@ -117,11 +128,11 @@ fn a_ten_to_one_density_scan_keeps_its_genus_within_the_bound() {
 }
 
 #[test]
-fn a_spurious_handle_fails_data_support() {
-    // The scan table's fandisk row at 0.5% noise with estimated normals: the output is one
-    // closed manifold of genus 1 where the model has genus 0, a tunnel at about
-    // (4.77, 15.77, -0.03) a fifth of the data's band across. Until the handle rule, verify
-    // PASSed it (a point set has no genus to compare with).
+fn a_spurious_handle_is_cut_and_fails_data_support_when_kept() {
+    // The scan table's fandisk row at 0.5% noise with estimated normals: the IMLS surface has
+    // a tunnel at about (4.77, 15.77, -0.03), a fifth of the data's band across, so the raw
+    // output (`--keep-unsupported`) has genus 1 where the model has genus 0. Until the
+    // handle rule, verify PASSed it (a point set has no genus to compare with).
     let spec = ScanSpec {
         points: 40_000,
         noise: 0.005,
@@ -129,8 +140,8 @@ fn a_spurious_handle_fails_data_support() {
         seed: 0,
         ..Default::default()
     };
-    let (_, out, _) = mesh_model_scan("fandisk", &spec, 0.006);
-    let r = out.report.as_ref().unwrap();
+    let (_, raw, _) = mesh_model_scan_with("fandisk", &spec, 0.006, true);
+    let r = raw.report.as_ref().unwrap();
     assert_eq!(r.topology.as_ref().unwrap().genera(), vec![Some(1)]);
     assert_eq!(
         r.check("data-support").unwrap().status,
@@ -143,6 +154,22 @@ fn a_spurious_handle_fails_data_support() {
     let at = DVec3::from_array(h.at);
     assert!(at.distance(DVec3::new(4.77, 15.77, -0.03)) < 0.3, "{h:?}");
     assert!(h.radius < 0.5 * h.band, "{h:?}");
+    // By default the handle is cut there: genus 0, verify PASS, the decision reported.
+    let (_, out, _) = mesh_model_scan("fandisk", &spec, 0.006);
+    assert_one_closed_component_passing(&out, 0);
+    let cut: Vec<_> = out
+        .stats
+        .topology_decisions
+        .iter()
+        .filter(|d| {
+            matches!(
+                d.kind,
+                rdt_mesher::DecisionKind::CutUnsupportedHandle { .. }
+            )
+        })
+        .collect();
+    assert!(!cut.is_empty());
+    assert!(cut.iter().all(|d| d.center.distance(at) < 0.5), "{cut:?}");
 }
 
 #[test]

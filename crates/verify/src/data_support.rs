@@ -525,6 +525,28 @@ pub fn data_support_oriented(
     })
 }
 
+/// The handles of the closed mesh `mesh` that the data does not show ([`handles`]), all of
+/// them, smallest first (what the check would list; the mesher cuts them); empty when the
+/// data has fewer than 2 points or the mesh is not closed.
+pub fn unsupported_handles(
+    mesh: &TriMesh,
+    data: &[DVec3],
+    normals: Option<&[DVec3]>,
+    opts: &SupportOptions,
+) -> Vec<UnsupportedHandle> {
+    let Some(band) = DataBand::new(data, opts) else {
+        return Vec::new();
+    };
+    let normals = normals.filter(|n| n.len() == data.len());
+    let (_, agree) = per_triangle(mesh, &band, normals);
+    handles::unsupported_handles(
+        mesh,
+        &|x| band.band_at(x),
+        agree.as_deref(),
+        opts.min_agreement,
+    )
+}
+
 /// Every component of `mesh` (in the order of [`vertex_components`]) with its support, the
 /// component of each triangle, each triangle's (area, supported share) and, with normals,
 /// its area-weighted agreement.

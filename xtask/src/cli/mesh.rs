@@ -499,6 +499,7 @@ fn print_single(spec: &str, out: &Outcome, out_path: &Path) {
         );
     }
     print_dropped(out);
+    print_cut_handles(out);
     if let Some(line) = out.verify_line() {
         outln!("{line}");
     }
@@ -539,6 +540,46 @@ fn print_dropped(out: &Outcome) {
             100.0 * c.supported_share,
             c.agreement
                 .map_or(String::new(), |a| format!(", orientation agreement {a:.2}"))
+        );
+    }
+}
+
+/// The handles cut as not shown by the input data (`pipeline`'s rule; kept with
+/// `--keep-unsupported`), one line each.
+fn print_cut_handles(out: &Outcome) {
+    let cut: Vec<_> = out
+        .stats
+        .topology_decisions
+        .iter()
+        .filter_map(|d| match &d.kind {
+            rdt_mesher::DecisionKind::CutUnsupportedHandle { loops, handle } => {
+                Some((d, *loops, handle))
+            }
+            _ => None,
+        })
+        .collect();
+    if cut.is_empty() {
+        return;
+    }
+    outln!(
+        "cut {} handle(s) the data does not show (--keep-unsupported keeps them; listed in the report's topology_decisions):",
+        cut.len()
+    );
+    for (d, loops, h) in cut {
+        let [x, y, z] = d.center.to_array();
+        outln!(
+            "  at ({x:.4}, {y:.4}, {z:.4}), {:.3e} across: a tunnel within a geodesic ball of {:.2} bands ({}{}); {} triangles removed, {loops} loops closed with {}",
+            d.size,
+            h.radius / h.band,
+            if h.reason == "below_band" {
+                "below the data's band"
+            } else {
+                "facing against the data"
+            },
+            h.agreement
+                .map_or(String::new(), |a| format!(", agreement {a:.2}")),
+            d.facets_removed,
+            d.facets_added
         );
     }
 }
@@ -620,6 +661,7 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
         }
     }
     print_dropped(out);
+    print_cut_handles(out);
     print_data_failures(out);
     if let Verdict::Fail(failures) = &out.verdict {
         for f in failures {

@@ -101,6 +101,17 @@ pub enum DecisionKind {
     /// (`crate::pipeline`'s rule; `--keep-unsupported` keeps it), with the `data-support`
     /// check's figures on the raw output.
     DropUnsupportedComponent(verify::data_support::ComponentSupport),
+    /// Point sets and meshes: a handle of the output the input data does not show (a tunnel
+    /// within half the data's band, or facing against the data normals), cut: the stars of
+    /// its ball's vertices removed and the `loops` boundary loops left closed apart
+    /// (`crate::pipeline`'s rule; `--keep-unsupported` keeps it), with the `data-support`
+    /// check's figures on the raw output.
+    CutUnsupportedHandle {
+        /// Boundary loops closed.
+        loops: usize,
+        /// The handle, as the check measured it.
+        handle: verify::data_support::UnsupportedHandle,
+    },
 }
 
 /// One decision of the topological repair, with where it was taken.

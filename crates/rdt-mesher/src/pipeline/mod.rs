@@ -29,6 +29,7 @@
 mod budget;
 mod error;
 mod forecast;
+mod handles;
 mod input;
 mod outcome;
 mod plan;

@@ -300,7 +300,7 @@ impl Plan<'_, '_> {
         out.sigma = Some(sigma);
         out.notes = self.notes;
         if !self.request.keep_unsupported {
-            super::unsupported::drop_unsupported(&mut out, self.input, sigma);
+            data_rules(&mut out, self.input, sigma, &self.options);
         }
         if let Some(n) = self
             .forecast
@@ -345,7 +345,7 @@ impl Plan<'_, '_> {
         let mut out = Outcome::new(tp.second);
         out.notes = self.notes;
         if !self.request.keep_unsupported {
-            super::unsupported::drop_unsupported(&mut out, self.input, tp.sigma0);
+            data_rules(&mut out, self.input, tp.sigma0, &self.options);
         }
         if self.request.verify {
             progress(Event::Verifying);
@@ -399,7 +399,7 @@ impl Plan<'_, '_> {
         let mut out = Outcome::new(a.result);
         out.notes = self.notes;
         if !self.request.keep_unsupported {
-            super::unsupported::drop_unsupported(&mut out, self.input, a.floor);
+            data_rules(&mut out, self.input, a.floor, &self.options);
         }
         if self.request.verify {
             progress(Event::Verifying);
@@ -511,4 +511,12 @@ fn resolution(input: &Input) -> Option<f64> {
         super::InputKind::PointSet => input.default_size,
         _ => None,
     }
+}
+
+/// The rules for what the input data does not show, on `out` (meshed from `input` at size
+/// `sigma` with `opts`): the unsupported components dropped (`super::unsupported`), then
+/// the unsupported handles cut (`super::handles`).
+fn data_rules(out: &mut Outcome, input: &Input, sigma: f64, opts: &crate::MeshOptions) {
+    super::unsupported::drop_unsupported(out, input, sigma);
+    super::handles::cut_unsupported_handles(out, input, sigma, opts);
 }

@@ -52,7 +52,7 @@ use std::collections::HashSet;
 
 /// Apply the rule of the module docs to `out` (meshed from `input` at size `sigma`, which
 /// sets the band's floor on mesh inputs, see [`support_options`]).
-pub(crate) fn drop_unsupported(out: &mut Outcome, input: &Input, sigma: f64) {
+pub(super) fn drop_unsupported(out: &mut Outcome, input: &Input, sigma: f64) {
     let Some(data) = &input.support_data else {
         return;
     };
@@ -91,6 +91,15 @@ pub(crate) fn drop_unsupported(out: &mut Outcome, input: &Input, sigma: f64) {
     crate::levels::repair::retain_marked(&mut mesh.triangles, &mut out.balls, &live);
     let before: Vec<DVec3> = mesh.vertices.clone();
     crate::levels::repair::compact(mesh);
+    after_edit(out, &before);
+    out.stats.topology_decisions.extend(decisions);
+}
+
+/// The figures of `out` after an edit of its mesh (the vertices `before` it): the sample
+/// loses the vertices gone; vertex and facet counts, the smallest angle and, at a constant
+/// size, the largest r / sigma measured again.
+pub(super) fn after_edit(out: &mut Outcome, before: &[DVec3]) {
+    let mesh = &out.mesh;
     let key = |p: &DVec3| p.to_array().map(f64::to_bits);
     let kept: HashSet<[u64; 3]> = mesh.vertices.iter().map(key).collect();
     let gone: HashSet<[u64; 3]> = before
@@ -118,7 +127,6 @@ pub(crate) fn drop_unsupported(out: &mut Outcome, input: &Input, sigma: f64) {
     {
         crate::levels::repair::record_max_r_over_sigma(st, m);
     }
-    st.topology_decisions.extend(decisions);
 }
 
 /// The components [`drop_unsupported`] dropped, as the `data-support` check measured them on

@@ -37,7 +37,8 @@ const MAX_CANDIDATES: usize = 64;
 /// A handle of the mesh that the data does not show.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct UnsupportedHandle {
-    /// A vertex of the tunnel (the seed of the smallest ball holding it).
+    /// A vertex of the tunnel (the seed of the smallest ball holding it) and its position.
+    pub vertex: u32,
     pub at: [f64; 3],
     /// That ball's geodesic radius: the tunnel's loop is about twice as long.
     pub radius: f64,
@@ -115,6 +116,7 @@ pub(super) fn unsupported_handles(
                 return None;
             };
             Some(UnsupportedHandle {
+                vertex: seed,
                 at: mesh.vertices[seed as usize].to_array(),
                 radius,
                 band: band_of(seed),
