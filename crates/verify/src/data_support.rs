@@ -534,6 +534,10 @@ pub fn unsupported_handles(
     normals: Option<&[DVec3]>,
     opts: &SupportOptions,
 ) -> Vec<UnsupportedHandle> {
+    // Genus 0 everywhere (most outputs): nothing to measure.
+    if !crate::short_loops::ShortLoops::new(mesh).is_some_and(|l| l.has_handles()) {
+        return Vec::new();
+    }
     let Some(band) = DataBand::new(data, opts) else {
         return Vec::new();
     };

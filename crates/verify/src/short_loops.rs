@@ -51,6 +51,11 @@ impl ShortLoops {
         Graph::new(mesh).map(|g| ShortLoops { g })
     }
 
+    /// Whether some component has genus at least 1 (else there is no handle to look for).
+    pub fn has_handles(&self) -> bool {
+        self.g.comp_genus.iter().any(|&g| g >= 1)
+    }
+
     /// The seeds (vertices of components of genus at least 1) whose geodesic ball of radius
     /// at most `limit(seed)` contains a handle (see the module docs), in increasing vertex
     /// order.

@@ -568,16 +568,9 @@ fn print_cut_handles(out: &Outcome) {
     for (d, loops, h) in cut {
         let [x, y, z] = d.center.to_array();
         outln!(
-            "  at ({x:.4}, {y:.4}, {z:.4}), {:.3e} across: a tunnel within a geodesic ball of {:.2} bands ({}{}); {} triangles removed, {loops} loops closed with {}",
+            "  at ({x:.4}, {y:.4}, {z:.4}), {:.3e} across: a tunnel within a geodesic ball of {}; {} triangles removed, {loops} loops closed with {}",
             d.size,
-            h.radius / h.band,
-            if h.reason == "below_band" {
-                "below the data's band"
-            } else {
-                "facing against the data"
-            },
-            h.agreement
-                .map_or(String::new(), |a| format!(", agreement {a:.2}")),
+            h.why(),
             d.facets_removed,
             d.facets_added
         );

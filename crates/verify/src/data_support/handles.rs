@@ -54,11 +54,20 @@ impl UnsupportedHandle {
     /// The check's detail for the smallest of `total` such handles.
     pub fn describe(&self, total: usize) -> String {
         format!(
-            "{total} handles the data does not show (smallest: a tunnel at ({:.4}, {:.4}, {:.4}) within a geodesic ball of radius {:.3e}, {:.2} bands, {}{})",
+            "{total} handles the data does not show (smallest: a tunnel at ({:.4}, {:.4}, {:.4}) within a geodesic ball of radius {:.3e}, {})",
             self.at[0],
             self.at[1],
             self.at[2],
             self.radius,
+            self.why()
+        )
+    }
+
+    /// Its size in bands and why it is unsupported, e.g. `0.41 bands, below the data's
+    /// band, agreement 0.27`.
+    pub fn why(&self) -> String {
+        format!(
+            "{:.2} bands, {}{}",
             self.radius / self.band,
             if self.reason == "below_band" {
                 "below the data's band"
@@ -80,7 +89,7 @@ pub(super) fn unsupported_handles(
     agree: Option<&[f64]>,
     min_agreement: f64,
 ) -> Vec<UnsupportedHandle> {
-    let Some(loops) = ShortLoops::new(mesh) else {
+    let Some(loops) = ShortLoops::new(mesh).filter(ShortLoops::has_handles) else {
         return Vec::new();
     };
     let band_of = |v: u32| band_at(mesh.vertices[v as usize]);
