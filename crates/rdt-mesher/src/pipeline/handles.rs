@@ -35,7 +35,7 @@ use verify::data_support::UnsupportedHandle;
 use verify::short_loops::ShortLoops;
 
 /// Rounds of detection and cutting.
-const ROUNDS: usize = 4;
+const ROUNDS: usize = 8;
 
 /// Apply the rule of the module docs to `out` (meshed from `input` at size `sigma` with
 /// `opts`: the angle bound of the skinny edits, and their largest move, half the run's
