@@ -31,12 +31,16 @@ use crate::topology::Dsu;
 const MAX_TESTS_PER_SEED: usize = 4;
 
 /// A seed whose geodesic ball holds a handle.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ShortHandle {
     /// The seed vertex.
     pub seed: u32,
     /// The ball's radius when its complement stayed connected around a non-disk region.
     pub radius: f64,
+    /// A loop through the tunnel (closed: the last vertex is joined to the first): from the
+    /// seed along the ball's shortest paths to the vertex whose addition closed the loop,
+    /// and back along the other side. Cutting along it removes the handle.
+    pub loop_vertices: Vec<u32>,
 }
 
 /// The short-handle search on one mesh (its graph built once).
@@ -71,7 +75,11 @@ impl ShortLoops {
                 || Scratch::new(n),
                 |sc, &s| {
                     let r = g.handle_radius(s, limit(s), sc);
-                    r.map(|radius| ShortHandle { seed: s, radius })
+                    r.map(|(radius, loop_vertices)| ShortHandle {
+                        seed: s,
+                        radius,
+                        loop_vertices,
+                    })
                 },
             )
             .collect::<Vec<_>>()
@@ -221,8 +229,9 @@ impl Graph {
         &self.tris[self.tri_start[v as usize]..self.tri_start[v as usize + 1]]
     }
 
-    /// The handle radius of seed `s` if at most `limit` (module docs).
-    fn handle_radius(&self, s: u32, limit: f64, sc: &mut Scratch) -> Option<f64> {
+    /// The handle radius of seed `s` if at most `limit` (module docs), and a loop through
+    /// the tunnel ([`ShortHandle::loop_vertices`]).
+    fn handle_radius(&self, s: u32, limit: f64, sc: &mut Scratch) -> Option<(f64, Vec<u32>)> {
         sc.reset();
         let mut heap = BinaryHeap::new();
         sc.set_dist(s, 0.0);
@@ -252,7 +261,7 @@ impl Graph {
             if v_in - e_in + f_in <= 0 && tests < MAX_TESTS_PER_SEED {
                 tests += 1;
                 if self.complement_connected(s, v_in as usize, sc) {
-                    found = Some(d);
+                    found = Some((d, self.loop_through(u, sc)));
                     break;
                 }
             }
@@ -260,11 +269,77 @@ impl Graph {
                 let nd = d + len;
                 if !sc.inside[w as usize] && nd < sc.dist[w as usize] {
                     sc.set_dist(w, nd);
+                    sc.parent[w as usize] = u;
                     heap.push(Reverse((Key(nd), w)));
                 }
             }
         }
         found
+    }
+
+    /// The loop closed by adding `u` to the region: `u`'s neighbours in the region fall in
+    /// two or more fans (runs joined by the region's triangles at `u`: that is how the
+    /// Euler characteristic dropped); the shortest paths from the least vertex of the first
+    /// two fans back to where they meet, joined through `u`.
+    fn loop_through(&self, u: u32, sc: &Scratch) -> Vec<u32> {
+        let inn: Vec<u32> = self
+            .neighbours(u)
+            .iter()
+            .map(|&(w, _)| w)
+            .filter(|&w| sc.inside[w as usize])
+            .collect();
+        // Fans: the region's neighbours of `u` joined by the region's triangles at `u`.
+        let mut fan: Vec<usize> = (0..inn.len()).collect();
+        fn root(f: &mut [usize], mut i: usize) -> usize {
+            while f[i] != i {
+                f[i] = f[f[i]];
+                i = f[i];
+            }
+            i
+        }
+        for t in self.triangles(u) {
+            let others: Vec<usize> = t
+                .iter()
+                .filter(|&&w| w != u)
+                .filter_map(|w| inn.iter().position(|x| x == w))
+                .collect();
+            if let [a, b] = others[..] {
+                let (ra, rb) = (root(&mut fan, a), root(&mut fan, b));
+                fan[ra.max(rb)] = ra.min(rb);
+            }
+        }
+        let mut firsts: Vec<(usize, u32)> = Vec::new();
+        for (i, &w) in inn.iter().enumerate() {
+            let r = root(&mut fan, i);
+            match firsts.iter_mut().find(|x| x.0 == r) {
+                Some(x) => x.1 = x.1.min(w),
+                None => firsts.push((r, w)),
+            }
+        }
+        firsts.sort_by_key(|x| x.1);
+        let (Some(&(_, a)), Some(&(_, b))) = (firsts.first(), firsts.get(1)) else {
+            return vec![u];
+        };
+        let path = |mut v: u32| {
+            let mut p = vec![v];
+            while sc.parent[v as usize] != u32::MAX {
+                v = sc.parent[v as usize];
+                p.push(v);
+            }
+            p
+        };
+        let (pa, pb) = (path(a), path(b));
+        // Drop the common tail (towards the seed) but its first vertex: where they meet.
+        let common = pa
+            .iter()
+            .rev()
+            .zip(pb.iter().rev())
+            .take_while(|(x, y)| x == y)
+            .count();
+        let mut lp: Vec<u32> = pa[..pa.len() - common + 1].to_vec();
+        lp.extend(pb[..pb.len() - common].iter().rev());
+        lp.push(u);
+        lp
     }
 
     /// Whether the vertices of `s`'s component outside the region (`sc.inside`, `inside`
@@ -327,6 +402,8 @@ impl Ord for Key {
 /// Per-thread buffers, reset between seeds through the lists of what was touched.
 struct Scratch {
     dist: Vec<f64>,
+    /// Each reached vertex's predecessor on its shortest path (`u32::MAX`: the seed).
+    parent: Vec<u32>,
     inside: Vec<bool>,
     seen: Vec<u32>,
     stamp: u32,
@@ -339,6 +416,7 @@ impl Scratch {
     fn new(n: usize) -> Scratch {
         Scratch {
             dist: vec![f64::INFINITY; n],
+            parent: vec![u32::MAX; n],
             inside: vec![false; n],
             seen: vec![0; n],
             stamp: 0,
@@ -351,6 +429,7 @@ impl Scratch {
     fn reset(&mut self) {
         for &v in &self.touched {
             self.dist[v as usize] = f64::INFINITY;
+            self.parent[v as usize] = u32::MAX;
         }
         for &v in &self.region {
             self.inside[v as usize] = false;

@@ -8,7 +8,8 @@
 //! half the data's band, or whose neighbourhood faces against the data normals). A user who
 //! meshes a scan expects the surface the data shows, so the handle is cut, as topological
 //! noise removal does (Guskov & Wood 2001): the stars of the vertices of the handle's
-//! geodesic ball (the ball at which it was found: the tube and a ring around it) are
+//! geodesic ball (the ball at which it was found: the tube and a ring around it; if that
+//! round fails, of a loop through the tunnel, `ShortHandle::loop_vertices`) are
 //! removed, and each boundary loop left is closed on its own side by the topological
 //! repair's closing (`levels::repair`, rules 1 to 3, with its exact intersection rounds), so
 //! the output stays a closed, oriented 2-manifold without self-intersections. The triangles
@@ -32,7 +33,6 @@ use super::outcome::Outcome;
 use crate::{DecisionKind, TopologyDecision};
 use glam::DVec3;
 use verify::data_support::UnsupportedHandle;
-use verify::short_loops::ShortLoops;
 
 /// Rounds of detection and cutting.
 const ROUNDS: usize = 8;
@@ -59,7 +59,12 @@ pub(super) fn cut_unsupported_handles(
         if handles.is_empty() {
             break;
         }
-        let Some(decisions) = cut_round(out, &handles, input, opts, sigma) else {
+        // Around the whole ball first, else along a loop through each tunnel (measured on
+        // the scan table: loops first left the genus-15 row at genus 1, with no handle the
+        // rule finds; balls reach the source's genus on every row).
+        let Some(decisions) = cut_round(out, &handles, input, opts, sigma, Cut::Ball)
+            .or_else(|| cut_round(out, &handles, input, opts, sigma, Cut::Loop))
+        else {
             break;
         };
         out.stats.topology_decisions.extend(decisions);
@@ -73,6 +78,14 @@ pub(super) fn cut_unsupported_handles(
     out.stats.time_queue_s += dt;
 }
 
+/// Where a handle is cut: the stars of the vertices of a loop through its tunnel, or of its
+/// whole geodesic ball.
+#[derive(Clone, Copy)]
+enum Cut {
+    Loop,
+    Ball,
+}
+
 /// One round: cut `handles` (see the module docs); the decisions, or `None` (the mesh
 /// unchanged) when the cut does not lower the genus or changes the component count.
 fn cut_round(
@@ -81,12 +94,21 @@ fn cut_round(
     input: &Input,
     opts: &crate::MeshOptions,
     sigma: f64,
+    how: Cut,
 ) -> Option<Vec<TopologyDecision>> {
-    let loops = ShortLoops::new(&out.mesh)?;
-    let mut ball: Vec<u32> = handles
-        .iter()
-        .flat_map(|x| loops.ball(x.vertex, x.radius))
-        .collect();
+    let mut ball: Vec<u32> = match how {
+        Cut::Loop => handles
+            .iter()
+            .flat_map(|x| x.loop_vertices.iter().copied())
+            .collect(),
+        Cut::Ball => {
+            let loops = verify::short_loops::ShortLoops::new(&out.mesh)?;
+            handles
+                .iter()
+                .flat_map(|x| loops.ball(x.vertex, x.radius))
+                .collect()
+        }
+    };
     ball.sort_unstable();
     ball.dedup();
     let (genus0, comps0) = genus_and_components(&out.mesh)?;

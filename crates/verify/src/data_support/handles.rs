@@ -23,7 +23,7 @@ use serde::Serialize;
 
 use glam::DVec3;
 
-use crate::short_loops::ShortLoops;
+use crate::short_loops::{ShortHandle, ShortLoops};
 
 /// The search's reach, in bands.
 pub const SEARCH_BANDS: f64 = 1.5;
@@ -48,6 +48,10 @@ pub struct UnsupportedHandle {
     pub agreement: Option<f64>,
     /// `below_band` or `faces_against_data`.
     pub reason: &'static str,
+    /// A loop through the tunnel (`crate::short_loops::ShortHandle::loop_vertices`): where
+    /// the mesher cuts it. Not in the report.
+    #[serde(skip)]
+    pub loop_vertices: Vec<u32>,
 }
 
 impl UnsupportedHandle {
@@ -93,19 +97,19 @@ pub(super) fn unsupported_handles(
         return Vec::new();
     };
     let band_of = |v: u32| band_at(mesh.vertices[v as usize]);
-    let mut found: Vec<(f64, u32, f64)> = loops
+    let mut found: Vec<(f64, ShortHandle)> = loops
         .handles(&|v| SEARCH_BANDS * band_of(v))
         .into_iter()
-        .map(|h| (h.radius / band_of(h.seed), h.seed, h.radius))
+        .map(|h| (h.radius / band_of(h.seed), h))
         .collect();
-    found.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let mut kept: Vec<(f64, u32, f64)> = Vec::new();
+    found.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.seed.cmp(&b.1.seed)));
+    let mut kept: Vec<(f64, ShortHandle)> = Vec::new();
     for f in found {
-        let p = mesh.vertices[f.1 as usize];
-        let b = band_of(f.1);
+        let p = mesh.vertices[f.1.seed as usize];
+        let b = band_of(f.1.seed);
         if kept
             .iter()
-            .all(|k| mesh.vertices[k.1 as usize].distance(p) > SAME_PLACE_BANDS * b)
+            .all(|k| mesh.vertices[k.1.seed as usize].distance(p) > SAME_PLACE_BANDS * b)
         {
             kept.push(f);
             if kept.len() == MAX_CANDIDATES {
@@ -115,7 +119,8 @@ pub(super) fn unsupported_handles(
     }
     let tri_of = triangles_by_vertex(mesh);
     kept.into_iter()
-        .filter_map(|(ratio, seed, radius)| {
+        .filter_map(|(ratio, h)| {
+            let (seed, radius) = (h.seed, h.radius);
             let agreement = agree.map(|a| ball_agreement(mesh, &loops, &tri_of, a, seed, radius));
             let reason = if ratio <= BELOW_BAND {
                 "below_band"
@@ -131,6 +136,7 @@ pub(super) fn unsupported_handles(
                 band: band_of(seed),
                 agreement,
                 reason,
+                loop_vertices: h.loop_vertices,
             })
         })
         .collect()

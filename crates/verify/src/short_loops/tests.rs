@@ -114,3 +114,45 @@ fn an_open_mesh_is_refused() {
     m.triangles.pop();
     assert!(ShortLoops::new(&m).is_none());
 }
+
+#[test]
+fn a_handle_s_loop_goes_once_around_the_tube_and_does_not_separate() {
+    let m = torus(1.0, 0.1, 96, 12);
+    let found = ShortLoops::new(&m).unwrap().handles(&|_| 0.45);
+    let adjacent = |a: u32, b: u32| {
+        m.triangles
+            .iter()
+            .any(|t| t.contains(&a) && t.contains(&b) && a != b)
+    };
+    for h in found.iter().step_by(97) {
+        let lp = &h.loop_vertices;
+        assert!(lp.len() >= 3, "{h:?}");
+        let mut sorted = lp.clone();
+        sorted.sort_unstable();
+        sorted.dedup();
+        assert_eq!(sorted.len(), lp.len(), "a simple loop: {lp:?}");
+        let mut length = 0.0;
+        for k in 0..lp.len() {
+            let (a, b) = (lp[k], lp[(k + 1) % lp.len()]);
+            assert!(adjacent(a, b), "{a} {b} not joined in {lp:?}");
+            length += m.vertices[a as usize].distance(m.vertices[b as usize]);
+        }
+        // About the meridian (2 pi 0.1 = 0.63): once around the tube.
+        assert!(length > 0.55 && length < 1.0, "length {length} of {lp:?}");
+        // Without the triangles at the loop, the torus is still connected: the loop does not
+        // separate it (a handle's loop, not a thin finger's).
+        let kept: Vec<[u32; 3]> = m
+            .triangles
+            .iter()
+            .filter(|t| !t.iter().any(|v| lp.contains(v)))
+            .copied()
+            .collect();
+        let mut dsu = crate::topology::Dsu::new(m.vertices.len());
+        for t in &kept {
+            dsu.union(t[0], t[1]);
+            dsu.union(t[0], t[2]);
+        }
+        let roots: std::collections::BTreeSet<u32> = kept.iter().map(|t| dsu.find(t[0])).collect();
+        assert_eq!(roots.len(), 1, "{lp:?}");
+    }
+}
