@@ -620,9 +620,14 @@ pub(super) fn measure_angles(out: &mut crate::MeshResult, opts: &crate::MeshOpti
     if !min_angle.is_finite() {
         return;
     }
-    let st = &mut out.stats;
-    st.min_angle_deg = min_angle;
-    let bound = opts.criteria.min_angle_deg;
+    out.stats.min_angle_deg = min_angle;
+    record_min_angle(&mut out.stats, opts.criteria.min_angle_deg);
+}
+
+/// The smallest angle of the mesh written (`st.min_angle_deg`, measured) against `bound`,
+/// into `unmet: angle` (replaced, or removed when the bound holds).
+pub(crate) fn record_min_angle(st: &mut crate::Stats, bound: f64) {
+    let min_angle = st.min_angle_deg;
     if min_angle >= bound {
         // Edits after the decisions (`skinny`) can bring every triangle back over the bound.
         st.unmet

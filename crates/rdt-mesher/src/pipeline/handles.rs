@@ -72,6 +72,8 @@ pub(super) fn cut_unsupported_handles(
     }
     if changed {
         super::unsupported::after_edit(out, &before);
+        // The closings are judged as the repair's are: `unmet: angle` from the mesh written.
+        crate::levels::repair::record_min_angle(&mut out.stats, opts.criteria.min_angle_deg);
     }
     let dt = t.elapsed().as_secs_f64();
     out.stats.time_total_s += dt;
