@@ -46,6 +46,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::distance::{MeshDistance, triangle_samples};
+use crate::short_loops::ShortLoops;
 use crate::topology::{Dsu, vertex_components};
 
 mod drop_rule;
@@ -467,12 +468,15 @@ pub fn data_support_oriented(
     let band = DataBand::new(data, opts)?;
     let normals = normals.filter(|n| n.len() == data.len());
     let (components, _, per_tri, agree) = component_measures(mesh, &band, normals);
-    let handles = handles::unsupported_handles(
-        mesh,
-        &|x| band.band_at(x),
-        agree.as_deref(),
-        opts.min_agreement,
-    );
+    let handles = ShortLoops::new(mesh).map_or_else(Vec::new, |loops| {
+        handles::unsupported_handles(
+            mesh,
+            &loops,
+            &|x| band.band_at(x),
+            agree.as_deref(),
+            opts.min_agreement,
+        )
+    });
     let total_area: f64 = per_tri.iter().map(|x| x.0).sum();
     let supported_area: f64 = per_tri.iter().map(|x| x.0 * x.1).sum();
     let unsupported_components = components
@@ -535,9 +539,9 @@ pub fn unsupported_handles(
     opts: &SupportOptions,
 ) -> Vec<UnsupportedHandle> {
     // Genus 0 everywhere (most outputs): nothing to measure.
-    if !crate::short_loops::ShortLoops::new(mesh).is_some_and(|l| l.has_handles()) {
+    let Some(loops) = ShortLoops::new(mesh).filter(ShortLoops::has_handles) else {
         return Vec::new();
-    }
+    };
     let Some(band) = DataBand::new(data, opts) else {
         return Vec::new();
     };
@@ -545,6 +549,7 @@ pub fn unsupported_handles(
     let (_, agree) = per_triangle(mesh, &band, normals);
     handles::unsupported_handles(
         mesh,
+        &loops,
         &|x| band.band_at(x),
         agree.as_deref(),
         opts.min_agreement,

@@ -110,6 +110,27 @@ impl ShortLoops {
         }
         sc.region
     }
+
+    /// The triangles (mesh indices, increasing) whose three corners are within geodesic
+    /// distance `radius` of `seed` ([`ShortLoops::ball`]).
+    pub fn ball_triangles(&self, seed: u32, radius: f64) -> Vec<u32> {
+        let g = &self.g;
+        let ball = self.ball(seed, radius);
+        let mut inside = vec![false; g.comp.len()];
+        ball.iter().for_each(|&v| inside[v as usize] = true);
+        let mut out: Vec<u32> = ball
+            .iter()
+            .flat_map(|&v| {
+                let r = g.tri_start[v as usize]..g.tri_start[v as usize + 1];
+                g.tris[r.clone()].iter().zip(&g.tri_ids[r])
+            })
+            .filter(|(t, _)| t.iter().all(|&w| inside[w as usize]))
+            .map(|(_, &k)| k)
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
 }
 
 /// Vertex adjacency (with edge lengths) and vertex-triangle incidence, in compressed rows,
@@ -119,6 +140,8 @@ struct Graph {
     nb: Vec<(u32, f64)>,
     tri_start: Vec<usize>,
     tris: Vec<[u32; 3]>,
+    /// The index in the mesh of each entry of `tris`.
+    tri_ids: Vec<u32>,
     comp: Vec<u32>,
     comp_size: Vec<usize>,
     comp_genus: Vec<i64>,
@@ -167,9 +190,11 @@ impl Graph {
         let tri_start = prefix(tdeg);
         let mut fill = tri_start.clone();
         let mut tris = vec![[0u32; 3]; tri_start[n]];
-        for t in &mesh.triangles {
+        let mut tri_ids = vec![0u32; tri_start[n]];
+        for (k, t) in mesh.triangles.iter().enumerate() {
             for &v in t {
                 tris[fill[v as usize]] = *t;
+                tri_ids[fill[v as usize]] = k as u32;
                 fill[v as usize] += 1;
             }
         }
@@ -210,6 +235,7 @@ impl Graph {
             nb,
             tri_start,
             tris,
+            tri_ids,
             comp,
             comp_size,
             comp_genus,

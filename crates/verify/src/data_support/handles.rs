@@ -84,18 +84,19 @@ impl UnsupportedHandle {
     }
 }
 
-/// The unsupported handles of the closed mesh `mesh` (none if it is not closed), smallest
-/// first; `band_at`: the data's band at the data point nearest a point; `agree`: each
-/// triangle's area-weighted agreement (`area * n_t . n_i`), with data normals.
+/// The unsupported handles of the closed mesh `mesh` (its search `loops`), smallest first;
+/// `band_at`: the data's band at the data point nearest a point; `agree`: each triangle's
+/// area-weighted agreement (`area * n_t . n_i`), with data normals.
 pub(super) fn unsupported_handles(
     mesh: &TriMesh,
+    loops: &ShortLoops,
     band_at: &(dyn Fn(DVec3) -> f64 + Sync),
     agree: Option<&[f64]>,
     min_agreement: f64,
 ) -> Vec<UnsupportedHandle> {
-    let Some(loops) = ShortLoops::new(mesh).filter(ShortLoops::has_handles) else {
+    if !loops.has_handles() {
         return Vec::new();
-    };
+    }
     let band_of = |v: u32| band_at(mesh.vertices[v as usize]);
     let mut found: Vec<(f64, ShortHandle)> = loops
         .handles(&|v| SEARCH_BANDS * band_of(v))
@@ -117,11 +118,10 @@ pub(super) fn unsupported_handles(
             }
         }
     }
-    let tri_of = triangles_by_vertex(mesh);
     kept.into_iter()
         .filter_map(|(ratio, h)| {
             let (seed, radius) = (h.seed, h.radius);
-            let agreement = agree.map(|a| ball_agreement(mesh, &loops, &tri_of, a, seed, radius));
+            let agreement = agree.map(|a| ball_agreement(mesh, loops, a, seed, radius));
             let reason = if ratio <= BELOW_BAND {
                 "below_band"
             } else if agreement.is_some_and(|x| x < min_agreement) {
@@ -142,41 +142,20 @@ pub(super) fn unsupported_handles(
         .collect()
 }
 
-/// The triangles at each vertex.
-fn triangles_by_vertex(mesh: &TriMesh) -> Vec<Vec<u32>> {
-    let mut out = vec![Vec::new(); mesh.vertices.len()];
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        for &v in tri {
-            out[v as usize].push(t as u32);
-        }
-    }
-    out
-}
-
 /// The area-weighted agreement of the triangles inside the geodesic ball (all three
 /// corners in it); 1 when it holds none.
 fn ball_agreement(
     mesh: &TriMesh,
     loops: &ShortLoops,
-    tri_of: &[Vec<u32>],
     agree: &[f64],
     seed: u32,
     radius: f64,
 ) -> f64 {
-    let ball = loops.ball(seed, radius);
-    let mut inside = std::collections::HashSet::with_capacity(ball.len());
-    inside.extend(ball.iter().copied());
-    let mut seen = std::collections::HashSet::new();
     let (mut sum, mut area) = (0.0, 0.0);
-    for &v in &ball {
-        for &t in &tri_of[v as usize] {
-            let tri = mesh.triangles[t as usize];
-            if tri.iter().all(|w| inside.contains(w)) && seen.insert(t) {
-                let [a, b, c] = tri.map(|i| mesh.vertices[i as usize]);
-                sum += agree[t as usize];
-                area += 0.5 * (b - a).cross(c - a).length();
-            }
-        }
+    for t in loops.ball_triangles(seed, radius) {
+        let [a, b, c] = mesh.triangles[t as usize].map(|i| mesh.vertices[i as usize]);
+        sum += agree[t as usize];
+        area += 0.5 * (b - a).cross(c - a).length();
     }
     if area > 0.0 { sum / area } else { 1.0 }
 }
