@@ -31,7 +31,11 @@ fn main() {
     let source = meshio::read(format!("{root}/fixtures/models/{model}.ply")).unwrap();
     let diag = diagonal(&source);
     let spec = ScanSpec {
-        points: 40_000,
+        // `SCANPROBE_POINTS=N`: the scan's size (default 40,000, the table's).
+        points: std::env::var("SCANPROBE_POINTS")
+            .ok()
+            .and_then(|h| h.parse().ok())
+            .unwrap_or(40_000),
         noise,
         density_ratio: dens,
         normals: nrm,
@@ -60,6 +64,31 @@ fn main() {
         t.elapsed().as_secs_f64(),
         s.stats()
     );
+    // Estimated normals against the exact ones (the same points with `normals: true`).
+    if !nrm {
+        let exact = simulate(&source, &ScanSpec { normals: true, ..spec.clone() });
+        if exact.points == scan.points {
+            let en = exact.normals.as_ref().unwrap();
+            for half in [true, false] {
+                let (mut flipped, mut total) = (0, 0);
+                let mut at = Vec::new();
+                for (i, p) in scan.points.iter().enumerate() {
+                    if (p.x < cx) == half {
+                        total += 1;
+                        if s.normals()[i].dot(en[i]) < 0.0 {
+                            flipped += 1;
+                            at.push(*p);
+                        }
+                    }
+                }
+                println!(
+                    "{} half: {flipped} of {total} estimated normals point inward; e.g. {:?}",
+                    if half { "sparse" } else { "dense" },
+                    at.iter().step_by((at.len() / 4).max(1)).take(4).collect::<Vec<_>>()
+                );
+            }
+        }
+    }
     // Source samples: IMLS distance estimate and kernel weight per half.
     let samples = verify::data_support::mesh_samples(&source, 40_000);
     for half in [true, false] {
