@@ -66,7 +66,13 @@ fn main() {
     );
     // Estimated normals against the exact ones (the same points with `normals: true`).
     if !nrm {
-        let exact = simulate(&source, &ScanSpec { normals: true, ..spec.clone() });
+        let exact = simulate(
+            &source,
+            &ScanSpec {
+                normals: true,
+                ..spec.clone()
+            },
+        );
         if exact.points == scan.points {
             let en = exact.normals.as_ref().unwrap();
             for half in [true, false] {
@@ -84,7 +90,10 @@ fn main() {
                 println!(
                     "{} half: {flipped} of {total} estimated normals point inward; e.g. {:?}",
                     if half { "sparse" } else { "dense" },
-                    at.iter().step_by((at.len() / 4).max(1)).take(4).collect::<Vec<_>>()
+                    at.iter()
+                        .step_by((at.len() / 4).max(1))
+                        .take(4)
+                        .collect::<Vec<_>>()
                 );
             }
         }

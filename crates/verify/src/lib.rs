@@ -143,6 +143,12 @@ pub struct Options {
     /// vertex lies on their voxel-scan components, those count as dropped, not missed
     /// ([`scan_components::account`]).
     pub dropped_points: Vec<DVec3>,
+    /// Point sets and meshes: the triangles of the output's components removed because the
+    /// input data does not support them (the mesher's `drop_unsupported_component`
+    /// decisions). Such a component is a component of S (the point-set or winding-number
+    /// surface) left out on purpose: a seed point of S within its tolerance of these
+    /// triangles is on a dropped component, not on a missed one (`components-sampled`).
+    pub dropped_triangles: Vec<[DVec3; 3]>,
 }
 
 impl Default for Options {
@@ -164,6 +170,7 @@ impl Default for Options {
             seed: 0,
             seed_tolerance: None,
             dropped_points: Vec::new(),
+            dropped_triangles: Vec::new(),
         }
     }
 }

@@ -235,6 +235,40 @@ fn one_sphere_of_two_nested_fails_the_coverage_of_the_other() {
     assert_status(&r, "components-sampled", Status::Pass);
 }
 
+/// A component of S removed on purpose (the mesher's unsupported-component rule) is not a
+/// missed one: its seed is excused by the dropped triangles, and only by them.
+#[test]
+fn a_seed_on_a_dropped_component_is_excused_and_only_there() {
+    let m = uv_sphere(DVec3::ZERO, 1.0, 16, 32);
+    let inner = uv_sphere(DVec3::ZERO, 0.5, 16, 32);
+    let dropped: Vec<[DVec3; 3]> = inner
+        .triangles
+        .iter()
+        .map(|t| t.map(|v| inner.vertices[v as usize]))
+        .collect();
+    let run = |seeds: Vec<DVec3>, dropped: Vec<[DVec3; 3]>| {
+        check_against(
+            &m,
+            &Nested,
+            &Options {
+                component_seeds: Some(seeds),
+                surface_samples: Some(fibonacci_sphere(500)),
+                dropped_triangles: dropped,
+                ..quiet()
+            },
+        )
+    };
+    let r = run(vec![DVec3::X, DVec3::X * 0.5], dropped.clone());
+    assert_status(&r, "components-sampled", Status::Pass);
+    let d = &r.check("components-sampled").unwrap().detail;
+    assert!(d.contains("1 of them on components dropped"), "{d}");
+    // Without the dropped triangles, or with a seed on neither mesh: FAIL.
+    let r = run(vec![DVec3::X, DVec3::X * 0.5], Vec::new());
+    assert_eq!(r.status("components-sampled"), Some(Status::Fail));
+    let r = run(vec![DVec3::X, DVec3::X * 0.5, DVec3::X * 1.9], dropped);
+    assert_eq!(r.status("components-sampled"), Some(Status::Fail));
+}
+
 #[test]
 fn loose_epsilon_never_passes_above_its_range() {
     // A coarse sphere: eps = r / d_M about 0.4, far above epsilon_1.

@@ -255,6 +255,9 @@ pub struct Outcome {
     pub report: Option<verify::Report>,
     /// Pass or the reasons of failure.
     pub verdict: Verdict,
+    /// Point sets and meshes: the triangles of the components dropped because the data does
+    /// not support them (`drop_unsupported_component` decisions; empty otherwise).
+    pub dropped_triangles: Vec<[DVec3; 3]>,
 }
 
 impl Outcome {
@@ -271,6 +274,7 @@ impl Outcome {
             sharp_edges: None,
             report: None,
             verdict: Verdict::Pass,
+            dropped_triangles: Vec::new(),
         }
     }
 

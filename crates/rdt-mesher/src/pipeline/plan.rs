@@ -481,6 +481,7 @@ fn verify_options(
                 _ => None,
             })
             .collect(),
+        dropped_triangles: out.dropped_triangles.clone(),
         ..Default::default()
     }
 }

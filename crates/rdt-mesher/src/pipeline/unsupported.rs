@@ -80,6 +80,9 @@ pub(super) fn drop_unsupported(out: &mut Outcome, input: &Input, sigma: f64) {
                 (lo.min(p), hi.max(p))
             });
         d.triangles.iter().for_each(|&i| live[i] = false);
+        let corners = |i: usize| mesh.triangles[i].map(|v| mesh.vertices[v as usize]);
+        out.dropped_triangles
+            .extend(d.triangles.iter().map(|&i| corners(i)));
         decisions.push(TopologyDecision {
             kind: DecisionKind::DropUnsupportedComponent(d.support),
             center: 0.5 * (lo + hi),
