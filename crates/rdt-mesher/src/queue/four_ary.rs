@@ -70,6 +70,11 @@ impl FourAryHeap {
         self.sift_up(self.items.len() - 1);
     }
 
+    /// The maximum.
+    pub fn peek(&self) -> Option<&Packed> {
+        self.items.first()
+    }
+
     /// The maximum, removed.
     pub fn pop(&mut self) -> Option<Packed> {
         let last = self.items.pop()?;

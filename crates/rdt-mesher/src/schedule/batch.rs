@@ -140,9 +140,9 @@ impl Scheduler {
             self.batch.push((e, rf));
         }
         m.stats.batch_deferrals += near.len() as u64;
-        for e in near {
-            m.queue.requeue(e);
-        }
+        // The batch's entries stay out: those deferred are the last taken from the queue
+        // apart from them, so they are its largest (`Queue::defer`).
+        m.queue.defer(&near);
         Ok(())
     }
 
