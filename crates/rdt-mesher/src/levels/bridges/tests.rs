@@ -45,12 +45,42 @@ fn octahedra(xs: &[f64]) -> meshio::TriMesh {
     m
 }
 
+/// `m` (two octahedra) with triangles `removed` replaced by `tube` (on `m`'s vertices and
+/// then `pts`), checked to be one closed, oriented sphere (V - E + F = 2) without
+/// self-intersection; `what` names the case in failures.
+fn joined_sphere(
+    m: &meshio::TriMesh,
+    removed: [usize; 2],
+    tube: &[[u32; 3]],
+    pts: &[DVec3],
+    what: &str,
+) -> meshio::TriMesh {
+    let mut m = m.clone();
+    m.vertices.extend(pts);
+    let [ta, tb] = removed;
+    m.triangles.swap_remove(ta.max(tb));
+    m.triangles.swap_remove(ta.min(tb));
+    m.triangles.extend(tube);
+    let rep = verify::check(&m, &verify::Options::default());
+    for name in verify::CLOSED_MANIFOLD_CHECKS {
+        assert_eq!(
+            rep.status(name),
+            Some(verify::Status::Pass),
+            "{what}: {name}: {:?}",
+            rep.check(name)
+        );
+    }
+    let (v, f) = (m.vertices.len() as i64, m.triangles.len() as i64);
+    assert_eq!(v - f / 2, 2, "{what}");
+    m
+}
+
 #[test]
 fn a_tube_with_rings_on_s_joins_two_closed_pieces_into_one_sphere() {
     let img = cylinder();
     let via = DVec3::new(10.0, 12.0, 12.0);
     for rings in 0..=MAX_RINGS {
-        let mut m = octahedra(&[5.0, 15.0]);
+        let m = octahedra(&[5.0, 15.0]);
         // The triangles facing each other: (+x, +y, +z) of the first, (-x, +y, +z) of the
         // second.
         let ta = m.triangles.iter().position(|t| *t == [0, 2, 4]).unwrap();
@@ -67,25 +97,11 @@ fn a_tube_with_rings_on_s_joins_two_closed_pieces_into_one_sphere() {
                 "rings {rings}: {p} off the wall ({r})"
             );
         }
-        m.vertices.extend(&pts);
-        let (hi, lo) = (ta.max(tb), ta.min(tb));
-        m.triangles.swap_remove(hi);
-        m.triangles.swap_remove(lo);
-        let first_new = m.triangles.len();
-        m.triangles.extend(&tube);
-        let rep = verify::check(&m, &verify::Options::default());
-        for name in verify::CLOSED_MANIFOLD_CHECKS {
-            assert_eq!(
-                rep.status(name),
-                Some(verify::Status::Pass),
-                "rings {rings}: {name}: {:?}",
-                rep.check(name)
-            );
-        }
-        assert!(super::super::repair::intersecting_vertices(&m, first_new).is_empty());
-        // One sphere: V - E + F = 2, one component.
-        let (v, f) = (m.vertices.len() as i64, m.triangles.len() as i64);
-        assert_eq!(v - f / 2, 2, "rings {rings}");
+        let m = joined_sphere(&m, [ta, tb], &tube, &pts, &format!("rings {rings}"));
+        assert!(
+            super::super::repair::intersecting_vertices(&m, m.triangles.len() - tube.len())
+                .is_empty()
+        );
         assert_eq!(tube.len(), 6 * (rings + 1));
     }
 }
@@ -199,22 +215,7 @@ fn a_straight_tube_crosses_a_gap_within_sigma() {
             true,
         )
         .unwrap();
-        let mut m = m0.clone();
-        m.vertices.extend(&pts);
-        let (hi, lo) = (ta.max(tb), ta.min(tb));
-        m.triangles.swap_remove(hi);
-        m.triangles.swap_remove(lo);
-        m.triangles.extend(&tube);
-        let rep = verify::check(&m, &verify::Options::default());
-        for name in verify::CLOSED_MANIFOLD_CHECKS {
-            assert_eq!(
-                rep.status(name),
-                Some(verify::Status::Pass),
-                "{rings:?}: {name}"
-            );
-        }
-        let (v, f) = (m.vertices.len() as i64, m.triangles.len() as i64);
-        assert_eq!(v - f / 2, 2, "{rings:?}");
+        let m = joined_sphere(&m0, [ta, tb], &tube, &pts, &format!("{rings:?}"));
         tube.iter()
             .map(|t| crate::criteria::min_angle_deg(t.map(|v| m.vertices[v as usize])))
             .fold(f64::INFINITY, f64::min)
