@@ -496,11 +496,12 @@ impl Candidate {
 }
 
 /// The tube from triangle `fa` to triangle `fb` through `rings` intermediate rings of three
-/// points of S (new vertices, numbered from the mesh's vertex count), and those points. Ring
-/// `i` of `n` is `fb` moved by `i / (n + 1)` of the way from `fb`'s centroid to `fa`'s, each
-/// point projected on S as the first crossing of the ray from the axis (the line through `via`,
-/// inside the component, along the tube) away from it. `None` when a ray meets no crossing
-/// within three tube lengths.
+/// new points (numbered from the mesh's vertex count), and those points. With
+/// [`Rings::OnS`], ring `i` of `n` is `fb` moved by `i / (n + 1)` of the way from `fb`'s
+/// centroid to `fa`'s, each point projected on S as the first crossing of the ray from the
+/// axis (the line through `via`, inside the component, along the tube) away from it; `None`
+/// when a ray meets no crossing within three tube lengths. With [`Rings::Straight`], each
+/// vertex of `fb` goes that far towards the vertex of `fa` it faces, off S.
 fn tube_with_rings(
     mesh: &meshio::TriMesh,
     img: &ImageSurface,
