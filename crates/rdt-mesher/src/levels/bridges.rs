@@ -16,7 +16,9 @@
 //! no wall there), from one triangle's shape to the other's in stages about as long as their
 //! edges ([`straight_rings`]): their stages are within sigma where a six-triangle tube
 //! between two tips was oversized (since 2026-12-05; `bridge_over_size` decisions went from
-//! 22 to 0 on `nibabel_example4d_vol0` at iso 420.5, `--size 2`). When no pair gives one, the
+//! 22 to 0 on `nibabel_example4d_vol0` at iso 420.5, `--size 2`). A tube within sigma with
+//! triangles below the angle bound is replaced by a straight one of its pair or the pairs
+//! just before it when that has fewer ([`fewer_skinny`]). When no pair gives one, the
 //! pairs among the [`NEAR_WIDE`] nearest triangles of each side are tried; when none of those
 //! does either, the least oversized tube that crosses nothing is taken if its circumballs are
 //! within [`MAX_OVERSIZE`] sigma (`bridge_over_size`, with its r / sigma: a size bound
@@ -42,6 +44,11 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
 
+mod straight;
+#[cfg(test)]
+use straight::MAX_STRAIGHT;
+use straight::straight_rings;
+
 /// Doublings of the search box's margin.
 const ROUNDS: u32 = 6;
 
@@ -63,26 +70,68 @@ const MAX_OVERSIZE: f64 = 3.0;
 /// Intermediate rings of points of S tried in a tube (0 first).
 const MAX_RINGS: usize = 2;
 
-/// Most intermediate rings of a straight tube (see [`straight_rings`]).
-const MAX_STRAIGHT: usize = 32;
+/// Pairs (counted back from the chosen tube's) whose straight tubes [`fewer_skinny`] tries.
+const SKINNY_PAIRS: usize = 4;
 
-/// The rings of a straight tube between triangles `ta` and `tb` (tried after those on S:
-/// rings from one triangle's shape to the other's, off S, across a neck thinner than the
-/// voxel where S has no wall to put them on) whose stages are about 0.8 times as long as
-/// the triangles' mean edge: the two triangles of a stage then have their smallest angles
-/// near 40 degrees. At least 1, at most [`MAX_STRAIGHT`].
-fn straight_rings(mesh: &meshio::TriMesh, ta: usize, tb: usize) -> usize {
-    let t = |k: usize| mesh.triangles[k].map(|v| mesh.vertices[v as usize]);
-    let (a, b) = (t(ta), t(tb));
-    let edges = |x: [DVec3; 3]| x[0].distance(x[1]) + x[1].distance(x[2]) + x[2].distance(x[0]);
-    let e = (edges(a) + edges(b)) / 6.0;
-    let len = ((a[0] + a[1] + a[2]) - (b[0] + b[1] + b[2])).length() / 3.0;
-    let n = (len / (0.8 * e)).round() - 1.0;
-    if n.is_finite() {
-        (n.max(1.0) as usize).min(MAX_STRAIGHT)
-    } else {
-        1
+/// `first`, the first tube within sigma that crosses nothing, or, when some of its triangles
+/// are below the angle bound, the straight tube with the fewest (then the largest smallest
+/// angle) when it beats `first` so, among those of `first`'s pair and the [`SKINNY_PAIRS`] -
+/// 1 pairs before it in `before` (the candidates met before `first`), within sigma and
+/// crossing nothing: never more triangles below the bound than `first`.
+fn fewer_skinny<E>(
+    first: Candidate,
+    before: &[(usize, usize, Rings, bool)],
+    evaluate: &E,
+    mesh: &meshio::TriMesh,
+    criteria: &crate::Criteria,
+) -> Candidate
+where
+    E: Fn(&(usize, usize, Rings, bool)) -> Option<(Candidate, Option<f64>, bool)> + Sync,
+{
+    let bound = criteria.min_angle_deg;
+    let skinny = |c: &Candidate| {
+        c.tube
+            .iter()
+            .map(|t| crate::criteria::min_angle_deg(t.map(|v| position(mesh, &c.ring_pts, v))))
+            .fold((0usize, f64::INFINITY), |(n, m), a| {
+                (n + usize::from(a < bound), m.min(a))
+            })
+    };
+    let (below, angle) = skinny(&first);
+    if below == 0 {
+        return first;
     }
+    // The pairs: `first`'s and those before it, nearest first.
+    let mut pairs: Vec<(usize, usize)> = vec![(first.removed[0], first.removed[1])];
+    for &(ta, tb, _, _) in before.iter().rev() {
+        if pairs.len() == SKINNY_PAIRS {
+            break;
+        }
+        if !pairs.contains(&(ta, tb)) {
+            pairs.push((ta, tb));
+        }
+    }
+    let tries: Vec<(usize, usize, Rings, bool)> = pairs
+        .iter()
+        .flat_map(|&(ta, tb)| {
+            let n = straight_rings(mesh, ta, tb);
+            (n.saturating_sub(1).max(1)..=n + 1)
+                .flat_map(move |r| [false, true].map(move |s| (ta, tb, Rings::Straight(r), s)))
+        })
+        .collect();
+    let found: Vec<_> = tries.par_iter().map(evaluate).collect();
+    let mut best = (below, angle, first);
+    for (c, _, _) in found
+        .into_iter()
+        .flatten()
+        .filter(|(_, over, crosses)| over.is_none() && !crosses)
+    {
+        let (b, a) = skinny(&c);
+        if b < best.0 || (b == best.0 && a > best.1) {
+            best = (b, a, c);
+        }
+    }
+    best.2
 }
 
 /// The intermediate rings of a tube: `n` rings of points of S, or `n` straight ones.
@@ -345,7 +394,12 @@ fn bridge(
         let evals: Vec<_> = chunk.par_iter().map(evaluate).collect();
         for (m, e) in evals.into_iter().enumerate() {
             match e {
-                Some((c, None, false)) => return Some(c.apply(out, DecisionKind::Bridge)),
+                Some((c, None, false)) => {
+                    // The first tube within sigma, or a straight one with fewer triangles
+                    // below the angle bound.
+                    let c = fewer_skinny(c, &order[..k * CHUNK + m], &evaluate, mesh, criteria);
+                    return Some(c.apply(out, DecisionKind::Bridge));
+                }
                 Some((c, Some(over), _)) if over <= MAX_OVERSIZE => {
                     oversized.push((over, k * CHUNK + m, c))
                 }

@@ -272,3 +272,55 @@ fn a_straight_tube_crosses_a_gap_within_sigma() {
         .fold(f64::INFINITY, f64::min);
     assert!(worst > 15.0, "{worst}");
 }
+
+/// `fewer_skinny` never returns a tube with more triangles below the angle bound than the
+/// one it is given (a ringless tube of needles between octahedra 22 voxels apart, or a
+/// straight one).
+#[test]
+fn fewer_skinny_never_takes_more_triangles_below_the_bound() {
+    let img = cylinder();
+    let via = DVec3::new(14.0, 12.0, 12.0);
+    let mesh = octahedra(&[3.0, 25.0]);
+    let ta = mesh.triangles.iter().position(|t| *t == [0, 2, 4]).unwrap();
+    let tb = mesh
+        .triangles
+        .iter()
+        .position(|t| *t == [8, 7, 10])
+        .unwrap();
+    let criteria = crate::Criteria::uniform(50.0);
+    let region = Region::new(&mesh, DVec3::splat(-100.0), DVec3::splat(100.0));
+    let evaluate = |&(ta, tb, rings, s): &(usize, usize, Rings, bool)| {
+        let (fa, fb) = (mesh.triangles[ta], mesh.triangles[tb]);
+        let (tube, ring_pts) = tube_with_rings(&mesh, &img, (fa, fb), via, rings, s)?;
+        let crosses = tube_crosses(&mesh, &ring_pts, [ta, tb], &tube, &region);
+        let c = Candidate {
+            removed: [ta, tb],
+            tube,
+            ring_pts,
+            balls: Vec::new(),
+        };
+        Some((c, None, crosses))
+    };
+    let below = |c: &Candidate| {
+        c.tube
+            .iter()
+            .filter(|t| {
+                crate::criteria::min_angle_deg(t.map(|v| position(&mesh, &c.ring_pts, v))) < 30.0
+            })
+            .count()
+    };
+    let (first, _, crosses) = evaluate(&(ta, tb, Rings::OnS(0), true)).unwrap();
+    assert!(!crosses);
+    let needles = below(&first);
+    assert!(needles > 0);
+    let c = fewer_skinny(first, &[], &evaluate, &mesh, &criteria);
+    // Here the straight tubes' sheared end stages hold more triangles below the bound than
+    // the six needles: the ringless tube stays.
+    assert!(below(&c) <= needles, "{} > {needles}", below(&c));
+    // A tube already meeting the bound is kept as it is.
+    let (good, _, _) =
+        evaluate(&(ta, tb, Rings::Straight(straight_rings(&mesh, ta, tb)), true)).unwrap();
+    let kept = below(&good);
+    let again = fewer_skinny(good, &[], &evaluate, &mesh, &criteria);
+    assert!(below(&again) <= kept);
+}
