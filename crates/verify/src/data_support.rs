@@ -468,15 +468,11 @@ pub fn data_support_oriented(
     let band = DataBand::new(data, opts)?;
     let normals = normals.filter(|n| n.len() == data.len());
     let (components, _, per_tri, agree) = component_measures(mesh, &band, normals);
-    let handles = ShortLoops::new(mesh).map_or_else(Vec::new, |loops| {
-        handles::unsupported_handles(
-            mesh,
-            &loops,
-            &|x| band.band_at(x),
-            agree.as_deref(),
-            opts.min_agreement,
-        )
-    });
+    let handles = ShortLoops::new(mesh)
+        .filter(ShortLoops::has_handles)
+        .map_or_else(Vec::new, |l| {
+            handles_in_band(mesh, &l, &band, agree.as_deref(), opts)
+        });
     let total_area: f64 = per_tri.iter().map(|x| x.0).sum();
     let supported_area: f64 = per_tri.iter().map(|x| x.0 * x.1).sum();
     let unsupported_components = components
@@ -538,7 +534,7 @@ pub fn unsupported_handles(
     normals: Option<&[DVec3]>,
     opts: &SupportOptions,
 ) -> Vec<UnsupportedHandle> {
-    // Genus 0 everywhere (most outputs): nothing to measure.
+    // Genus 0 everywhere (most outputs): nothing to measure, not even the band.
     let Some(loops) = ShortLoops::new(mesh).filter(ShortLoops::has_handles) else {
         return Vec::new();
     };
@@ -547,13 +543,19 @@ pub fn unsupported_handles(
     };
     let normals = normals.filter(|n| n.len() == data.len());
     let (_, agree) = per_triangle(mesh, &band, normals);
-    handles::unsupported_handles(
-        mesh,
-        &loops,
-        &|x| band.band_at(x),
-        agree.as_deref(),
-        opts.min_agreement,
-    )
+    handles_in_band(mesh, &loops, &band, agree.as_deref(), opts)
+}
+
+/// The handles of `mesh` (its short loops `loops`) that the data does not show ([`handles`]),
+/// measured against `band` and the per-triangle agreement `agree`.
+fn handles_in_band(
+    mesh: &TriMesh,
+    loops: &ShortLoops,
+    band: &DataBand,
+    agree: Option<&[f64]>,
+    opts: &SupportOptions,
+) -> Vec<UnsupportedHandle> {
+    handles::unsupported_handles(mesh, loops, &|x| band.band_at(x), agree, opts.min_agreement)
 }
 
 /// Every component of `mesh` (in the order of [`vertex_components`]) with its support, the
