@@ -218,6 +218,41 @@ fn a_missing_patch_does_not_turn_the_inside_out() {
 /// meshes: a closed oriented manifold without self-intersections, each decision reported.
 /// (Its geometry can still fail `verify`: 300 points do not determine fertility's genus,
 /// and the certificate says so.)
+/// A mesh running past the data is not PASSed (the table's row `bunny-n0.3-d10-est-s1`: the
+/// IMLS surface continues past an ear tip in the sparse half, 4.4% of the diagonal from the
+/// source where the bound is 0.75%). Before 2026-12-05 `verify` said PASS and called the
+/// region a bridge over missing data; the data's winding number there is 0.05 (outside)
+/// and the data lies straight across the mesh (alignment 0.91).
+#[test]
+fn a_mesh_running_past_the_data_fails_data_support() {
+    let spec = ScanSpec {
+        points: 40_000,
+        noise: 0.003,
+        density_ratio: 10.0,
+        normals: false,
+        seed: 1,
+        ..Default::default()
+    };
+    let (_, out, h) = mesh_model_scan("bunny", &spec, 0.006);
+    let r = out.report.as_ref().unwrap();
+    assert!(h > 0.02, "Hausdorff {h}: the row changed, pick another");
+    assert_eq!(
+        r.status("data-support"),
+        Some(Status::Fail),
+        "{}",
+        r.summary()
+    );
+    let ds = r.data_support.as_ref().unwrap();
+    assert!(ds.regions_past_data >= 1, "{}", r.summary());
+    let past = &ds.unsupported_regions[0];
+    assert!(past.data_winding.unwrap() < 0.25, "{}", r.summary());
+    assert!(
+        r.summary().contains("extend past the data"),
+        "{}",
+        r.summary()
+    );
+}
+
 #[test]
 fn sparse_point_sets_still_mesh_to_closed_manifolds() {
     for name in ["fertility_300_normals.ply", "bunny_300.ply"] {

@@ -24,8 +24,10 @@
 //!   a pocket between two sheets) has agreement near 0, whatever its shape, while a
 //!   component that follows the data has agreement near 1.
 //! - The unsupported triangles (share below one half) that touch one another form the
-//!   *unsupported regions*: where the mesh bridges a hole in the data. They are reported
-//!   (area, size, location) but fail nothing by themselves.
+//!   *unsupported regions*. Where the mesh bridges a hole in the data they are reported
+//!   (area, size, location) and fail nothing; with data normals, a region where the data's
+//!   winding number says "outside" (or "inside") extends past data that closes the surface
+//!   there, and FAILs the check ([`excursions`]).
 //!
 //! - The mesher drops the unsupported components that no data needs
 //!   ([`droppable_components`], the rule of `rdt_mesher::pipeline`'s `unsupported` module);
@@ -36,8 +38,8 @@
 //!   facing against the data normals): [`handles`], [`DataSupport::unsupported_handles`].
 //!
 //! Invariants: deterministic (parallel maps collected in order, sequential reductions); the
-//! check FAILs iff some mesh component is unsupported, some data component is uncovered or
-//! some handle is unsupported.
+//! check FAILs iff some mesh component is unsupported, some data component is uncovered,
+//! some handle is unsupported or some unsupported region extends past the data.
 
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -50,6 +52,7 @@ use crate::short_loops::ShortLoops;
 use crate::topology::{Dsu, vertex_components};
 
 mod drop_rule;
+pub mod excursions;
 mod handles;
 pub use drop_rule::{Droppable, MAX_DROP_TRIES, droppable_components};
 pub use handles::UnsupportedHandle;
@@ -135,6 +138,13 @@ pub struct UnsupportedRegion {
     pub extent: f64,
     /// Distance from the centroid to the nearest data point.
     pub distance_to_data: f64,
+    /// The area-weighted median of the data's winding number over the region (with data
+    /// normals; see [`excursions`]): about 1/2 on a bridge over missing data, near 0 or 1
+    /// where the mesh extends past data that closes the surface elsewhere.
+    pub data_winding: Option<f64>,
+    /// Where the data lies from the region ([`excursions::region_alignment`]): about 1
+    /// straight across the mesh, about 0 to its side.
+    pub data_alignment: f64,
 }
 
 /// What the data-support check measured.
@@ -153,9 +163,12 @@ pub struct DataSupport {
     /// Data components of at least `min_data_component` points, largest first.
     pub data_components: Vec<DataComponent>,
     pub data_components_total: usize,
-    /// Unsupported regions, largest area first.
+    /// Unsupported regions: those extending past the data first, then largest area first.
     pub unsupported_regions: Vec<UnsupportedRegion>,
     pub unsupported_regions_total: usize,
+    /// Unsupported regions whose data winding number says they extend past the data
+    /// ([`excursions::past_data`]), not bridge a hole in it.
+    pub regions_past_data: usize,
     /// Mesh components below `min_share` (or, with data normals, below `min_agreement`),
     /// and data components not covered.
     pub unsupported_components: usize,
@@ -179,6 +192,7 @@ impl DataSupport {
         self.unsupported_components == 0
             && self.uncovered_data_components == 0
             && self.unsupported_handles_total == 0
+            && self.regions_past_data == 0
     }
 
     /// The check's one-line detail.
@@ -280,17 +294,11 @@ impl DataSupport {
         } else {
             s += ", all covered";
         }
-        if let Some(r) = self.unsupported_regions.first() {
-            s += &format!(
-                "; {} unsupported regions bridged (no data; largest: {} triangles, area {:.3e}, {:.3e} across, at {}, {:.3e} from the data)",
-                self.unsupported_regions_total,
-                r.triangles,
-                r.area,
-                r.extent,
-                fmt_p(r.centroid),
-                r.distance_to_data
-            );
-        }
+        s += &excursions::describe(
+            &self.unsupported_regions,
+            self.unsupported_regions_total,
+            self.regions_past_data,
+        );
         s
     }
 }
@@ -492,16 +500,24 @@ pub fn data_support_oriented(
     let bad: Vec<usize> = (0..mesh.triangles.len())
         .filter(|&t| per_tri[t].1 < 0.5)
         .collect();
-    let mut regions = unsupported_regions(mesh, &bad, &per_tri, &band);
+    let med_spacing = median(band.spacing.clone());
+    let gwn = excursions::data_winding(data, normals, &band.spacing, med_spacing);
+    let mut regions = unsupported_regions(mesh, &bad, &per_tri, &band, gwn.as_ref());
+    let past = |r: &UnsupportedRegion| {
+        r.data_winding
+            .is_some_and(|w| excursions::past_data(w, r.data_alignment))
+    };
     regions.sort_by(|a, b| {
-        b.area
-            .total_cmp(&a.area)
+        past(b)
+            .cmp(&past(a))
+            .then(b.area.total_cmp(&a.area))
             .then(a.triangles.cmp(&b.triangles))
     });
+    let regions_past_data = regions.iter().filter(|r| past(r)).count();
     let ml = opts.max_listed;
     Some(DataSupport {
         data_points: data.len(),
-        median_spacing: median(band.spacing.clone()),
+        median_spacing: med_spacing,
         noise: band.noise,
         median_band: band.median_band(),
         supported_share: if total_area > 0.0 {
@@ -515,6 +531,7 @@ pub fn data_support_oriented(
         data_components: data_components.into_iter().take(ml.max(1)).collect(),
         unsupported_regions_total: regions.len(),
         unsupported_regions: regions.into_iter().take(ml).collect(),
+        regions_past_data,
         unsupported_components,
         uncovered_data_components,
         min_share: opts.min_share,
@@ -677,6 +694,7 @@ fn unsupported_regions(
     bad: &[usize],
     per_tri: &[(f64, f64)],
     band: &DataBand,
+    gwn: Option<&geom::bvh::TriangleBvh>,
 ) -> Vec<UnsupportedRegion> {
     if bad.is_empty() {
         return Vec::new();
@@ -713,6 +731,14 @@ fn unsupported_regions(
                 centroid,
                 extent,
                 distance_to_data: band.supports(DVec3::from_array(centroid)).1,
+                data_winding: gwn
+                    .map(|w| excursions::region_winding(mesh, &g, |t| per_tri[t].0, w)),
+                data_alignment: excursions::region_alignment(
+                    mesh,
+                    &g,
+                    |t| per_tri[t].0,
+                    |x| band.points[band.nearest(x)],
+                ),
             }
         })
         .collect()

@@ -350,3 +350,97 @@ fn nothing_is_measured_where_the_data_does_not_define_s() {
     let ds = data_support(&off, &s.points, &SupportOptions::default()).unwrap();
     assert!(!ds.passed(), "{}", ds.detail());
 }
+
+/// A patch of the bunny around its vertex of largest x pushed outward by `offset` along the
+/// vertex normals (a plateau beside the data, as a mesh running past a scan's rim or tip).
+fn bumped(m: &TriMesh, offset: f64, radius: f64) -> TriMesh {
+    let n = vertex_normals(m);
+    let top = (0..m.vertices.len())
+        .max_by(|&a, &b| m.vertices[a].x.total_cmp(&m.vertices[b].x))
+        .unwrap();
+    let c = m.vertices[top];
+    let mut out = m.clone();
+    for (i, v) in out.vertices.iter_mut().enumerate() {
+        let t = 1.0 - (*v - c).length() / radius;
+        if t > 0.0 {
+            *v += offset * t.min(0.5) * 2.0 * n[i];
+        }
+    }
+    out
+}
+
+#[test]
+fn a_region_past_the_data_fails_and_a_bridge_over_a_hole_does_not() {
+    let m = bunny();
+    let d = diagonal(&m);
+    // A hole in the scan, exact normals: the source mesh bridges it with the curved surface
+    // of the head, on the convex side of the rim (the data's winding number well below
+    // 1/2), but the data lies to the side of it (the rim): a bridge, which fails nothing.
+    let spec = ScanSpec {
+        points: 20_000,
+        noise: 0.002,
+        hole: 0.08,
+        seed: 7,
+        ..Default::default()
+    };
+    let s = simulate(&m, &spec);
+    let r = data_support_oriented(
+        &m,
+        &s.points,
+        s.normals.as_deref(),
+        &SupportOptions::default(),
+    )
+    .unwrap();
+    assert!(r.passed() && r.regions_past_data == 0, "{}", r.detail());
+    let hole = &r.unsupported_regions[0];
+    assert!(hole.data_winding.unwrap() < 0.25, "{}", r.detail());
+    assert!(hole.data_alignment < 0.4, "{}", r.detail());
+    assert!(r.detail().contains("unsupported regions bridged"));
+    // The same data without a hole, and a mesh running 3% of the diagonal past it: the
+    // plateau is an unsupported region where the data says "outside".
+    let s = scan_with_normals(&m);
+    let bump = bumped(&m, 0.03 * d, 0.06 * d);
+    let r = data_support_oriented(
+        &bump,
+        &s.points,
+        s.normals.as_deref(),
+        &SupportOptions::default(),
+    )
+    .unwrap();
+    assert!(!r.passed() && r.regions_past_data == 1, "{}", r.detail());
+    let past = &r.unsupported_regions[0];
+    assert!(past.data_winding.unwrap() < 0.1, "{}", r.detail());
+    assert!(
+        r.detail().contains("extend past the data"),
+        "{}",
+        r.detail()
+    );
+    // Pushed inward instead: "inside".
+    let dent = bumped(&m, -0.03 * d, 0.06 * d);
+    let r = data_support_oriented(
+        &dent,
+        &s.points,
+        s.normals.as_deref(),
+        &SupportOptions::default(),
+    )
+    .unwrap();
+    assert!(!r.passed() && r.regions_past_data == 1, "{}", r.detail());
+    assert!(
+        r.unsupported_regions[0].data_winding.unwrap() > 0.9,
+        "{}",
+        r.detail()
+    );
+    // The unbumped mesh against the same data passes.
+    let r = data_support_oriented(
+        &m,
+        &s.points,
+        s.normals.as_deref(),
+        &SupportOptions::default(),
+    )
+    .unwrap();
+    assert!(
+        r.passed() && r.unsupported_regions_total == 0,
+        "{}",
+        r.detail()
+    );
+}

@@ -665,10 +665,43 @@ pub fn knn_lists(points: &[DVec3], tree: &ImmutableKdTree<f64, 3>, k: usize) -> 
         .collect()
 }
 
-/// The point-cloud winding-number trees: each point an equilateral triangle of area
+/// One point's disk of the point-cloud winding number: an equilateral triangle of area
 /// ≈ 0.9 × spacing² (the share of the surface of a point whose k nearest neighbours are at
-/// mean distance `spacing`) in its tangent plane, counter-clockwise about its normal; and,
-/// for large inputs, a coarse copy from a random subsample (areas scaled up).
+/// mean distance `spacing`, at least a quarter of the median) times `scale`, in the tangent
+/// plane at `p`, counter-clockwise about the unit normal `n`.
+fn winding_disk(p: DVec3, n: DVec3, spacing: f64, med_spacing: f64, scale: f64) -> [DVec3; 3] {
+    let (u, v) = n.any_orthonormal_pair();
+    let area = scale * 0.9 * spacing.max(0.25 * med_spacing).powi(2);
+    let rho = (area / (0.75 * 3f64.sqrt())).sqrt();
+    let c = |t: f64| p + rho * (t.cos() * u + t.sin() * v);
+    let third = 2.0 * std::f64::consts::FRAC_PI_3;
+    [c(0.0), c(third), c(2.0 * third)]
+}
+
+/// The generalized winding number of an oriented point cloud (after Barill et al. 2018), as
+/// the point-set surface's far field uses it: each point a small disk in its tangent plane
+/// ([`winding_disk`]); `TriangleBvh::winding_number` of the result is ≈ 1 inside the sampled
+/// solid and ≈ 0 outside, meaningful at distances above the spacing. `normals`: outward unit
+/// normals; `spacing`: each point's mean distance to its nearest neighbours (the `k_spacing`
+/// mean of [`PointSetParams`]), `med_spacing` their median.
+pub fn winding_disks(
+    points: &[DVec3],
+    normals: &[DVec3],
+    spacing: &[f64],
+    med_spacing: f64,
+) -> Bvh {
+    let n = points.len();
+    Bvh::build(
+        (0..n)
+            .map(|i| winding_disk(points[i], normals[i], spacing[i], med_spacing, 1.0))
+            .collect(),
+        (0..n as u32).collect(),
+        0.0,
+    )
+}
+
+/// The point-cloud winding-number trees: [`winding_disks`], and, for large inputs, a coarse
+/// copy from a random subsample (areas scaled up).
 fn winding_trees(
     points: &[DVec3],
     normals: &[DVec3],
@@ -676,22 +709,7 @@ fn winding_trees(
     med_spacing: f64,
 ) -> (Bvh, Option<Bvh>) {
     let n = points.len();
-    // Point-cloud winding number: each point becomes an equilateral triangle of area
-    // ≈ 0.9 × spacing² (the share of the surface of a point whose k nearest neighbours are
-    // at mean distance `spacing`) in its tangent plane, counter-clockwise about its normal.
-    let tiny = |i: usize, scale: f64| {
-        let (u, v) = normals[i].any_orthonormal_pair();
-        let area = scale * 0.9 * spacing[i].max(0.25 * med_spacing).powi(2);
-        let rho = (area / (0.75 * 3f64.sqrt())).sqrt();
-        let c = |t: f64| points[i] + rho * (t.cos() * u + t.sin() * v);
-        let third = 2.0 * std::f64::consts::FRAC_PI_3;
-        [c(0.0), c(third), c(2.0 * third)]
-    };
-    let gwn = Bvh::build(
-        (0..n).map(|i| tiny(i, 1.0)).collect(),
-        (0..n as u32).collect(),
-        0.0,
-    );
+    let gwn = winding_disks(points, normals, spacing, med_spacing);
     // A coarse copy from a random subsample (areas scaled up), tried first out of the
     // kernel support; its answer is kept when clear-cut (w < 0.1 or w > 0.9).
     let gwn_coarse = (n > 2 * GWN_COARSE).then(|| {
@@ -704,7 +722,10 @@ fn winding_trees(
         idx.truncate(GWN_COARSE);
         idx.sort_unstable();
         let scale = n as f64 / GWN_COARSE as f64;
-        let tris = idx.iter().map(|&i| tiny(i, scale)).collect();
+        let tris = idx
+            .iter()
+            .map(|&i| winding_disk(points[i], normals[i], spacing[i], med_spacing, scale))
+            .collect();
         Bvh::build(tris, (0..GWN_COARSE as u32).collect(), 0.0)
     });
     (gwn, gwn_coarse)
