@@ -27,7 +27,7 @@
 //!   *unsupported regions*. Where the mesh bridges a hole in the data they are reported
 //!   (area, size, location) and fail nothing; with data normals, a region where the data's
 //!   winding number says "outside" (or "inside") extends past data that closes the surface
-//!   there, and FAILs the check ([`excursions`]).
+//!   there, and FAILs the check ([`regions`]).
 //!
 //! - The mesher drops the unsupported components that no data needs
 //!   ([`droppable_components`], the rule of `rdt_mesher::pipeline`'s `unsupported` module);
@@ -52,10 +52,11 @@ use crate::short_loops::ShortLoops;
 use crate::topology::{Dsu, vertex_components};
 
 mod drop_rule;
-pub mod excursions;
 mod handles;
+pub mod regions;
 pub use drop_rule::{Droppable, MAX_DROP_TRIES, droppable_components};
 pub use handles::UnsupportedHandle;
+pub use regions::UnsupportedRegion;
 
 /// Parameters of the data-support check.
 #[derive(Clone, Debug, PartialEq)]
@@ -128,25 +129,6 @@ pub struct DataComponent {
     pub extent: f64,
 }
 
-/// Touching unsupported triangles: a region where the mesh bridges missing data.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct UnsupportedRegion {
-    pub triangles: usize,
-    pub area: f64,
-    pub centroid: [f64; 3],
-    /// Bounding-box diagonal (the hole's size).
-    pub extent: f64,
-    /// Distance from the centroid to the nearest data point.
-    pub distance_to_data: f64,
-    /// The area-weighted median of the data's winding number over the region (with data
-    /// normals; see [`excursions`]): about 1/2 on a bridge over missing data, near 0 or 1
-    /// where the mesh extends past data that closes the surface elsewhere.
-    pub data_winding: Option<f64>,
-    /// Where the data lies from the region ([`excursions::region_alignment`]): about 1
-    /// straight across the mesh, about 0 to its side.
-    pub data_alignment: f64,
-}
-
 /// What the data-support check measured.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct DataSupport {
@@ -167,7 +149,7 @@ pub struct DataSupport {
     pub unsupported_regions: Vec<UnsupportedRegion>,
     pub unsupported_regions_total: usize,
     /// Unsupported regions whose data winding number says they extend past the data
-    /// ([`excursions::past_data`]), not bridge a hole in it.
+    /// ([`regions::past_data`]), not bridge a hole in it.
     pub regions_past_data: usize,
     /// Mesh components below `min_share` (or, with data normals, below `min_agreement`),
     /// and data components not covered.
@@ -294,7 +276,7 @@ impl DataSupport {
         } else {
             s += ", all covered";
         }
-        s += &excursions::describe(
+        s += &regions::describe(
             &self.unsupported_regions,
             self.unsupported_regions_total,
             self.regions_past_data,
@@ -501,11 +483,11 @@ pub fn data_support_oriented(
         .filter(|&t| per_tri[t].1 < 0.5)
         .collect();
     let med_spacing = median(band.spacing.clone());
-    let gwn = excursions::data_winding(data, normals, &band.spacing, med_spacing);
+    let gwn = regions::data_winding(data, normals, &band.spacing, med_spacing);
     let mut regions = unsupported_regions(mesh, &bad, &per_tri, &band, gwn.as_ref());
     let past = |r: &UnsupportedRegion| {
         r.data_winding
-            .is_some_and(|w| excursions::past_data(w, r.data_alignment))
+            .is_some_and(|w| regions::past_data(w, r.data_alignment))
     };
     regions.sort_by(|a, b| {
         past(b)
@@ -731,9 +713,8 @@ fn unsupported_regions(
                 centroid,
                 extent,
                 distance_to_data: band.supports(DVec3::from_array(centroid)).1,
-                data_winding: gwn
-                    .map(|w| excursions::region_winding(mesh, &g, |t| per_tri[t].0, w)),
-                data_alignment: excursions::region_alignment(
+                data_winding: gwn.map(|w| regions::region_winding(mesh, &g, |t| per_tri[t].0, w)),
+                data_alignment: regions::region_alignment(
                     mesh,
                     &g,
                     |t| per_tri[t].0,

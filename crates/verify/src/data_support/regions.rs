@@ -1,6 +1,6 @@
-//! Section 6.6.3's point-set surface beyond its data: does an unsupported region of a mesh
-//! bridge missing data, or extend past data that shows a closed surface there? (Not in the
-//! paper, which assumes S known.)
+//! Unsupported regions (section 6.6.3's point-set surface beyond its data; not in the paper,
+//! which assumes S known): touching triangles beyond the data's band, and whether such a
+//! region bridges missing data or extends past data that shows a closed surface there.
 //!
 //! Two measures of an unsupported region (beyond the data's band), each an area-weighted
 //! median over its triangles:
@@ -30,6 +30,27 @@
 use geom::bvh::TriangleBvh;
 use glam::DVec3;
 use meshio::TriMesh;
+use serde::Serialize;
+
+/// Touching unsupported triangles: where the mesh bridges missing data, or (see
+/// [`past_data`]) runs past data that closes the surface there.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct UnsupportedRegion {
+    pub triangles: usize,
+    pub area: f64,
+    pub centroid: [f64; 3],
+    /// Bounding-box diagonal (the hole's size).
+    pub extent: f64,
+    /// Distance from the centroid to the nearest data point.
+    pub distance_to_data: f64,
+    /// The area-weighted median of the data's winding number over the region (with data
+    /// normals; see the module documentation): about 1/2 on a bridge over missing data,
+    /// near 0 or 1 where the mesh extends past data that closes the surface there.
+    pub data_winding: Option<f64>,
+    /// Where the data lies from the region ([`region_alignment`]): about 1 straight across
+    /// the mesh, about 0 to its side.
+    pub data_alignment: f64,
+}
 
 /// Below this median winding number of the data, an unsupported region lies outside the
 /// sampled solid (see the module documentation).
@@ -122,10 +143,10 @@ pub fn past_data(w: f64, alignment: f64) -> bool {
 }
 
 /// The regions' part of the check's line: the regions past the data (which FAIL it), then
-/// the bridges over missing data (`regions` ordered as [`super::DataSupport`] keeps them).
-pub(super) fn describe(regions: &[super::UnsupportedRegion], total: usize, past: usize) -> String {
+/// the bridges over missing data (`regions` ordered as `DataSupport` keeps them).
+pub(super) fn describe(regions: &[UnsupportedRegion], total: usize, past: usize) -> String {
     let fmt_p = |p: [f64; 3]| format!("({:.4}, {:.4}, {:.4})", p[0], p[1], p[2]);
-    let one = |r: &super::UnsupportedRegion| {
+    let one = |r: &UnsupportedRegion| {
         format!(
             "{} triangles, area {:.3e}, {:.3e} across, at {}, {:.3e} from the data{}",
             r.triangles,
