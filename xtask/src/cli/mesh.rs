@@ -577,16 +577,17 @@ fn print_cut_handles(out: &Outcome) {
     }
 }
 
-/// The details of a failed `input-topology` or `data-support` check (why the output's
-/// topology is not the input's; which component the data does not support), and of a
-/// `data-support` check that says components were dropped before it.
+/// The details of a failed `input-topology`, `data-support` or `angles` check (why the
+/// output's topology is not the input's; which component the data does not support; how
+/// many triangles are below the angle bound and where), and of a `data-support` check that
+/// says components were dropped before it.
 fn print_data_failures(out: &Outcome) {
     let Some(r) = &out.report else { return };
     let dropped = r
         .data_support
         .as_ref()
         .is_some_and(|d| !d.dropped_components.is_empty());
-    for name in ["input-topology", "data-support"] {
+    for name in ["input-topology", "data-support", "angles"] {
         if let Some(c) = r.check(name)
             && (c.status == verify::Status::Fail || (name == "data-support" && dropped))
         {

@@ -26,6 +26,7 @@
 //! depend on the number of threads of the rayon pool the run is called from.
 #![deny(missing_docs)]
 
+mod angle_sources;
 mod budget;
 mod error;
 mod forecast;

@@ -322,6 +322,8 @@ impl Plan<'_, '_> {
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
             let dropped = super::unsupported::dropped(&out.stats);
             data_support(&mut report, self.input, &out.mesh, sigma, &dropped);
+            let decisions = &out.stats.topology_decisions;
+            super::angle_sources::annotate(&mut report, &out.mesh, decisions, vopts.min_angle_deg);
             out.report = Some(report);
         }
         Ok(out)
@@ -358,6 +360,8 @@ impl Plan<'_, '_> {
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
             let dropped = super::unsupported::dropped(&out.stats);
             data_support(&mut report, self.input, &out.mesh, tp.sigma0, &dropped);
+            let decisions = &out.stats.topology_decisions;
+            super::angle_sources::annotate(&mut report, &out.mesh, decisions, vopts.min_angle_deg);
             out.report = Some(report);
         }
         out.two_pass = Some(TwoPassOutcome {
@@ -412,6 +416,8 @@ impl Plan<'_, '_> {
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
             let dropped = super::unsupported::dropped(&out.stats);
             data_support(&mut report, self.input, &out.mesh, a.floor, &dropped);
+            let decisions = &out.stats.topology_decisions;
+            super::angle_sources::annotate(&mut report, &out.mesh, decisions, vopts.min_angle_deg);
             out.report = Some(report);
         }
         out.adaptive = Some(super::AdaptiveOutcome {
