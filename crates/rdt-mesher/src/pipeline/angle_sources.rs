@@ -4,10 +4,11 @@
 //! detail gains how many of the triangles below the bound lie within the box of a
 //! topological decision, by kind, and how many elsewhere.
 //!
-//! A triangle is counted at a decision when its centroid is within half the decision's box
-//! diagonal (`TopologyDecision::size`) of the box's center: the triangles a decision adds
-//! lie in that box, and the skinny edits after the decisions (flips, collapses, moves) keep
-//! their triangles there or next to it. It is a statement of place, not of cause.
+//! A triangle is counted at a decision when one of its corners is within half the decision's
+//! box diagonal (`TopologyDecision::size`) of the box's center: the triangles a decision
+//! adds lie in that box, and the skinny edits after the decisions (flips, collapses, moves)
+//! change them and the triangles sharing their corners. It is a statement of place, not of
+//! cause.
 //! Invariant: the check's status and figures are unchanged; only its detail grows.
 
 use crate::TopologyDecision;
@@ -41,8 +42,7 @@ pub(super) fn annotate(
         if smallest >= min_deg {
             continue;
         }
-        let c = (p[0] + p[1] + p[2]) / 3.0;
-        match decisions.iter().find(|d| within(d, c)) {
+        match decisions.iter().find(|d| p.iter().any(|&c| within(d, c))) {
             Some(d) => {
                 let kind = kind_name(d);
                 match at_kinds.iter_mut().find(|(k, _)| *k == kind) {
