@@ -140,10 +140,8 @@ fn a_mesh_offset_by_3_percent_of_the_diagonal_fails() {
     assert!(r.passed(), "{}", r.detail());
 }
 
-#[test]
-fn a_hole_in_the_scan_is_an_unsupported_region_and_missed_data_fails() {
-    let m = bunny();
-    let d = diagonal(&m);
+/// The scan of [`scan_with_normals`] with a missing patch of radius 8% of the diagonal.
+fn scan_with_a_hole(m: &TriMesh) -> Scan {
     let spec = ScanSpec {
         points: 20_000,
         noise: 0.002,
@@ -151,7 +149,14 @@ fn a_hole_in_the_scan_is_an_unsupported_region_and_missed_data_fails() {
         seed: 7,
         ..Default::default()
     };
-    let s = simulate(&m, &spec);
+    simulate(m, &spec)
+}
+
+#[test]
+fn a_hole_in_the_scan_is_an_unsupported_region_and_missed_data_fails() {
+    let m = bunny();
+    let d = diagonal(&m);
+    let s = scan_with_a_hole(&m);
     let (c, radius) = s.hole.unwrap();
     let r = data_support(&m, &s.points, &SupportOptions::default()).unwrap();
     assert!(r.passed(), "{}", r.detail());
@@ -376,21 +381,11 @@ fn a_region_past_the_data_fails_and_a_bridge_over_a_hole_does_not() {
     // A hole in the scan, exact normals: the source mesh bridges it with the curved surface
     // of the head, on the convex side of the rim (the data's winding number well below
     // 1/2), but the data lies to the side of it (the rim): a bridge, which fails nothing.
-    let spec = ScanSpec {
-        points: 20_000,
-        noise: 0.002,
-        hole: 0.08,
-        seed: 7,
-        ..Default::default()
+    let check = |mesh: &TriMesh, s: &Scan| {
+        let o = SupportOptions::default();
+        data_support_oriented(mesh, &s.points, s.normals.as_deref(), &o).unwrap()
     };
-    let s = simulate(&m, &spec);
-    let r = data_support_oriented(
-        &m,
-        &s.points,
-        s.normals.as_deref(),
-        &SupportOptions::default(),
-    )
-    .unwrap();
+    let r = check(&m, &scan_with_a_hole(&m));
     assert!(r.passed() && r.regions_past_data == 0, "{}", r.detail());
     let hole = &r.unsupported_regions[0];
     assert!(hole.data_winding.unwrap() < 0.25, "{}", r.detail());
@@ -400,13 +395,7 @@ fn a_region_past_the_data_fails_and_a_bridge_over_a_hole_does_not() {
     // plateau is an unsupported region where the data says "outside".
     let s = scan_with_normals(&m);
     let bump = bumped(&m, 0.03 * d, 0.06 * d);
-    let r = data_support_oriented(
-        &bump,
-        &s.points,
-        s.normals.as_deref(),
-        &SupportOptions::default(),
-    )
-    .unwrap();
+    let r = check(&bump, &s);
     assert!(!r.passed() && r.regions_past_data == 1, "{}", r.detail());
     let past = &r.unsupported_regions[0];
     assert!(past.data_winding.unwrap() < 0.1, "{}", r.detail());
@@ -417,13 +406,7 @@ fn a_region_past_the_data_fails_and_a_bridge_over_a_hole_does_not() {
     );
     // Pushed inward instead: "inside".
     let dent = bumped(&m, -0.03 * d, 0.06 * d);
-    let r = data_support_oriented(
-        &dent,
-        &s.points,
-        s.normals.as_deref(),
-        &SupportOptions::default(),
-    )
-    .unwrap();
+    let r = check(&dent, &s);
     assert!(!r.passed() && r.regions_past_data == 1, "{}", r.detail());
     assert!(
         r.unsupported_regions[0].data_winding.unwrap() > 0.9,
@@ -431,13 +414,7 @@ fn a_region_past_the_data_fails_and_a_bridge_over_a_hole_does_not() {
         r.detail()
     );
     // The unbumped mesh against the same data passes.
-    let r = data_support_oriented(
-        &m,
-        &s.points,
-        s.normals.as_deref(),
-        &SupportOptions::default(),
-    )
-    .unwrap();
+    let r = check(&m, &s);
     assert!(
         r.passed() && r.unsupported_regions_total == 0,
         "{}",

@@ -76,22 +76,16 @@ pub(super) fn data_winding(
 }
 
 /// The area-weighted median of the data's winding number at the centroids of the region's
-/// triangles `tris` (`area[t]`: triangle `t`'s area).
+/// triangles `tris` (`area(t)`: triangle `t`'s area).
 pub(super) fn region_winding(
     mesh: &TriMesh,
     tris: &[usize],
     area: impl Fn(usize) -> f64,
     gwn: &TriangleBvh,
 ) -> f64 {
-    let v = &mesh.vertices;
-    let ws: Vec<(f64, f64)> = tris
-        .iter()
-        .map(|&t| {
-            let [a, b, c] = mesh.triangles[t].map(|i| v[i as usize]);
-            (gwn.winding_number((a + b + c) / 3.0), area(t))
-        })
-        .collect();
-    weighted_median(ws)
+    region_median(mesh, tris, area, |[a, b, c]| {
+        gwn.winding_number((a + b + c) / 3.0)
+    })
 }
 
 /// The area-weighted median over the region's triangles of `|n_t · u|`, `n_t` the unit
@@ -104,16 +98,24 @@ pub(super) fn region_alignment(
     area: impl Fn(usize) -> f64,
     nearest: impl Fn(DVec3) -> DVec3,
 ) -> f64 {
+    region_median(mesh, tris, area, |[a, b, c]| {
+        let x = (a + b + c) / 3.0;
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        n.dot((nearest(x) - x).normalize_or_zero()).abs()
+    })
+}
+
+/// The area-weighted median of `measure` over the region's triangles `tris`.
+fn region_median(
+    mesh: &TriMesh,
+    tris: &[usize],
+    area: impl Fn(usize) -> f64,
+    measure: impl Fn([DVec3; 3]) -> f64,
+) -> f64 {
     let v = &mesh.vertices;
-    let ws: Vec<(f64, f64)> = tris
+    let ws = tris
         .iter()
-        .map(|&t| {
-            let [a, b, c] = mesh.triangles[t].map(|i| v[i as usize]);
-            let x = (a + b + c) / 3.0;
-            let n = (b - a).cross(c - a).normalize_or_zero();
-            let u = (nearest(x) - x).normalize_or_zero();
-            (n.dot(u).abs(), area(t))
-        })
+        .map(|&t| (measure(mesh.triangles[t].map(|i| v[i as usize])), area(t)))
         .collect();
     weighted_median(ws)
 }
