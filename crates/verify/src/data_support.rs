@@ -483,7 +483,10 @@ pub fn data_support_oriented(
         .filter(|&t| per_tri[t].1 < 0.5)
         .collect();
     let med_spacing = median(band.spacing.clone());
-    let gwn = regions::data_winding(data, normals, &band.spacing, med_spacing);
+    // (Built only when some triangle is unsupported.)
+    let gwn = (!bad.is_empty())
+        .then(|| regions::data_winding(data, normals, &band.spacing, med_spacing))
+        .flatten();
     let mut regions = unsupported_regions(mesh, &bad, &per_tri, &band, gwn.as_ref());
     let past = |r: &UnsupportedRegion| {
         r.data_winding

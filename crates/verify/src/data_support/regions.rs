@@ -161,8 +161,7 @@ pub(super) fn describe(regions: &[UnsupportedRegion], total: usize, past: usize)
         ) + &format!(", alignment {:.2}", r.data_alignment)
     };
     let mut s = String::new();
-    if past > 0 {
-        let r = &regions[0];
+    if let Some(r) = regions.first().filter(|_| past > 0) {
         let side = match r.data_winding {
             Some(w) if w > PAST_DATA_INSIDE => "inside",
             _ => "outside",
