@@ -194,6 +194,81 @@ pub fn poles_of_range(
     out
 }
 
+/// The poles of the vertices `vs` alone (`out[i]` is `vs[i]`'s), from their own cells:
+/// bit for bit those of [`poles_from_centers`] (each vertex's cells are visited in increasing
+/// id, the order of [`Triangulation::finite_cells`], their circumcenters computed by
+/// [`Triangulation::circumcenter`], and its hull facets summed in (cell, index) order), at a
+/// cost proportional to the vertices' stars: for a caller that knows which stars changed.
+pub fn poles_of_vertices(
+    t: &Triangulation,
+    vs: &[VertexId],
+    normal: impl Fn(VertexId) -> Option<DVec3>,
+) -> Vec<VertexPoles> {
+    vs.iter().map(|&v| poles_of_vertex(t, v, &normal)).collect()
+}
+
+/// [`poles_of_vertices`] of one vertex.
+fn poles_of_vertex(
+    t: &Triangulation,
+    v: VertexId,
+    normal: &impl Fn(VertexId) -> Option<DVec3>,
+) -> VertexPoles {
+    let mut cells = t.incident_cells(v);
+    cells.retain(|&c| !t.is_infinite(c));
+    cells.sort_unstable_by_key(|c| c.0);
+    let centers: Vec<DVec3> = cells.iter().map(|&c| t.circumcenter(c)).collect();
+    let p = t.point(v);
+    let mut far = (0.0f64, DVec3::ZERO);
+    for &cc in centers.iter().filter(|cc| cc.is_finite()) {
+        let d = (cc - p).length_squared();
+        if d > far.0 {
+            far = (d, cc);
+        }
+    }
+    let mut hull_dir = DVec3::ZERO;
+    for &c in &cells {
+        let vs = t.cell_vertices(c);
+        for k in 0..4 {
+            if vs[k] == v || !t.is_infinite(t.neighbor(c, k)) {
+                continue;
+            }
+            let pts = vs.map(|w| t.point(w));
+            let f: Vec<DVec3> = (0..4).filter(|&j| j != k).map(|j| pts[j]).collect();
+            let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
+            if n.dot(pts[k] - f[0]) > 0.0 {
+                n = -n;
+            }
+            hull_dir += n.normalize_or_zero();
+        }
+    }
+    let (dir, plus_finite) = if let Some(n) = normal(v) {
+        (n, true)
+    } else if hull_dir != DVec3::ZERO {
+        (hull_dir, false)
+    } else {
+        (far.1 - p, true)
+    };
+    let mut out = VertexPoles::default();
+    for &cc in centers.iter().filter(|cc| cc.is_finite()) {
+        let d = (cc - p).length_squared();
+        let side = (cc - p).dot(dir);
+        let slot = if side > 0.0 && plus_finite {
+            &mut out.plus
+        } else if side < 0.0 {
+            &mut out.minus
+        } else {
+            continue;
+        };
+        if d > slot.map_or(0.0, |s| s.distance_squared) {
+            *slot = Some(Pole {
+                point: cc,
+                distance_squared: d,
+            });
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -211,6 +286,42 @@ mod tests {
                 DVec3::new(r * a.cos(), r * a.sin(), z) * s
             })
             .collect()
+    }
+
+    /// The poles of chosen vertices from their own stars are those of the scan over every
+    /// cell, bit for bit, for hull and interior vertices, with and without normals, and
+    /// with cospherical points (a grid: ties between equally far Voronoi vertices).
+    #[test]
+    fn poles_of_some_vertices_are_those_of_all() {
+        let mut pts = sphere(300);
+        let mut r = geom_like_rng(7);
+        pts.extend((0..300).map(|_| DVec3::new(r(), r(), r()) * 0.8 - DVec3::splat(0.4)));
+        pts.extend(
+            (0..64).map(|i| DVec3::new((i % 4) as f64, (i / 4 % 4) as f64, (i / 16) as f64) * 0.1),
+        );
+        let mut t = Triangulation::new();
+        t.insert_bulk(&pts).unwrap();
+        let all: Vec<VertexId> = t.vertices().collect();
+        let some: Vec<VertexId> = all.iter().copied().step_by(3).collect();
+        for with_normal in [false, true] {
+            let normal = |v: VertexId| with_normal.then(|| t.point(v));
+            let full = t.poles(normal);
+            let part = poles_of_vertices(&t, &some, normal);
+            for (v, got) in some.iter().zip(&part) {
+                assert_eq!(*got, full[v.index()], "vertex {v:?}");
+            }
+        }
+    }
+
+    /// A small deterministic generator in [0, 1).
+    fn geom_like_rng(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        }
     }
 
     #[test]

@@ -9,7 +9,10 @@
 //!
 //! - d_k = distance to the Voronoi poles of E ([`MedialAxisEstimate::poles_of`], computed on
 //!   the mesher's own Del(E), which has no scaffold point in this mode; no lambda-medial vertices: with
-//!   one lambda they keep spurious vertices near S where the spacing varies, see there);
+//!   one lambda they keep spurious vertices near S where the spacing varies, see there); when
+//!   few vertices are new since the last estimate, only the poles of the new vertices and
+//!   their Delaunay neighbours are computed again, the others kept (`poles_reusing`: the
+//!   same poles, bit for bit);
 //! - m_k = min over E of d_k, the current estimate of d_M^inf;
 //! - sigma_k(x) = max(f_k, eps' d_k(x)), eps' = [`EPS_PRIME_FACTOR`] eps, with the floor
 //!   f_k = max(eps' m_k, f_{k-1} / [`MAX_SHRINK`]) (f_0 = sigma_0).
@@ -159,32 +162,100 @@ fn next_id() -> u64 {
 /// d_k and the last field at a sample point.
 type DistanceAndOld = (f64, f64);
 
+/// The poles of the last estimate's Del(E) (the mesher's), with its vertices' positions:
+/// reused for the vertices whose stars have not changed since.
+struct LastPoles {
+    positions: Vec<DVec3>,
+    poles: Vec<delaunay3::VertexPoles>,
+}
+
+/// Below this share of new vertices since the last estimate, the poles are recomputed only
+/// for the new vertices and their Delaunay neighbours.
+const REUSE_BELOW_NEW_SHARE: f64 = 0.125;
+
+/// The poles of every vertex of `tri` (the mesher's Del(E), which only grows by
+/// insertions), those of `last` reused where they still hold: a vertex whose star changed
+/// since `last` was taken is, now, a Delaunay neighbour of a vertex inserted since (the
+/// last insertion that changed its star joined it to the new point, and no later one
+/// touched that star), so only the new vertices and their neighbours are computed again
+/// (`delaunay3::poles::poles_of_vertices`, bit for bit the poles of the whole scan). The
+/// reuse is skipped when many vertices are new, or when the first vertices are not those of
+/// `last` (then every pole is computed).
+fn poles_reusing(tri: &delaunay3::Triangulation, last: Option<&LastPoles>) -> LastPoles {
+    use delaunay3::VertexId;
+    let nv = tri.num_vertices();
+    let positions: Vec<DVec3> = (0..nv)
+        .map(|i| tri.point(VertexId::from_index(i)))
+        .collect();
+    let reuse = last.filter(|l| {
+        let n0 = l.poles.len();
+        n0 <= nv
+            && ((nv - n0) as f64) < REUSE_BELOW_NEW_SHARE * nv as f64
+            && l.positions.len() == n0
+            && (0..n0).all(|i| positions[i].to_array() == l.positions[i].to_array())
+    });
+    let poles = match reuse {
+        None => {
+            let (cells, centers) = verify::medial::circumcenters(tri);
+            verify::medial::poles_in_parallel(tri, &cells, &centers, |_| None)
+        }
+        Some(l) => {
+            let mut dirty = vec![false; nv];
+            for i in l.poles.len()..nv {
+                for c in tri.incident_cells(VertexId::from_index(i)) {
+                    for w in tri.cell_vertices(c) {
+                        if w != VertexId::INFINITE {
+                            dirty[w.index()] = true;
+                        }
+                    }
+                }
+            }
+            let list: Vec<VertexId> = (0..nv)
+                .filter(|&i| dirty[i])
+                .map(VertexId::from_index)
+                .collect();
+            let fresh: Vec<delaunay3::VertexPoles> = list
+                .par_chunks(1024)
+                .flat_map_iter(|ch| delaunay3::poles::poles_of_vertices(tri, ch, |_| None))
+                .collect();
+            let mut poles = l.poles.clone();
+            poles.resize(nv, delaunay3::VertexPoles::default());
+            for (v, p) in list.iter().zip(fresh) {
+                poles[v.index()] = p;
+            }
+            poles
+        }
+    };
+    LastPoles { positions, poles }
+}
+
 /// The estimate of a round from the sample ([`crate::mesher::RoundEnd`]): the poles of its
-/// Delaunay triangulation (the mesher's when given, else built), thinned at the scale of the
-/// last floor; and at each sample point, d_k and the last field `prev` there (the mesher's
-/// values `sizes` when it has them).
+/// Delaunay triangulation (the mesher's when given, else built; with the mesher's, `last`
+/// holds its poles from one estimate to the next), thinned at the scale of the last floor;
+/// and at each sample point, d_k and the last field `prev` there (the mesher's values
+/// `sizes` when it has them).
 fn estimate(
     prev: &Field,
     sample: &[DVec3],
     tri: Option<&delaunay3::Triangulation>,
     sizes: &[f64],
     keep: oracle::BoundingSphere,
+    last: &mut Option<LastPoles>,
 ) -> Result<(Arc<MedialAxisEstimate>, Vec<DistanceAndOld>), MeshError> {
-    let own;
-    let tri = match tri {
-        Some(t) => t,
+    let lambda = LAMBDA_FACTOR * prev.floor;
+    let medial = Arc::new(match tri {
+        Some(t) => {
+            let now = poles_reusing(t, last.as_ref());
+            let m = MedialAxisEstimate::from_poles(&now.poles, lambda, keep);
+            *last = Some(now);
+            m
+        }
         None => {
             let mut t = delaunay3::Triangulation::new();
             t.insert_bulk(sample)?;
-            own = t;
-            &own
+            MedialAxisEstimate::poles_of(&t, lambda, keep)
         }
-    };
-    let medial = Arc::new(MedialAxisEstimate::poles_of(
-        tri,
-        LAMBDA_FACTOR * prev.floor,
-        keep,
-    ));
+    });
     let eval = medial
         .distances(sample)
         .into_par_iter()
@@ -273,6 +344,7 @@ pub fn adaptive(
     let mut converged = false;
     let mut latest = f64::INFINITY;
     let mut last_round = false;
+    let mut last_poles: Option<LastPoles> = None;
     let result = crate::mesher::mesh_in_rounds(surface, &opts, progress, &mut |end| {
         let RoundEnd { sample, tri, sizes } = end;
         if last_round {
@@ -282,7 +354,7 @@ pub fn adaptive(
         let k = rounds.len() + 1;
         let prev = state.read().expect("the field is never poisoned");
         let prev_floor = prev.floor;
-        let (medial, eval) = estimate(&prev, sample, tri, sizes, keep)?;
+        let (medial, eval) = estimate(&prev, sample, tri, sizes, keep, &mut last_poles)?;
         drop(prev);
         let m = eval.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
         let settled = settled(eps, &eval);

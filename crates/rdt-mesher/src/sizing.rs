@@ -116,6 +116,13 @@ impl MedialAxisEstimate {
         Self::of_triangulation(tri, None, lambda, keep)
     }
 
+    /// [`MedialAxisEstimate::poles_of`] from the poles of every vertex of the triangulation,
+    /// computed by the caller (`poles[i]`: vertex `i`'s; e.g. some reused from an earlier
+    /// estimate where the stars did not change): the same estimate for the same poles.
+    pub fn from_poles(poles: &[delaunay3::VertexPoles], lambda: f64, keep: BoundingSphere) -> Self {
+        Self::from_candidates(Vec::new(), poles, lambda, keep)
+    }
+
     /// From Del(E): the lambda-medial vertices (with `medial_lambda`) and the poles,
     /// thinned at `lambda` / [`THINNING_CELLS`].
     fn of_triangulation(
@@ -144,10 +151,27 @@ impl MedialAxisEstimate {
                 candidates.push((cc, cc.distance(pts[0])));
             }
         }
+        let poles = verify::medial::poles_in_parallel(tri, &cells, &centers, |_| None);
+        Self::from_candidates(candidates, &poles, lambda, keep)
+    }
+
+    /// The estimate from the lambda-medial `candidates` (point, radius) and the poles of
+    /// every vertex, in vertex order (a hull sample's Voronoi cell is unbounded: only its
+    /// inner pole is finite), those within three times `keep`, thinned at `lambda` /
+    /// [`THINNING_CELLS`].
+    fn from_candidates(
+        mut candidates: Vec<(DVec3, f64)>,
+        vertex_poles: &[delaunay3::VertexPoles],
+        lambda: f64,
+        keep: BoundingSphere,
+    ) -> Self {
+        let far = BoundingSphere {
+            center: keep.center,
+            radius: keep.radius * 3.0,
+        };
         let lambda_vertices = candidates.len();
-        // The poles (a hull sample's Voronoi cell is unbounded: only its inner pole is finite).
         let mut poles = 0;
-        for vp in verify::medial::poles_in_parallel(tri, &cells, &centers, |_| None) {
+        for vp in vertex_poles {
             for pole in [vp.plus, vp.minus].into_iter().flatten() {
                 if far.contains(pole.point) {
                     candidates.push((pole.point, pole.distance_squared.sqrt()));
