@@ -133,14 +133,8 @@ pub fn poles_of_range(
     let mut hull_dir = vec![DVec3::ZERO; len];
     for (c, k) in hull {
         let vs = t.cell_vertices(c);
-        let pts = vs.map(point);
         // Hull facet opposite vs[k]: its outward normal points away from vs[k].
-        let f: Vec<DVec3> = (0..4).filter(|&j| j != k).map(|j| pts[j]).collect();
-        let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
-        if n.dot(pts[k] - f[0]) > 0.0 {
-            n = -n;
-        }
-        let n = n.normalize_or_zero();
+        let n = hull_normal(vs.map(point), k);
         for j in (0..4).filter(|&j| j != k) {
             let w = local(vs[j]);
             if w < len {
@@ -172,26 +166,42 @@ pub fn poles_of_range(
             if i >= len {
                 continue;
             }
-            let p = point(v);
-            let d = (cc - p).length_squared();
-            let (dir, plus_finite) = reference[i];
-            let side = (cc - p).dot(dir);
-            let slot = if side > 0.0 && plus_finite {
-                &mut out[i].plus
-            } else if side < 0.0 {
-                &mut out[i].minus
-            } else {
-                continue;
-            };
-            if d > slot.map_or(0.0, |s| s.distance_squared) {
-                *slot = Some(Pole {
-                    point: cc,
-                    distance_squared: d,
-                });
-            }
+            offer(&mut out[i], point(v), cc, reference[i]);
         }
     }
     out
+}
+
+/// Pass 2 for one Voronoi vertex `cc` of the sample point `p`: it becomes the pole on its
+/// side of the reference direction `dir` (the positive side only if `plus_finite`) when it
+/// is farther than the pole kept there (the first of equally far ones stays).
+fn offer(out: &mut VertexPoles, p: DVec3, cc: DVec3, (dir, plus_finite): (DVec3, bool)) {
+    let d = (cc - p).length_squared();
+    let side = (cc - p).dot(dir);
+    let slot = if side > 0.0 && plus_finite {
+        &mut out.plus
+    } else if side < 0.0 {
+        &mut out.minus
+    } else {
+        return;
+    };
+    if d > slot.map_or(0.0, |s| s.distance_squared) {
+        *slot = Some(Pole {
+            point: cc,
+            distance_squared: d,
+        });
+    }
+}
+
+/// The outward unit normal of the hull facet of the cell with points `pts` opposite
+/// `pts[k]` (pointing away from it).
+fn hull_normal(pts: [DVec3; 4], k: usize) -> DVec3 {
+    let f: Vec<DVec3> = (0..4).filter(|&j| j != k).map(|j| pts[j]).collect();
+    let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
+    if n.dot(pts[k] - f[0]) > 0.0 {
+        n = -n;
+    }
+    n.normalize_or_zero()
 }
 
 /// The poles of the vertices `vs` alone (`out[i]` is `vs[i]`'s), from their own cells:
@@ -232,13 +242,7 @@ fn poles_of_vertex(
             if vs[k] == v || !t.is_infinite(t.neighbor(c, k)) {
                 continue;
             }
-            let pts = vs.map(|w| t.point(w));
-            let f: Vec<DVec3> = (0..4).filter(|&j| j != k).map(|j| pts[j]).collect();
-            let mut n = (f[1] - f[0]).cross(f[2] - f[0]);
-            if n.dot(pts[k] - f[0]) > 0.0 {
-                n = -n;
-            }
-            hull_dir += n.normalize_or_zero();
+            hull_dir += hull_normal(vs.map(|w| t.point(w)), k);
         }
     }
     let (dir, plus_finite) = if let Some(n) = normal(v) {
@@ -250,21 +254,7 @@ fn poles_of_vertex(
     };
     let mut out = VertexPoles::default();
     for &cc in centers.iter().filter(|cc| cc.is_finite()) {
-        let d = (cc - p).length_squared();
-        let side = (cc - p).dot(dir);
-        let slot = if side > 0.0 && plus_finite {
-            &mut out.plus
-        } else if side < 0.0 {
-            &mut out.minus
-        } else {
-            continue;
-        };
-        if d > slot.map_or(0.0, |s| s.distance_squared) {
-            *slot = Some(Pole {
-                point: cc,
-                distance_squared: d,
-            });
-        }
+        offer(&mut out, p, cc, (dir, plus_finite));
     }
     out
 }

@@ -131,10 +131,7 @@ impl MedialAxisEstimate {
         lambda: f64,
         keep: BoundingSphere,
     ) -> Self {
-        let far = BoundingSphere {
-            center: keep.center,
-            radius: keep.radius * 3.0,
-        };
+        let far = far_sphere(keep);
         let (cells, centers) = verify::medial::circumcenters(tri);
         let mut candidates: Vec<(DVec3, f64)> = Vec::new();
         // The lambda-medial vertices.
@@ -165,10 +162,7 @@ impl MedialAxisEstimate {
         lambda: f64,
         keep: BoundingSphere,
     ) -> Self {
-        let far = BoundingSphere {
-            center: keep.center,
-            radius: keep.radius * 3.0,
-        };
+        let far = far_sphere(keep);
         let lambda_vertices = candidates.len();
         let mut poles = 0;
         for vp in vertex_poles {
@@ -520,4 +514,13 @@ pub fn estimate_dm_inf(
         sigma = next;
     }
     Ok(best.expect("at least one pass"))
+}
+
+/// The sphere within which medial points are kept: `keep` enlarged three times (the outer
+/// medial axis matters too).
+fn far_sphere(keep: BoundingSphere) -> BoundingSphere {
+    BoundingSphere {
+        center: keep.center,
+        radius: keep.radius * 3.0,
+    }
 }
