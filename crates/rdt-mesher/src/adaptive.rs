@@ -181,7 +181,7 @@ const REUSE_BELOW_NEW_SHARE: f64 = 0.125;
 /// (`delaunay3::poles::poles_of_vertices`, bit for bit the poles of the whole scan). The
 /// reuse is skipped when many vertices are new, or when the first vertices are not those of
 /// `last` (then every pole is computed).
-fn poles_reusing(tri: &delaunay3::Triangulation, last: Option<&LastPoles>) -> LastPoles {
+fn poles_reusing(tri: &delaunay3::Triangulation, last: Option<LastPoles>) -> LastPoles {
     use delaunay3::VertexId;
     let nv = tri.num_vertices();
     let positions: Vec<DVec3> = (0..nv)
@@ -218,7 +218,7 @@ fn poles_reusing(tri: &delaunay3::Triangulation, last: Option<&LastPoles>) -> La
                 .par_chunks(1024)
                 .flat_map_iter(|ch| delaunay3::poles::poles_of_vertices(tri, ch, |_| None))
                 .collect();
-            let mut poles = l.poles.clone();
+            let mut poles = l.poles;
             poles.resize(nv, delaunay3::VertexPoles::default());
             for (v, p) in list.iter().zip(fresh) {
                 poles[v.index()] = p;
@@ -245,7 +245,7 @@ fn estimate(
     let lambda = LAMBDA_FACTOR * prev.floor;
     let medial = Arc::new(match tri {
         Some(t) => {
-            let now = poles_reusing(t, last.as_ref());
+            let now = poles_reusing(t, last.take());
             let m = MedialAxisEstimate::from_poles(&now.poles, lambda, keep);
             *last = Some(now);
             m

@@ -586,13 +586,7 @@ fn below_angle(mesh: &TriMesh, min_deg: f64) -> (usize, Option<DVec3>) {
     let (mut below, mut worst) = (0, (f64::INFINITY, None));
     for t in &mesh.triangles {
         let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-        let smallest = quality::triangle_shape(a, b, c).map_or(0.0, |(angles, _, _)| {
-            angles
-                .iter()
-                .copied()
-                .fold(f64::INFINITY, f64::min)
-                .to_degrees()
-        });
+        let smallest = quality::smallest_angle_deg(a, b, c);
         if smallest < min_deg {
             below += 1;
             if smallest < worst.0 {

@@ -28,6 +28,18 @@ pub struct Quality {
     pub zero_area_triangles: usize,
 }
 
+/// The smallest angle of a triangle in degrees, 0 for a degenerate one (what the `angles`
+/// check counts against its bound).
+pub fn smallest_angle_deg(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    triangle_shape(a, b, c).map_or(0.0, |(angles, _, _)| {
+        angles
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+            .to_degrees()
+    })
+}
+
 /// The three angles (radians), circumradius/shortest-edge and area of a triangle.
 pub fn triangle_shape(a: DVec3, b: DVec3, c: DVec3) -> Option<([f64; 3], f64, f64)> {
     let (ab, bc, ca) = (b - a, c - b, a - c);

@@ -14,7 +14,7 @@
 //! triangles per stage: shorter stages have smaller circumballs. Only when no such tube
 //! fits, the same pairs with straight rings (off S: across a neck thinner than a voxel, S has
 //! no wall there), from one triangle's shape to the other's in stages about as long as their
-//! edges ([`straight_rings`]): their stages are within sigma where a six-triangle tube
+//! edges ([`straight::straight_rings`]): their stages are within sigma where a six-triangle tube
 //! between two tips was oversized (since 2026-12-05; `bridge_over_size` decisions went from
 //! 22 to 0 on `nibabel_example4d_vol0` at iso 420.5, `--size 2`). A tube within sigma with
 //! triangles below the angle bound is replaced by a straight one of its pair or the pairs
@@ -46,8 +46,8 @@ use std::collections::BTreeMap;
 
 mod straight;
 #[cfg(test)]
-use straight::MAX_STRAIGHT;
-use straight::straight_rings;
+use straight::{MAX_STRAIGHT, straight_rings};
+use straight::{Rings, straight_variants};
 
 /// Doublings of the search box's margin.
 const ROUNDS: u32 = 6;
@@ -113,11 +113,7 @@ where
     }
     let tries: Vec<(usize, usize, Rings, bool)> = pairs
         .iter()
-        .flat_map(|&(ta, tb)| {
-            let n = straight_rings(mesh, ta, tb);
-            (n.saturating_sub(1).max(1)..=n + 1)
-                .flat_map(move |r| [false, true].map(move |s| (ta, tb, Rings::Straight(r), s)))
-        })
+        .flat_map(|&(ta, tb)| straight_variants(mesh, ta, tb))
         .collect();
     let found: Vec<_> = tries.par_iter().map(evaluate).collect();
     let mut best = (below, angle, first);
@@ -132,13 +128,6 @@ where
         }
     }
     best.2
-}
-
-/// The intermediate rings of a tube: `n` rings of points of S, or `n` straight ones.
-#[derive(Clone, Copy, Debug)]
-enum Rings {
-    OnS(usize),
-    Straight(usize),
 }
 
 /// Bridge the split components of a run on an image with a resolution set (the pipeline's
@@ -353,11 +342,9 @@ fn bridge(
     let on_s = pairs.iter().flat_map(|&(_, ta, tb)| {
         (0..=MAX_RINGS).flat_map(move |r| [false, true].map(move |s| (ta, tb, Rings::OnS(r), s)))
     });
-    let straight = pairs.iter().flat_map(|&(_, ta, tb)| {
-        let n = straight_rings(mesh, ta, tb);
-        (n.saturating_sub(1).max(1)..=n + 1)
-            .flat_map(move |r| [false, true].map(move |s| (ta, tb, Rings::Straight(r), s)))
-    });
+    let straight = pairs
+        .iter()
+        .flat_map(|&(_, ta, tb)| straight_variants(mesh, ta, tb));
     let order: Vec<(usize, usize, Rings, bool)> = on_s.chain(straight).collect();
     let evaluate = |&(ta, tb, rings, superimposed): &(usize, usize, Rings, bool)| {
         let (fa, fb) = (mesh.triangles[ta], mesh.triangles[tb]);

@@ -35,11 +35,7 @@ pub(super) fn annotate(
     let (mut at_kinds, mut elsewhere) = (Vec::<(String, usize)>::new(), 0usize);
     for t in &mesh.triangles {
         let p = t.map(|i| mesh.vertices[i as usize]);
-        let smallest = verify::quality::triangle_shape(p[0], p[1], p[2])
-            .map_or(0.0, |(a, _, _)| {
-                a.iter().copied().fold(f64::INFINITY, f64::min).to_degrees()
-            });
-        if smallest >= min_deg {
+        if verify::quality::smallest_angle_deg(p[0], p[1], p[2]) >= min_deg {
             continue;
         }
         match decisions.iter().find(|d| p.iter().any(|&c| within(d, c))) {

@@ -1,7 +1,27 @@
-//! Straight tubes of the bridges (ours, images; issue 14): how many rings a straight tube
-//! between two triangles gets (see `super` for where straight tubes are tried).
+//! Straight tubes of the bridges (ours, images; issue 14): the kinds of intermediate rings,
+//! how many rings a straight tube between two triangles gets, and the straight variants
+//! tried for a pair (see `super` for where straight tubes are tried).
 
 use glam::DVec3;
+
+/// The intermediate rings of a tube: `n` rings of points of S, or `n` straight ones.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Rings {
+    OnS(usize),
+    Straight(usize),
+}
+
+/// The straight tubes tried for the pair of triangles `ta`, `tb`: [`straight_rings`] rings,
+/// one fewer (at least 1) and one more, each with the loops as they are and superimposed.
+pub(super) fn straight_variants(
+    mesh: &meshio::TriMesh,
+    ta: usize,
+    tb: usize,
+) -> impl Iterator<Item = (usize, usize, Rings, bool)> {
+    let n = straight_rings(mesh, ta, tb);
+    (n.saturating_sub(1).max(1)..=n + 1)
+        .flat_map(move |r| [false, true].map(move |s| (ta, tb, Rings::Straight(r), s)))
+}
 
 /// Most intermediate rings of a straight tube (see [`straight_rings`]).
 pub(super) const MAX_STRAIGHT: usize = 32;
