@@ -15,11 +15,13 @@ and the test asserts:
 - components (by shared vertices): ours + those the report lists as `dropped` == MC's
   (`marching_cubes(method="lewiner", allow_degenerate=False)` on the volume padded by one
   layer of the background, the data minimum, as the mesher continues the image; duplicate
-  vertices merged), or, where they differ, MC's on the trilinear interpolant sampled every
-  1/2 voxel (`UP`); on a difference from both the message lists the report's component
-  decisions (kind, centre, size) and where MC differs (an MC component holding several of
-  ours, or none). Lewiner's MC is not the trilinear topology everywhere (see `UP` and
-  `XFAIL_ISSUE_14`): on the real volumes it counts fewer components than the voxel scan;
+  vertices merged), or, where they differ, MC's on the same trilinear interpolant sampled
+  every 1/8 voxel (`FINE_UP`; 1/4 or 1/2 where that would exceed `FINE_SAMPLES` samples); on
+  a difference from both the message lists the report's component decisions (kind, centre,
+  size) and where MC differs (an MC component holding several of ours, or none). At the
+  voxels, Lewiner's MC is not the trilinear topology everywhere (see `FINE_UP`): its count
+  depends on the sampling of one surface and settles as the sampling resolves sub-voxel
+  necks, gaps and tunnels;
 - two-sided distance within h + sigma: every MC vertex is within it of our mesh (those on voxel
   edges are exact points of the trilinear level set, the voxel-edge crossings of `cargo xtask
   regress`; Lewiner adds a few inside cells, 0.3% on mni-crop, and MC puts one at each node
@@ -40,12 +42,13 @@ the 30% and 60% quantiles of their foreground; and generated hard volumes writte
 NIfTI files, the same voxels as `xtask/src/suites/hard_volumes.rs` (blobs, sheet, tube, noise,
 checker, integer; the integer one stored as int16), plus smoothed noise.
 
-The (case, size) failing today, by gaps of the mesher or of MC as the reference, are in
-`XFAIL_ISSUE_14` below (strict: a case that starts passing fails the test, and its entry must
-then be removed). The measured table is in docs/GUIDE.md (`cargo xtask regress`). Every size
-is kept on every case: the whole module took 1 min 53 s to 2 min 12 s on a shared 2-core
-machine (`mni-half` at 1 voxel, the slowest, 11 s). Run alone, with `target/release/xtask`
-built: `pytest python/tests/test_images_vs_marching_cubes.py`.
+Every (case, size) passes since 2026-12-05 (session 26: the voxel scan's joins through a
+cell's interior, `oracle::image::topology::interior`; before, 12 failed as strict xfails, all
+where the scan counted too many components). The measured table is in docs/GUIDE.md
+(`cargo xtask regress`). Every size is kept on every case: the whole module took about 3 min
+on a shared 2-core machine (the four 1/8-voxel MC runs of the nibabel volumes 84 s, 4.6 GB
+peak). Run alone, with `target/release/xtask` built:
+`pytest python/tests/test_images_vs_marching_cubes.py`.
 """
 
 import functools
@@ -70,36 +73,18 @@ from scipy.spatial import cKDTree  # noqa: E402
 SIZES = (1, 2, 4)
 
 # The component reference: MC at the voxels, or, where its count differs from ours, MC of the
-# trilinear interpolant sampled every 1/UP voxel. At the voxels, Lewiner's tables decide some
-# ambiguous faces and cells otherwise than the interpolant (mni-crop: 160 components, 166 at
-# 1/2 voxel, the voxel scan's and ours); sampled, a face saddle exactly at the iso value
-# becomes a sample at the iso value, which MC decides arbitrarily (checker: 43 at the voxels,
-# ours and the scan's, 34 at 1/2 voxel). See XFAIL_ISSUE_14 for what neither explains.
-UP = 2
-
-# (case, size in voxels) -> what fails today (issue 14), measured 2026-12-04, session 17 (after the
-# coverage's stars, the bridged sub-voxel pieces and the fragment rule; scikit-image 0.26,
-# trimesh 5.2). strict=True: when one starts passing, the test fails until its entry is
-# removed here. Every distance is now within h + sigma, and our count
-# equals the voxel scan's on every case.
-# - "MC below the scan": nibabel's two volumes, where neither MC count is the trilinear level
-#   set's. Lewiner's at the voxels is not even invariant under f -> -f (the same level set;
-#   `neg` below is its count on the negated volume). MC on the interpolant sampled finer
-#   (`up2`, `up4`: at 1/2 and 1/4 voxel) climbs towards the scan's count (sub-quarter-voxel
-#   necks and gaps): anatomical at 60% 268, 279, 283, 284, 284 of 285 at 1, 1/2, 1/4, 1/8 and
-#   1/16 voxel; example4d at 30% 489, 529, 535, 538 of 539 at 1 to 1/8 voxel (measured
-#   2026-12-04, session 18, scikit-image 0.26). The same trilinear function sampled finer
-#   gives more components: MC's count depends on the sampling of one surface, so it is not
-#   that surface's count.
-# - "S gap" (sheet at 1 and 2 voxels, until session 20): MC vertices at tied nodes where the
-#   sheet ends on a plateau of ties, which the mesher's coverage left out; it now covers them.
-_MC = "issue 14: MC below the scan: MC {}, neg {}, up2 {}, scan {}, ours {}"
-XFAIL_ISSUE_14 = {
-    **{("nib-anatomical@q30", k): _MC.format(93, 92, 94, 96, 96) for k in SIZES},
-    **{("nib-anatomical@q60", k): _MC.format(268, 271, 279, 285, 285) + ", up4 283, up8 284, up16 284" for k in SIZES},
-    **{("nib-example4d@q30", k): _MC.format(489, 534, 529, 539, 539) + ", up4 535, up8 538" for k in SIZES},
-    **{("nib-example4d@q60", k): _MC.format(597, 586, 614, 624, 624) for k in SIZES},
-}
+# same trilinear interpolant sampled every 1/FINE_UP voxel (the function restricted to a
+# sub-cell is trilinear again, so MC sees the same level set, with fewer ambiguous cells).
+# Lewiner's tables at the voxels decide some ambiguous faces and cells otherwise than the
+# interpolant; the counts settle as the sampling gets finer (measured 2026-12-05, scikit-image
+# 0.26, at 1, 1/2, 1/4, 1/8, 1/16 and 1/32 voxel): checker 43, 34, 35, 35, 35, 35; noise 23,
+# 22, 20, 21, 21, 21; nibabel's anatomical at its 60% quantile 268, 279, 283, 284, 284; and at
+# 1/8 voxel anatomical at 30% 96, example4d at 30% and 60% 538 and 623: each the voxel scan's
+# count (with its joins through cell interiors) and ours.
+FINE_UP = 8
+# Largest number of samples of a fine MC (float64: 8 bytes each, and about three times that
+# while sampling): a finer sampling is tried only below it.
+FINE_SAMPLES = 2.5e8
 
 IMAGES = os.path.join(FIXTURES, "images")
 NIBABEL_DATA = os.path.join(os.path.dirname(nib.__file__), "tests", "data")
@@ -278,10 +263,7 @@ def params():
     out = []
     for case in CASES:
         for k in SIZES:
-            marks = []
-            if (case, k) in XFAIL_ISSUE_14:
-                marks.append(pytest.mark.xfail(strict=True, reason=XFAIL_ISSUE_14[(case, k)]))
-            out.append(pytest.param(case, k, id=f"{case}-{k}vox", marks=marks))
+            out.append(pytest.param(case, k, id=f"{case}-{k}vox"))
     return out
 
 
@@ -362,6 +344,21 @@ def marching_cubes(path, iso, up=1):
     world = v @ aff[:3, :3].T + aff[:3, 3]
     h = float(np.linalg.norm(aff[:3, :3], axis=0).min())
     return world, f, components(f, len(world)), h, aff
+
+
+@functools.lru_cache(maxsize=None)
+def fine_components(path, iso):
+    """(sampling, MC's component count) of the trilinear interpolant sampled every 1/FINE_UP
+    voxel, or 1/4, 1/2 when that would exceed FINE_SAMPLES samples (the count only is kept)."""
+    shape = np.array(nib.load(path).shape[:3]) + 2  # the padded volume
+    up = next((u for u in (FINE_UP, 4, 2) if np.prod((shape - 1) * u + 1) <= FINE_SAMPLES), 1)
+    vol, _ = nifti_volume(path)
+    pad = np.pad(vol, 1, constant_values=float(vol.min()))
+    if up > 1:
+        pad = trilinear_samples(pad, up)
+    _, f, _, _ = skmeasure.marching_cubes(pad, level=iso, method="lewiner", allow_degenerate=False)
+    del pad
+    return up, components(f, int(f.max()) + 1 if len(f) else 0)
 
 
 def components(faces, n):
@@ -592,14 +589,14 @@ def test_image_mesh_vs_marching_cubes(xtask, volumes_dir, tmp_path, case, k):
 
     ours = components(f, len(v))
     dropped = sum(1 for d in report["stats"]["component_decisions"] if d["kind"] == "dropped")
-    mc_fine = mc_comps if ours + dropped == mc_comps else marching_cubes(path, iso, UP)[2]
+    up, mc_fine = (1, mc_comps) if ours + dropped == mc_comps else fine_components(path, iso)
     scan = report["input_stats"]["image"]["components"]
 
     d_mc_to_ours = distance_upper(mc_v, v, f, bound)
     d_ours_to_mc = distance_upper(v, mc_v, mc_f, bound)
     far1 = int((d_mc_to_ours > bound).sum())
     far2 = int((d_ours_to_mc > bound).sum())
-    row = dict(case=case, k=k, iso=iso, ours=ours, dropped=dropped, mc=mc_comps, mc_fine=mc_fine, scan=scan,
+    row = dict(case=case, k=k, iso=iso, ours=ours, dropped=dropped, mc=mc_comps, mc_fine=mc_fine, fine_up=up, scan=scan,
                mc_to_ours=float(d_mc_to_ours.max()), ours_to_mc=float(d_ours_to_mc.max()), bound=bound,
                h=h, vertices=len(v), far1=far1, far2=far2)
     MEASURED.append(row)
@@ -609,7 +606,7 @@ def test_image_mesh_vs_marching_cubes(xtask, volumes_dir, tmp_path, case, k):
     if ours + dropped not in (mc_comps, mc_fine):
         pytest.fail(
             f"components: ours {ours} + dropped {dropped} != marching cubes {mc_comps} (of the interpolant "
-            f"sampled at 1/{UP} voxel: {mc_fine}; voxel scan {scan}); "
+            f"sampled at 1/{up} voxel: {mc_fine}; voxel scan {scan}); "
             f"the report's decisions: {decisions_text(report)}; where MC differs: {joined_by_mc(v, f, mc_v, mc_f)}; "
             f"distances (h + sigma = {bound:.3f}): MC -> ours max {d_mc_to_ours.max():.3f} ({far1} beyond), "
             f"ours -> MC max {d_ours_to_mc.max():.3f} ({far2} beyond)",

@@ -190,9 +190,12 @@ fn a_piece_refined_to_a_tip_at_the_join_is_bridged_from_its_side() {
     let out = run_at(&input, 1.0);
     let rep = out.report.as_ref().unwrap();
     let acc = rep.scan_components.as_ref().unwrap();
+    // 284 since the scan's joins through cell interiors (285 before: two surfaces joined by
+    // a tunnel through one cell were counted apart; marching cubes of the interpolant
+    // sampled at 1/8 voxel finds 284).
     assert_eq!(
         (acc.scan, acc.meshed, acc.split),
-        (285, 285, 0),
+        (284, 284, 0),
         "{}",
         acc.summary()
     );

@@ -163,7 +163,7 @@ fn bridge_splits(
         if ps.len() < 2 {
             continue;
         }
-        ps.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
+        super::components::sort_pieces_largest_first(&out.mesh, &mut ps);
         // The nearest piece (and distance) of a point, over the component's vertices (the
         // bridges keep every vertex where it is, so one tree serves the whole component).
         let mut coords: Vec<[f64; 3]> = Vec::new();

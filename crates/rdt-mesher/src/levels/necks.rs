@@ -175,12 +175,7 @@ impl Mesher<'_> {
             .into_iter()
             .filter(|(_, p)| p.len() > 1)
             .map(|(l, mut p)| {
-                // Largest first; ties by the first point (deterministic).
-                p.sort_by(|a, b| {
-                    b.len()
-                        .cmp(&a.len())
-                        .then(a[0].to_array().partial_cmp(&b[0].to_array()).unwrap())
-                });
+                super::components::sort_largest_first(&mut p, |&x| x, |x| x.to_array());
                 (l, p)
             })
             .collect()

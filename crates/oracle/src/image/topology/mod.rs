@@ -8,9 +8,13 @@
 //! of an ambiguous face and the bilinear saddle of that face is on their side (the asymptotic
 //! decider: the inside pair is joined if the saddle value is `< 0`, the outside pair otherwise).
 //! These are exact connections of the trilinear interpolant's inside and outside regions, so
-//! every component of the node sets lies in one true region. The only connection not detected
-//! is an interior tunnel through a cell (a body-diagonal pair joined through the cell's
-//! interior), so the counts are exact except in that rare case, where they are too high.
+//! every component of the node sets lies in one true region. The last kind of connection is a
+//! tunnel through a cell's interior between corners no face joins (marching cubes 33's
+//! tunnels): [`interior`] finds those, by slicing the cell. With all three the node sets'
+//! components are the regions' (up to ties: a saddle exactly at the iso value). Until
+//! 2026-12-05 the tunnels were left out and the counts could be too high: 285 for 284 on
+//! nibabel's `anatomical.nii` at iso 9444.5, 43 for 35 on the jittered checkerboard of the
+//! image suite (marching cubes of the interpolant sampled at 1/8 voxel gives 284 and 35).
 //!
 //! **Surface components.** The regions of R³ \ S form a tree (each closed surface separates
 //! space in two), so #surface components = #inside regions + #outside regions - 1.
@@ -37,6 +41,7 @@
 //! sequential in index order, so the result does not depend on the thread count.
 
 mod dsu;
+mod interior;
 mod labels;
 mod necks;
 mod pairs;

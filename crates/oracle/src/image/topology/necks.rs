@@ -1,6 +1,7 @@
 //! Joins of the voxel scan (ours, P1 of section 6.6.2): where two grid nodes of one inside
-//! region are connected (6-neighbours, or the diagonal of a face joined through its bilinear
-//! saddle), the trilinear inside region passes from one to the other. A join between nodes
+//! region are connected (6-neighbours, the diagonal of a face joined through its bilinear
+//! saddle, or two corners of a cell joined through its interior: `super::interior`), the
+//! trilinear inside region passes from one to the other. A join between nodes
 //! that a mesh puts on different pieces of one surface component is a neck the mesh missed;
 //! the mesher samples S around it (`rdt_mesher`'s neck reseeding).
 
@@ -15,10 +16,11 @@ pub struct Join {
     pub a: DVec3,
     /// The other node.
     pub b: DVec3,
-    /// A point of the region between them: the midpoint of a grid edge, or the saddle of the
-    /// face whose diagonal `a`-`b` is.
+    /// A point of the region between them: the midpoint of a grid edge, the saddle of the
+    /// face whose diagonal `a`-`b` is, or for a cell's interior the saddle of the slice
+    /// that joins them.
     pub via: DVec3,
-    /// Whether `a`-`b` is the diagonal of a face (else a grid edge).
+    /// Whether `a`-`b` is the diagonal of a face or of a cell (else a grid edge).
     pub diagonal: bool,
     /// The indices in the volume of the nodes at `a` and `b` (as [`Node::index`]).
     pub nodes: [usize; 2],
@@ -274,7 +276,50 @@ impl RegionMask {
                             }
                         }
                     }
+                    self.interior_joins(s, p, keep, out);
                 }
+            }
+        }
+    }
+}
+
+impl RegionMask {
+    /// The joins through the interior of the cell whose first corner is `p` between two of
+    /// its corners in the region (see [`super::interior`]), that `keep` accepts.
+    fn interior_joins(
+        &self,
+        s: &ImageSurface,
+        p: [i64; 3],
+        keep: &mut dyn FnMut(Node, Node) -> bool,
+        out: &mut Vec<Join>,
+    ) {
+        let corner = |c: u8| {
+            [
+                p[0] + i64::from(c & 1),
+                p[1] + i64::from((c >> 1) & 1),
+                p[2] + i64::from(c >> 2),
+            ]
+        };
+        if !in_grid(corner(7), self.dims) || (0..8).filter(|&c| self.has(corner(c))).count() < 2 {
+            return;
+        }
+        let g: [f64; 8] = std::array::from_fn(|c| s.node_value(self.node(corner(c as u8)).index));
+        for j in super::interior::interior_joins(&g) {
+            let (ca, cb) = (corner(j.a), corner(j.b));
+            if (g[j.a as usize] < 0.0) != self.side || !self.has(ca) || !self.has(cb) {
+                continue;
+            }
+            let (na, nb) = (self.node(ca), self.node(cb));
+            if keep(na, nb) {
+                out.push(Join {
+                    a: na.at,
+                    b: nb.at,
+                    via: self
+                        .to_world
+                        .transform_point3(node(p) + DVec3::from_array(j.via)),
+                    diagonal: true,
+                    nodes: [na.index, nb.index],
+                });
             }
         }
     }

@@ -74,6 +74,16 @@ pub(crate) fn compute_reference(s: &ImageSurface) -> Topology {
                 if j + 1 < ny && k + 1 < nz {
                     face(&mut dsu, p, sy, sz);
                 }
+                if i + 1 < nx && j + 1 < ny && k + 1 < nz {
+                    // Corner c = dx + 2 dy + 4 dz.
+                    let at = |c: u8| {
+                        p + (c & 1) as usize + ((c >> 1) & 1) as usize * sy + (c >> 2) as usize * sz
+                    };
+                    let g: [f64; 8] = std::array::from_fn(|c| s.node_value(at(c as u8)));
+                    for j in super::interior::interior_joins(&g) {
+                        dsu.union(at(j.a) as u32, at(j.b) as u32);
+                    }
+                }
             }
         }
     }

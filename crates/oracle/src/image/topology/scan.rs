@@ -211,6 +211,43 @@ impl<'a> Runs<'a> {
         }
     }
 
+    /// Join the corners that the interior of a cell between rows `r` = (j, k), (j+1, k),
+    /// (j, k+1) and (j+1, k+1) connects (see [`super::interior`]). Only cells with both
+    /// signs among their corners can hold such a join.
+    fn link_cells(&self, s: &ImageSurface, dsu: &mut Dsu, r: usize) {
+        let rows = [r, r + 1, r + self.ny, r + self.ny + 1];
+        for wi in 0..self.w {
+            // Bits at x and x + 1 of each row, aligned at x.
+            let (mut any, mut all) = (0u64, !0u64);
+            for &q in &rows {
+                let a = self.word(q, wi);
+                let next = if wi + 1 < self.w {
+                    self.word(q, wi + 1) << 63
+                } else {
+                    0
+                };
+                let b = (a >> 1) | next;
+                any |= a | b;
+                all &= a & b;
+            }
+            let mut mixed = any & !all & mask_below(wi, self.nx - 1);
+            while mixed != 0 {
+                let x = wi * 64 + mixed.trailing_zeros() as usize;
+                mixed &= mixed - 1;
+                // Corner c = dx + 2 dy + 4 dz: row rows[dy + 2 dz], node x + dx.
+                let at = |c: u8| (rows[(c >> 1) as usize], x + (c & 1) as usize);
+                let g: [f64; 8] = std::array::from_fn(|c| {
+                    let (q, xx) = at(c as u8);
+                    s.node_value(self.node(q, xx))
+                });
+                for j in super::interior::interior_joins(&g) {
+                    let ((qa, xa), (qb, xb)) = (at(j.a), at(j.b));
+                    dsu.union(self.run_of(qa, xa), self.run_of(qb, xb));
+                }
+            }
+        }
+    }
+
     /// The union-find of the runs (and the exterior `ext`, joined to every outside run on the
     /// grid's border).
     fn link_all(&self, s: &ImageSurface, dsu: &mut Dsu, ext: u32) {
@@ -232,6 +269,7 @@ impl<'a> Runs<'a> {
             }
             if j + 1 < ny && k + 1 < nz {
                 self.link_yz_faces(s, dsu, r);
+                self.link_cells(s, dsu, r);
             }
         }
     }
