@@ -326,21 +326,28 @@ def trilinear_samples(vol, s):
     return out
 
 
-@functools.lru_cache(maxsize=None)
-def marching_cubes(path, iso, up=1):
-    """MC's mesh in world coordinates (duplicate vertices merged), its component count, the
-    voxel h (smallest spacing) and the affine; with `up` > 1, MC of the trilinear interpolant
-    sampled every 1/up voxel (the same level set, its ambiguous faces resolved by sampling)."""
+def mc_mesh(path, iso, up):
+    """MC of the volume padded by one layer of the background (the data minimum, as the mesher
+    continues a bright foreground), or with `up` > 1 of its trilinear interpolant sampled every
+    1/up voxel (the same level set, its ambiguous cells resolved by sampling): vertices in voxel
+    coordinates, duplicates merged, faces, and the NIfTI affine."""
     vol, aff = nifti_volume(path)
     assert vol.ndim == 3, vol.shape
-    bg = float(vol.min())  # the mesher's background for a bright foreground
-    pad = np.pad(vol, 1, constant_values=bg)
+    pad = np.pad(vol, 1, constant_values=float(vol.min()))
     if up > 1:
         pad = trilinear_samples(pad, up)
     v, f, _, _ = skmeasure.marching_cubes(pad, level=iso, method="lewiner", allow_degenerate=False)
+    del pad
     v = v.astype(np.float64) / up - 1.0  # undo the sampling and the padding
     v, inv = np.unique(v, axis=0, return_inverse=True)
-    f = inv.reshape(-1)[f]
+    return v, inv.reshape(-1)[f], aff
+
+
+@functools.lru_cache(maxsize=None)
+def marching_cubes(path, iso):
+    """MC's mesh at the voxels in world coordinates, its component count, the voxel h (smallest
+    spacing) and the affine."""
+    v, f, aff = mc_mesh(path, iso, 1)
     world = v @ aff[:3, :3].T + aff[:3, 3]
     h = float(np.linalg.norm(aff[:3, :3], axis=0).min())
     return world, f, components(f, len(world)), h, aff
@@ -352,13 +359,8 @@ def fine_components(path, iso):
     voxel, or 1/4, 1/2 when that would exceed FINE_SAMPLES samples (the count only is kept)."""
     shape = np.array(nib.load(path).shape[:3]) + 2  # the padded volume
     up = next((u for u in (FINE_UP, 4, 2) if np.prod((shape - 1) * u + 1) <= FINE_SAMPLES), 1)
-    vol, _ = nifti_volume(path)
-    pad = np.pad(vol, 1, constant_values=float(vol.min()))
-    if up > 1:
-        pad = trilinear_samples(pad, up)
-    _, f, _, _ = skmeasure.marching_cubes(pad, level=iso, method="lewiner", allow_degenerate=False)
-    del pad
-    return up, components(f, int(f.max()) + 1 if len(f) else 0)
+    v, f, _ = mc_mesh(path, iso, up)
+    return up, components(f, len(v))
 
 
 def components(faces, n):

@@ -41,6 +41,19 @@ fn sign_interval(a: f64, b: f64, neg: bool) -> (f64, f64) {
     }
 }
 
+/// The value of the bilinear interpolant of a face at its saddle (corners f00, f11 on one
+/// diagonal, f10, f01 on the other; 0 for a degenerate face): the asymptotic decider joins the
+/// inside diagonal when it is `< 0`, else the outside one. The scan, its reference and
+/// [`face_groups`] decide every face with it.
+pub(super) fn face_saddle(f00: f64, f10: f64, f01: f64, f11: f64) -> f64 {
+    let den = f00 + f11 - f10 - f01;
+    if den != 0.0 {
+        (f00 * f11 - f10 * f01) / den
+    } else {
+        0.0
+    }
+}
+
 /// The groups of a cell's corners joined along its edges and faces as the scan joins them:
 /// corners of one sign (inside: `g < 0`, as the scan's bits) that are 6-neighbours, and the
 /// diagonal of an ambiguous face that the asymptotic decider picks (the saddle value `< 0`
@@ -79,13 +92,7 @@ pub(super) fn face_groups(g: &[f64; 8]) -> [Corner; 8] {
         let (a, b) = (ins(p00), ins(p10));
         if a == ins(p11) && b == ins(p01) && a != b {
             let [f00, f10, f01, f11] = [p00, p10, p01, p11].map(|c| g[c as usize]);
-            let den = f00 + f11 - f10 - f01;
-            let saddle = if den != 0.0 {
-                (f00 * f11 - f10 * f01) / den
-            } else {
-                0.0
-            };
-            if (saddle < 0.0) == a {
+            if (face_saddle(f00, f10, f01, f11) < 0.0) == a {
                 union(&mut parent, p00, p11);
             } else {
                 union(&mut parent, p10, p01);
@@ -111,7 +118,9 @@ pub(super) struct InteriorJoin {
 /// diagonal of z-edges and sign.
 pub(super) fn interior_joins(g: &[f64; 8]) -> impl Iterator<Item = InteriorJoin> {
     let lin = |e: u8| (g[e as usize], g[e as usize + 4]);
-    let groups = face_groups(g);
+    // The face groups only where a join is found (rare): this runs on every cell with both
+    // signs among its corners.
+    let mut groups: Option<[Corner; 8]> = None;
     let mut out = [None; 4];
     for (d, (e, f, o, p)) in [(0u8, 3u8, 1u8, 2u8), (1, 2, 0, 3)].into_iter().enumerate() {
         for (s, neg) in [true, false].into_iter().enumerate() {
@@ -156,6 +165,7 @@ pub(super) fn interior_joins(g: &[f64; 8]) -> impl Iterator<Item = InteriorJoin>
                 }
             };
             let (a, b) = (corner(e), corner(f));
+            let groups = groups.get_or_insert_with(|| face_groups(g));
             if groups[a as usize] == groups[b as usize] {
                 continue;
             }

@@ -31,13 +31,7 @@ pub(crate) fn compute_reference(s: &ImageSurface) -> Topology {
                 s.node_value(p00 + v),
                 s.node_value(p00 + u + v),
             );
-            let den = f00 + f11 - f10 - f01;
-            let saddle = if den != 0.0 {
-                (f00 * f11 - f10 * f01) / den
-            } else {
-                0.0
-            };
-            let inside_joined = saddle < 0.0;
+            let inside_joined = super::interior::face_saddle(f00, f10, f01, f11) < 0.0;
             if inside_joined == a {
                 dsu.union(p00 as u32, (p00 + u + v) as u32);
             } else {

@@ -51,13 +51,7 @@ fn decide(s: &ImageSurface, p00: usize, p10: usize, p01: usize, p11: usize, a: b
         s.node_value(p01),
         s.node_value(p11),
     );
-    let den = f00 + f11 - f10 - f01;
-    let saddle = if den != 0.0 {
-        (f00 * f11 - f10 * f01) / den
-    } else {
-        0.0
-    };
-    (saddle < 0.0) == a
+    (super::interior::face_saddle(f00, f10, f01, f11) < 0.0) == a
 }
 
 impl<'a> Runs<'a> {
