@@ -321,6 +321,21 @@ fn bad_point_sets_give_clear_errors() {
             })
         ));
     }
+    // The trust weight must be a positive number (0 would trust the IMLS value where no point
+    // reaches, a NaN nowhere).
+    for w in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let bad = PointSetParams {
+            min_weight: w,
+            ..PointSetParams::scan()
+        };
+        assert!(matches!(
+            PointSetSurface::new(&pts, None, &bad),
+            Err(PointSetError::BadParameter {
+                name: "min_weight",
+                ..
+            })
+        ));
+    }
     // Without a robust pass σ_n is unused.
     let unused = PointSetParams {
         robust_sigma_n: 0.0,

@@ -73,12 +73,10 @@ fn band_weight(band2: f64) -> f64 {
     a * a * (3.0 - 2.0 * a)
 }
 
-/// Total kernel weight below which the IMLS blends into the far field (`∓ max_radius`).
-pub(super) const MIN_WEIGHT: f64 = 1.0;
-
-/// Below [`MIN_WEIGHT`], the IMLS value signs the far field where the kernel weight is at
-/// least this (more than one point's tail; below it, the flood-filled far-field sign is
-/// used as where the weight is 0)...
+/// Below the trust weight ([`PointSetParams::min_weight`](super::PointSetParams::min_weight)),
+/// the IMLS value signs the far field where the kernel weight is at least this (more than
+/// one point's tail; below it, the flood-filled far-field sign is used as where the weight
+/// is 0)...
 const FRINGE_WEIGHT: f64 = 0.003;
 
 /// ...the contributing normals agree to this ratio (`|Σ φ n| / Σ φ`)...
@@ -87,14 +85,15 @@ const COHERENCE: f64 = 0.9;
 /// ...and the value is at least this multiple of the median kernel radius away from 0.
 const FRINGE_OFFSET: f64 = 0.25;
 
-/// The value where the kernel weight `den` is below [`MIN_WEIGHT`]: a smooth blend of the
+/// The value where the kernel weight `den` is below `min_weight` (the surface's
+/// [`PointSetParams::min_weight`](super::PointSetParams::min_weight)): a smooth blend of the
 /// IMLS value `num / den` into the far field `far` (they have the same sign away from the
 /// surface).
-pub(super) fn blend(num: f64, den: f64, far: f64) -> f64 {
+pub(super) fn blend(num: f64, den: f64, far: f64, min_weight: f64) -> f64 {
     if den <= 0.0 {
         return far;
     }
-    let a = den / MIN_WEIGHT;
+    let a = den / min_weight;
     let a = a * a * (3.0 - 2.0 * a);
     a * (num / den) + (1.0 - a) * far
 }
@@ -104,17 +103,17 @@ impl PointSetSurface {
     /// blending threshold (near the points); `None` elsewhere.
     pub(crate) fn near_value(&self, x: DVec3) -> Option<f64> {
         let s = self.sums_impl::<false>(x);
-        (s.den >= MIN_WEIGHT && s.band2 <= 1.0).then(|| s.num / s.den)
+        (s.den >= self.min_weight && s.band2 <= 1.0).then(|| s.num / s.den)
     }
 
     /// The value inside the bounding sphere, with the far field (`∓ max_radius`, given the
     /// total kernel weight) from `far`.
     pub(crate) fn value_with_far(&self, x: DVec3, far: impl FnOnce(f64) -> f64) -> f64 {
         let (num, den, _) = self.sums(x);
-        if den >= MIN_WEIGHT {
+        if den >= self.min_weight {
             return num / den;
         }
-        blend(num, den, far(den))
+        blend(num, den, far(den), self.min_weight)
     }
 
     /// The value inside the bounding sphere from the kernel sums at `x` (what
@@ -138,22 +137,28 @@ impl PointSetSurface {
             if w == 0.0 {
                 return (far, false);
             }
-            let near = if s.den >= MIN_WEIGHT {
+            let near = if s.den >= self.min_weight {
                 s.num / s.den
             } else {
                 blend(
                     s.num,
                     s.den,
                     self.far_value_known(x, s.num, s.den, s.nsum, uncached),
+                    self.min_weight,
                 )
             };
             return (w * near + (1.0 - w) * far, false);
         }
-        if s.den >= MIN_WEIGHT {
+        if s.den >= self.min_weight {
             return (s.num / s.den, true);
         }
         (
-            blend(s.num, s.den, self.far_value(x, s.num, s.den, s.nsum)),
+            blend(
+                s.num,
+                s.den,
+                self.far_value(x, s.num, s.den, s.nsum),
+                self.min_weight,
+            ),
             false,
         )
     }
@@ -161,11 +166,11 @@ impl PointSetSurface {
     /// Is the value at `x` the plain IMLS quotient (the `true` of `value_from_sums`)?
     pub(super) fn plain_imls_at(&self, x: DVec3) -> bool {
         let s = self.sums_impl::<false>(x);
-        band_weight(s.band2) >= 1.0 && s.den >= MIN_WEIGHT
+        band_weight(s.band2) >= 1.0 && s.den >= self.min_weight
     }
 
-    /// Diagnostics: at `x`, the total plain kernel weight `Σ φ_i(x)` (below 1 the value
-    /// blends into the far field), the smallest distance to a point in band radii, squared
+    /// Diagnostics: at `x`, the total plain kernel weight `Σ φ_i(x)` (below `min_weight` the
+    /// value blends into the far field), the smallest distance to a point in band radii, squared
     /// (`∞` if none; 0 without the band), and the number of points whose support contains `x`.
     pub fn kernel_weight(&self, x: DVec3) -> (f64, f64, usize) {
         let s = self.sums_impl::<false>(x);

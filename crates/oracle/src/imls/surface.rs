@@ -2,7 +2,6 @@
 //! Newton projection, P1 seeds and the P2 hint from shrinking balls.
 
 use super::PointSetSurface;
-use super::kernel::MIN_WEIGHT;
 use super::lfs::LfsSample;
 use crate::roots::{Ends, SplitMix64};
 use crate::{BoundingSphere, Surface};
@@ -49,7 +48,8 @@ impl Surface for PointSetSurface {
     }
 
     /// Where the value is the plain IMLS quotient (within the data's band, kernel weight at
-    /// least `MIN_WEIGHT`): the points where `Surface::value` takes no far-field term.
+    /// least [`PointSetParams::min_weight`](super::PointSetParams::min_weight)): the points
+    /// where `Surface::value` takes no far-field term.
     fn data_defined(&self, x: DVec3) -> Option<bool> {
         let inside = x.is_finite() && (x - self.sphere.center).length() < self.sphere.radius;
         Some(inside && self.plain_imls_at(x))
@@ -90,7 +90,7 @@ impl Surface for PointSetSurface {
             let f = s.num / s.den;
             let grad = (s.dnum - f * s.dden) / s.den;
             let g2 = grad.length_squared();
-            let step = if s.den >= MIN_WEIGHT && g2 > 0.0 && g2.is_finite() {
+            let step = if s.den >= self.min_weight && g2 > 0.0 && g2.is_finite() {
                 grad * (f / g2)
             } else {
                 let g = s.nsum.normalize_or_zero();
