@@ -165,11 +165,18 @@ fn unsupported_components_are_dropped_and_said() {
         &["unsupported regions extend past the data"],
     );
     lacks(&v, &["below 50% support", "handles the data does not show"]);
-    // The raw mesh's tunnels, without data normals (a 3-column .xyz): the band rule alone
-    // still finds one.
+    // The raw mesh's tunnels, against the 3-column .xyz (normals estimated by `verify`'s own
+    // point-set surface): one is found, and the detail says why (since the trust threshold of
+    // 2, session 27, the raw mesh's smallest is 0.87 bands wide and found facing against the
+    // data; before, 0.18 bands, below the data's band).
     let v = stdout(&xtask(&d, &["verify", "raw.ply", "--against", "scan.xyz"]));
+    let line = line_starting(&v, "FAIL data-support");
     has(
-        line_starting(&v, "FAIL data-support"),
-        &["handles the data does not show", "below the data's band"],
+        line,
+        &["handles the data does not show (smallest: a tunnel at"],
+    );
+    assert!(
+        line.contains("below the data's band") || line.contains("facing against the data"),
+        "{line}"
     );
 }
