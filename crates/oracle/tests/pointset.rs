@@ -307,34 +307,33 @@ fn bad_point_sets_give_clear_errors() {
             ..
         })
     ));
-    // A robust pass needs a positive finite σ_n (0 made every weight NaN).
-    for sigma in [0.0, -0.5, f64::NAN, f64::INFINITY] {
-        let bad = PointSetParams {
-            robust_sigma_n: sigma,
-            ..PointSetParams::scan()
-        };
-        assert!(matches!(
-            PointSetSurface::new(&pts, None, &bad),
-            Err(PointSetError::BadParameter {
-                name: "robust_sigma_n",
-                ..
-            })
-        ));
-    }
-    // The trust weight must be a positive number (0 would trust the IMLS value where no point
-    // reaches, a NaN nowhere).
-    for w in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        let bad = PointSetParams {
-            min_weight: w,
-            ..PointSetParams::scan()
-        };
-        assert!(matches!(
-            PointSetSurface::new(&pts, None, &bad),
-            Err(PointSetError::BadParameter {
-                name: "min_weight",
-                ..
-            })
-        ));
+    // A robust pass needs a positive finite σ_n (0 made every weight NaN); the trust weight a
+    // positive number (0 would trust the IMLS value where no point reaches, a NaN nowhere).
+    for v in [0.0, -0.5, f64::NAN, f64::INFINITY] {
+        for (name, bad) in [
+            (
+                "robust_sigma_n",
+                PointSetParams {
+                    robust_sigma_n: v,
+                    ..PointSetParams::scan()
+                },
+            ),
+            (
+                "min_weight",
+                PointSetParams {
+                    min_weight: v,
+                    ..PointSetParams::scan()
+                },
+            ),
+        ] {
+            assert!(
+                matches!(
+                    PointSetSurface::new(&pts, None, &bad),
+                    Err(PointSetError::BadParameter { name: n, .. }) if n == name
+                ),
+                "{name} = {v}"
+            );
+        }
     }
     // Without a robust pass σ_n is unused.
     let unused = PointSetParams {

@@ -61,6 +61,27 @@ fn mesh_model_scan_with(
     (scan, out, h)
 }
 
+/// A row of `cargo xtask scans`' table: 40,000 points of the model with that noise (fraction
+/// of the diagonal), density ratio, normals given or not and seed, meshed at the table's size
+/// (0.6% of the diagonal).
+fn table_row(
+    name: &str,
+    noise: f64,
+    density_ratio: f64,
+    normals: bool,
+    seed: u64,
+) -> (verify::scan_sim::Scan, rdt_mesher::pipeline::Outcome, f64) {
+    let spec = ScanSpec {
+        points: 40_000,
+        noise,
+        density_ratio,
+        normals,
+        seed,
+        ..Default::default()
+    };
+    mesh_model_scan(name, &spec, 0.006)
+}
+
 /// The output is one closed oriented manifold of genus `genus` and `verify` passes.
 fn assert_one_closed_component_passing(out: &rdt_mesher::pipeline::Outcome, genus: i64) {
     let r = out.report.as_ref().unwrap();
@@ -114,15 +135,7 @@ fn a_clean_scan_meshes_to_one_supported_genus_0_component() {
 /// below 1 on 18% of the sparse half's surface) and the row measured 0.79%.
 #[test]
 fn a_ten_to_one_density_scan_keeps_its_genus_within_the_bound() {
-    let spec = ScanSpec {
-        points: 40_000,
-        noise: 0.001,
-        density_ratio: 10.0,
-        normals: true,
-        seed: 2,
-        ..Default::default()
-    };
-    let (_, out, h) = mesh_model_scan("fertility", &spec, 0.006);
+    let (_, out, h) = table_row("fertility", 0.001, 10.0, true, 2);
     assert_one_closed_component_passing(&out, 4);
     assert!(h <= 0.0075, "Hausdorff {h}");
 }
@@ -134,15 +147,7 @@ fn a_ten_to_one_density_scan_keeps_its_genus_within_the_bound() {
 /// until the weight faded; now 1.08%.
 #[test]
 fn a_sparse_thin_part_ends_where_the_data_does() {
-    let spec = ScanSpec {
-        points: 40_000,
-        noise: 0.005,
-        density_ratio: 10.0,
-        normals: true,
-        seed: 1,
-        ..Default::default()
-    };
-    let (_, out, h) = mesh_model_scan("bunny", &spec, 0.006);
+    let (_, out, h) = table_row("bunny", 0.005, 10.0, true, 1);
     assert_one_closed_component_passing(&out, 0);
     assert!(h <= 0.0125, "Hausdorff {h}");
 }
@@ -245,15 +250,7 @@ fn a_missing_patch_does_not_turn_the_inside_out() {
 /// and the data lies straight across the mesh (alignment 0.91).
 #[test]
 fn a_mesh_running_past_the_data_fails_data_support() {
-    let spec = ScanSpec {
-        points: 40_000,
-        noise: 0.003,
-        density_ratio: 10.0,
-        normals: false,
-        seed: 1,
-        ..Default::default()
-    };
-    let (_, out, h) = mesh_model_scan("bunny", &spec, 0.006);
+    let (_, out, h) = table_row("bunny", 0.003, 10.0, false, 1);
     let r = out.report.as_ref().unwrap();
     assert!(h > 0.02, "Hausdorff {h}: the row changed, pick another");
     assert_eq!(

@@ -85,20 +85,20 @@ const COHERENCE: f64 = 0.9;
 /// ...and the value is at least this multiple of the median kernel radius away from 0.
 const FRINGE_OFFSET: f64 = 0.25;
 
-/// The value where the kernel weight `den` is below `min_weight` (the surface's
-/// [`PointSetParams::min_weight`](super::PointSetParams::min_weight)): a smooth blend of the
-/// IMLS value `num / den` into the far field `far` (they have the same sign away from the
-/// surface).
-pub(super) fn blend(num: f64, den: f64, far: f64, min_weight: f64) -> f64 {
-    if den <= 0.0 {
-        return far;
-    }
-    let a = den / min_weight;
-    let a = a * a * (3.0 - 2.0 * a);
-    a * (num / den) + (1.0 - a) * far
-}
-
 impl PointSetSurface {
+    /// The value where the kernel weight `den` is below
+    /// [`PointSetParams::min_weight`](super::PointSetParams::min_weight): a smooth blend of the
+    /// IMLS value `num / den` into the far field `far` (they have the same sign away from the
+    /// surface).
+    fn blend(&self, num: f64, den: f64, far: f64) -> f64 {
+        if den <= 0.0 {
+            return far;
+        }
+        let a = den / self.min_weight;
+        let a = a * a * (3.0 - 2.0 * a);
+        a * (num / den) + (1.0 - a) * far
+    }
+
     /// The IMLS value `Σ φ n·(x − p) / Σ φ` where the total kernel weight is at least the
     /// blending threshold (near the points); `None` elsewhere.
     pub(crate) fn near_value(&self, x: DVec3) -> Option<f64> {
@@ -113,7 +113,7 @@ impl PointSetSurface {
         if den >= self.min_weight {
             return num / den;
         }
-        blend(num, den, far(den), self.min_weight)
+        self.blend(num, den, far(den))
     }
 
     /// The value inside the bounding sphere from the kernel sums at `x` (what
@@ -140,11 +140,10 @@ impl PointSetSurface {
             let near = if s.den >= self.min_weight {
                 s.num / s.den
             } else {
-                blend(
+                self.blend(
                     s.num,
                     s.den,
                     self.far_value_known(x, s.num, s.den, s.nsum, uncached),
-                    self.min_weight,
                 )
             };
             return (w * near + (1.0 - w) * far, false);
@@ -153,12 +152,7 @@ impl PointSetSurface {
             return (s.num / s.den, true);
         }
         (
-            blend(
-                s.num,
-                s.den,
-                self.far_value(x, s.num, s.den, s.nsum),
-                self.min_weight,
-            ),
+            self.blend(s.num, s.den, self.far_value(x, s.num, s.den, s.nsum)),
             false,
         )
     }

@@ -281,9 +281,7 @@ impl RegionMask {
             }
         }
     }
-}
 
-impl RegionMask {
     /// The joins through the interior of the cell whose first corner is `p` between two of
     /// its corners in the region (see [`super::interior`]), that `keep` accepts.
     fn interior_joins(
