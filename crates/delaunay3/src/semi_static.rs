@@ -97,9 +97,9 @@ pub(crate) fn insphere_decide(points: &[DVec3], v: [u32; 4], e: DVec3) -> Option
     let cl = cx * cx + cy * cy + cz * cz;
     let dl = dx * dx + dy * dy + dz * dz;
     let det = (dl * abc - cl * dab) + (bl * cda - al * bcd);
-    let mx = ax.abs().max(bx.abs()).max(cx.abs().max(dx.abs()));
-    let my = ay.abs().max(by.abs()).max(cy.abs().max(dy.abs()));
-    let mz = az.abs().max(bz.abs()).max(cz.abs().max(dz.abs()));
+    let mx = max4(ax.abs(), bx.abs(), cx.abs(), dx.abs());
+    let my = max4(ay.abs(), by.abs(), cy.abs(), dy.abs());
+    let mz = max4(az.abs(), bz.abs(), cz.abs(), dz.abs());
     let eps = INSPHERE_EPS * mx * my * mz * (mx * mx + my * my + mz * mz);
     if det > eps {
         Some(true)
@@ -108,6 +108,14 @@ pub(crate) fn insphere_decide(points: &[DVec3], v: [u32; 4], e: DVec3) -> Option
     } else {
         None
     }
+}
+
+/// The largest of four numbers that are not NaN (the differences of checked points): a
+/// plain compare and select each, where `f64::max` adds the handling of NaN.
+#[inline(always)]
+fn max4(a: f64, b: f64, c: f64, d: f64) -> f64 {
+    let max = |x: f64, y: f64| if x > y { x } else { y };
+    max(max(a, b), max(c, d))
 }
 
 #[cfg(test)]
