@@ -2,7 +2,7 @@
 //!
 //! Points (`f64`) are inserted one at a time (Bowyer–Watson: the cavity of cells whose
 //! circumsphere contains the point is replaced by the star of the new vertex) or in bulk
-//! ([`Triangulation::insert_bulk`], which spatially sorts first: BRIO + Hilbert median order).
+//! ([`Triangulation::insert_bulk`], which spatially sorts first: BRIO rounds in Hilbert-curve order).
 //! All decisions use exact predicates (`robust` orient3d / insphere, wrapped in
 //! [`predicates`]); ties are broken by the Devillers–Teillaud symbolic perturbation with the
 //! lexicographic `(x, y, z)` order of the points, so the triangulation of a point set is
@@ -38,8 +38,9 @@
 //! `< 3`) points are held without cells; the triangulation is then built from all of them.
 //!
 //! # Performance
-//! Points are spatially sorted once (BRIO rounds of Hilbert median splits on contiguous
-//! (point, index) records). Point location is a randomized visibility walk from the last
+//! Points are spatially sorted once (BRIO rounds sorted by Hilbert keys on a 2^21 grid,
+//! computed eight points at a time; the median splits on contiguous (point, index) records
+//! order the few points held before the triangulation is 3D). Point location is a randomized visibility walk from the last
 //! created cell (or a hint); the cavity search uses a per-cell visit stamp, prefetches the
 //! neighbors of the cells it finds in conflict, and reuses its buffers, so an insertion does
 //! not allocate. In-sphere tests go through a semi-static filter inline in the search (an
@@ -95,6 +96,7 @@ mod cavity;
 pub mod construct;
 mod dd_arith;
 mod hash;
+mod hilbert;
 pub mod ids;
 mod insert;
 mod locate;

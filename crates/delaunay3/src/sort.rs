@@ -1,7 +1,11 @@
-//! Deterministic spatial sorting: Hilbert median sort (Delage & Devillers, as in CGAL's
-//! `Hilbert_sort_median_3`) wrapped in BRIO (Amenta, Choi & Rote) rounds.
+//! Deterministic spatial sorting: BRIO (Amenta, Choi & Rote) rounds sorted along the
+//! Hilbert curve by grid keys ([`crate::hilbert`]) for bulk insertions, and the Hilbert
+//! median sort (Delage & Devillers, as in CGAL's `Hilbert_sort_median_3`) for the few points
+//! held before a triangulation is 3D.
 
 use glam::DVec3;
+
+use crate::hilbert;
 
 /// A small deterministic PRNG (64-bit LCG with output mixing). Works from any state.
 #[derive(Clone, Debug, Default)]
@@ -99,8 +103,9 @@ pub(crate) fn hilbert_sort(pts: &[DVec3], idx: &mut [u32]) {
 }
 
 /// BRIO order of `0..pts.len()`: a seeded shuffle, then rounds of geometrically growing size
-/// (ratio 1/4, first round at most 1024 points), each round Hilbert-sorted. Deterministic.
-/// Returns each index with its point (read in this order: contiguous, not gathered).
+/// (ratio 1/4, first round at most 1024 points), each round sorted by Hilbert key (ties in
+/// shuffled order). Deterministic. Returns each index with its point (read in this order:
+/// contiguous, not gathered).
 pub(crate) fn brio_order(pts: &[DVec3], seed: u64) -> Vec<(DVec3, u32)> {
     let mut idx: Vec<u32> = (0..pts.len() as u32).collect();
     let mut rng = Rng(seed);
@@ -108,18 +113,23 @@ pub(crate) fn brio_order(pts: &[DVec3], seed: u64) -> Vec<(DVec3, u32)> {
         let j = rng.below(i + 1);
         idx.swap(i, j);
     }
-    let mut recs = records(pts, &idx);
-    multiscale(&mut recs);
-    recs.iter().map(|r| (DVec3::from_array(r.p), r.i)).collect()
-}
-
-fn multiscale(recs: &mut [Rec]) {
-    let mut middle = 0;
-    if recs.len() > 1024 {
-        middle = recs.len() / 4;
-        multiscale(&mut recs[..middle]);
+    let grid = hilbert::Grid::new(pts);
+    // (key, shuffled position): distinct, so an unstable sort is deterministic.
+    let keys = grid.keys(idx.iter().map(|&i| pts[i as usize]));
+    let mut keyed: Vec<(u64, u32)> = keys.into_iter().zip(0..).collect();
+    let mut end = keyed.len();
+    while end > 0 {
+        let start = if end > 1024 { end / 4 } else { 0 };
+        keyed[start..end].sort_unstable();
+        end = start;
     }
-    hilbert(&mut recs[middle..], 0, [true, true, true]);
+    keyed
+        .iter()
+        .map(|&(_, k)| {
+            let i = idx[k as usize];
+            (pts[i as usize], i)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -2,12 +2,14 @@
 //! that the kernel produced before its speed work (issue 21). Performance changes must keep
 //! them: the mesher's output depends on cell ids and on the order of created cells, not
 //! only on the (unique) set of Delaunay cells. A mismatch means an optimisation changed the
-//! numbering, not necessarily the triangulation (the other tests check that).
+//! numbering, not necessarily the triangulation (the other tests check that). The bulk
+//! insertion's numbering changed once, on purpose, with its order (2026-12-06; the mesher
+//! does not use it): `bulk_cells_are_unchanged` holds its cells to the earlier order's.
 
 mod common;
 
 use common::*;
-use delaunay3::{CellId, Changes, DVec3, Triangulation};
+use delaunay3::{CellId, Changes, DVec3, Triangulation, VertexId};
 
 /// FNV-1a over `u32` words.
 struct Fnv(u64);
@@ -49,6 +51,37 @@ fn bulk(pts: &[DVec3]) -> u64 {
         h.word(v.to_u32());
     }
     hash_cells(&t, &mut h);
+    h.0
+}
+
+/// Bulk insertion's cells as sets of input indices (the infinite vertex as `u32::MAX`),
+/// sorted: the triangulation whatever the insertion order and numbering.
+fn bulk_cells(pts: &[DVec3]) -> u64 {
+    let mut t = Triangulation::new();
+    let ids = t.insert_bulk(pts).unwrap();
+    let mut input = vec![0u32; t.num_vertices()];
+    for (i, v) in ids.iter().enumerate() {
+        input[v.to_u32() as usize] = i as u32;
+    }
+    let mut cells: Vec<[u32; 4]> = t
+        .live_cells()
+        .map(|c| {
+            let mut q = t.cell_vertices(c).map(|v| {
+                if v == VertexId::INFINITE {
+                    u32::MAX
+                } else {
+                    input[v.to_u32() as usize]
+                }
+            });
+            q.sort_unstable();
+            q
+        })
+        .collect();
+    cells.sort_unstable();
+    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    for q in cells {
+        q.into_iter().for_each(|x| h.word(x));
+    }
     h.0
 }
 
@@ -118,10 +151,25 @@ fn numbering_is_unchanged() {
         .map(|p| (bulk(p), incremental(&p[..p.len().min(4000)])))
         .collect();
     let want: [(u64, u64); 4] = [
-        (0xf7ab3f3d1febf6f4, 0x87b0a8dd799d684b),
-        (0x49c34559d8254925, 0xa4c4075b6f3728db),
-        (0xb6b10c3df181f906, 0x263f2995b6fe3944),
-        (0x5766c38ef8caab5c, 0x9ab2e2d919fe276f),
+        (0x8006ca05b3812ba4, 0x87b0a8dd799d684b),
+        (0x9f4c3a4ff207919d, 0xa4c4075b6f3728db),
+        (0xb49ad4a149cc9116, 0x263f2995b6fe3944),
+        (0xfb599c7680e92f68, 0x9ab2e2d919fe276f),
+    ];
+    assert_eq!(got, want, "{got:#x?}");
+}
+
+/// The bulk insertion's order changed (2026-12-06: Hilbert keys instead of median splits),
+/// and with it the numbering above; the cells, as sets of input points, are those the
+/// median order gave (these fingerprints were taken with it).
+#[test]
+fn bulk_cells_are_unchanged() {
+    let got: Vec<u64> = inputs().iter().map(|p| bulk_cells(p)).collect();
+    let want: [u64; 4] = [
+        0xb0ec88a7ba06d46d,
+        0x15c5a0609afc9ee5,
+        0xb41221a61a3aaa4d,
+        0x3ec606bafe4ee7c9,
     ];
     assert_eq!(got, want, "{got:#x?}");
 }
