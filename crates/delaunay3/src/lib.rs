@@ -2,7 +2,8 @@
 //!
 //! Points (`f64`) are inserted one at a time (Bowyer–Watson: the cavity of cells whose
 //! circumsphere contains the point is replaced by the star of the new vertex) or in bulk
-//! ([`Triangulation::insert_bulk`], which spatially sorts first: BRIO rounds in Hilbert-curve order).
+//! ([`Triangulation::insert_bulk`], which spatially sorts first: BRIO rounds in Hilbert-curve
+//! order).
 //! All decisions use exact predicates (`robust` orient3d / insphere, wrapped in
 //! [`predicates`]); ties are broken by the Devillers–Teillaud symbolic perturbation with the
 //! lexicographic `(x, y, z)` order of the points, so the triangulation of a point set is
@@ -40,10 +41,10 @@
 //! # Performance
 //! Points are spatially sorted once (BRIO rounds sorted by Hilbert keys on a 2^21 grid,
 //! computed eight points at a time; the median splits on contiguous (point, index) records
-//! order the few points held before the triangulation is 3D). Point location is a randomized visibility walk from the last
-//! created cell (or a hint); the cavity search uses a per-cell visit stamp, prefetches the
-//! neighbors of the cells it finds in conflict, and reuses its buffers, so an insertion does
-//! not allocate. In-sphere tests go through a semi-static filter inline in the search (an
+//! order the few points held before the triangulation is 3D). Point location is a randomized
+//! visibility walk from the last created cell (or a hint); the cavity search uses a per-cell
+//! visit stamp, prefetches the neighbors of the cells it finds in conflict, and reuses its
+//! buffers, so an insertion does not allocate. In-sphere tests go through a semi-static filter inline in the search (an
 //! error bound from the largest coordinate differences, proved in `semi_static`), then
 //! Shewchuk's static filter, an exact `i128` stage for grid-like inputs, a double-double
 //! stage (decides nearly-cospherical inputs such as rounded sphere samples), then `robust`'s
