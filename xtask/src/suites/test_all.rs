@@ -41,9 +41,10 @@ pub fn run(a: &TestArgs) -> Result<()> {
     let root = root();
     let mut steps = Vec::new();
     let mut c = cargo();
-    c.args(["test", "--workspace", "--release"]);
+    // The release profile's optimisations without its LTO (see `[profile.test-release]`).
+    c.args(["test", "--workspace", "--profile", "test-release"]);
     steps.push(Step {
-        name: "cargo test --workspace --release",
+        name: "cargo test --workspace --profile test-release",
         cmd: c,
     });
     let mut c = Command::new(std::env::current_exe()?);
