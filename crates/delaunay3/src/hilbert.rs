@@ -5,6 +5,7 @@
 //! linear-time key computations and one sort, where the median splits of [`crate::sort`]
 //! select at every level.
 
+use geom::morton::spread;
 use glam::DVec3;
 
 /// Bits per axis: 3 x 21 = 63 key bits.
@@ -124,21 +125,10 @@ pub(crate) fn index_lanes(mut x: [[u32; LANES]; 3]) -> [u64; LANES] {
             t ^= (q - 1) & 0u32.wrapping_sub(u32::from(x[2][l] & q != 0));
             q >>= 1;
         }
-        out[l] = (spread(x[0][l] ^ t) << 2) | (spread(x[1][l] ^ t) << 1) | spread(x[2][l] ^ t);
+        let s = |v: u32| spread(u64::from(v ^ t));
+        out[l] = (s(x[0][l]) << 2) | (s(x[1][l]) << 1) | s(x[2][l]);
     }
     out
-}
-
-/// The 21 low bits of `v`, bit `k` moved to bit `3k`.
-#[inline]
-fn spread(v: u32) -> u64 {
-    let mut x = u64::from(v) & 0x1f_ffff;
-    x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
-    x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
-    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
-    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
-    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
-    x
 }
 
 #[cfg(test)]
@@ -168,14 +158,6 @@ mod tests {
             assert_eq!(d, s, "{:?} -> {:?} is not one step", w[0].1, w[1].1);
         }
         assert_eq!(cells[0].1, [0, 0, 0], "the curve starts at the origin");
-    }
-
-    #[test]
-    fn spread_interleaves_every_bit() {
-        for k in 0..21 {
-            assert_eq!(spread(1 << k), 1u64 << (3 * k));
-        }
-        assert_eq!(spread(0x1f_ffff), 0x1249_2492_4924_9249);
     }
 
     #[test]

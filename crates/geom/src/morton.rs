@@ -3,8 +3,9 @@
 
 use glam::DVec3;
 
-/// Spread the low 21 bits of `v` to every third bit.
-fn spread(v: u64) -> u64 {
+/// Spread the low 21 bits of `v` to every third bit (bit `k` to bit `3k`).
+#[inline]
+pub fn spread(v: u64) -> u64 {
     let mut x = v & 0x1f_ffff;
     x = (x | (x << 32)) & 0x1f_0000_0000_ffff;
     x = (x | (x << 16)) & 0x1f_0000_ff00_00ff;
@@ -28,6 +29,15 @@ pub fn morton_key(p: DVec3, center: DVec3, half: f64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn spread_moves_bit_k_to_bit_3k() {
+        for k in 0..21 {
+            assert_eq!(spread(1 << k), 1u64 << (3 * k));
+        }
+        assert_eq!(spread(0x1f_ffff), 0x1249_2492_4924_9249);
+        assert_eq!(spread(1 << 21), 0, "only the low 21 bits");
+    }
 
     #[test]
     fn keys_interleave_the_axes_and_clamp() {
