@@ -23,7 +23,22 @@ pub(crate) struct Grid {
     /// `start[c]..start[c + 1]` are the items of cell `c` (x fastest).
     start: Vec<u32>,
     items: Vec<Item>,
+    /// The items' coordinates and squared support radii as columns (same order), for
+    /// [`Grid::gather`]'s test on several items at once.
+    keys: Keys,
 }
+
+/// Columns of the items' `p.x`, `p.y`, `p.z` and `r2`.
+#[derive(Clone, Debug, Default)]
+struct Keys {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    z: Vec<f64>,
+    r2: Vec<f64>,
+}
+
+/// Items whose support test [`Grid::gather`] runs at once (two vectors of four).
+const LANES: usize = 8;
 
 impl Grid {
     /// `cell` ≥ every support radius. The cell size grows if the grid would have far more
@@ -56,6 +71,7 @@ impl Grid {
             dims,
             start: Vec::new(),
             items: Vec::new(),
+            keys: Keys::default(),
         };
         let ncell = dims[0] * dims[1] * dims[2];
         let cid: Vec<usize> = points.iter().map(|p| grid.cell_index(*p)).collect();
@@ -83,6 +99,12 @@ impl Grid {
             };
             fill[c] += 1;
         }
+        grid.keys = Keys {
+            x: items.iter().map(|it| it.p.x).collect(),
+            y: items.iter().map(|it| it.p.y).collect(),
+            z: items.iter().map(|it| it.p.z).collect(),
+            r2: items.iter().map(|it| it.r2).collect(),
+        };
         grid.start = start;
         grid.items = items;
         grid
@@ -113,23 +135,43 @@ impl Grid {
     }
 
     /// Append to `buf`, in visiting order, every item whose support contains `x` (`|x −
-    /// p|² < r2` is not false: the test of `add`); `r` bounds the support radii. `kept`
-    /// counts them all; past the buffer's end they are not stored (the last slot is
-    /// overwritten). Without a branch per item: the items are written unconditionally and
-    /// the count advances by the test, so a hit costs no misprediction.
-    // `!(d2 >= r2)`, not `d2 < r2`: the test of `add`, which keeps a NaN distance.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    /// p|² < r2` is not false: the test of `add`, with the same operations in the same
+    /// order, so the same items); `r` bounds the support radii. `kept` counts them all; past
+    /// the buffer's end they are not stored (the last slot is overwritten).
+    ///
+    /// The test runs on [`LANES`] items at a time from the columns of [`Keys`] (vector
+    /// compares giving a bit mask), and only the items kept are written. Item by item, each
+    /// test loaded a 64-byte item and cost about 22 instructions: on the 50k-point bunny
+    /// scan a gather scans 239 items and keeps 22 on average, and the gathers were 32% of the
+    /// whole run's instructions (valgrind); with the mask, 23%.
     #[inline]
     pub fn gather<'a>(&'a self, x: DVec3, r: f64, buf: &mut [&'a Item], kept: &mut usize) {
         let last = buf.len() - 1;
-        self.for_each_row(x, r, |row| {
-            let mut k = *kept;
-            for it in row {
-                let d2 = (x - it.p).length_squared();
-                buf[k.min(last)] = it;
-                k += usize::from(!(d2 >= it.r2));
+        let k = &self.keys;
+        self.for_each_range(x, r, |s, e| {
+            let mut n = *kept;
+            let mut put = |i: usize| {
+                buf[n.min(last)] = &self.items[i];
+                n += 1;
+            };
+            let mut i = s;
+            while i + LANES <= e {
+                let at = |v: &'a [f64]| -> &'a [f64; LANES] {
+                    v[i..i + LANES].try_into().expect("LANES entries")
+                };
+                let mut bits = supported_mask(x, [at(&k.x), at(&k.y), at(&k.z)], at(&k.r2));
+                while bits != 0 {
+                    put(i + bits.trailing_zeros() as usize);
+                    bits &= bits - 1;
+                }
+                i += LANES;
             }
-            *kept = k;
+            for j in i..e {
+                if supports(x, DVec3::new(k.x[j], k.y[j], k.z[j]), k.r2[j]) {
+                    put(j);
+                }
+            }
+            *kept = n;
         });
     }
 
@@ -137,6 +179,12 @@ impl Grid {
     /// cube of half-side `r` about `x`.
     #[inline(always)]
     fn for_each_row<'a>(&'a self, x: DVec3, r: f64, mut f: impl FnMut(&'a [Item])) {
+        self.for_each_range(x, r, |s, e| f(&self.items[s..e]));
+    }
+
+    /// [`Grid::for_each_row`] as index ranges of `items`.
+    #[inline(always)]
+    fn for_each_range(&self, x: DVec3, r: f64, mut f: impl FnMut(usize, usize)) {
         let a = x - DVec3::splat(r);
         let b = x + DVec3::splat(r);
         let hi = self.lo
@@ -157,10 +205,39 @@ impl Grid {
                 // Cells i0..=i1 of a row are contiguous in `items`.
                 let s = self.start[row + i0] as usize;
                 let e = self.start[row + i1 + 1] as usize;
-                f(&self.items[s..e]);
+                f(s, e);
             }
         }
     }
+}
+
+/// Whether the support of the point `p` of squared radius `r2` contains `x`:
+/// `!(|x − p|² >= r2)` with `|x − p|²` computed as `(x − p).length_squared()` is (the test
+/// of `add`, which keeps a NaN distance).
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+#[inline(always)]
+fn supports(x: DVec3, p: DVec3, r2: f64) -> bool {
+    !((x - p).length_squared() >= r2)
+}
+
+/// [`supports`] on [`LANES`] items given as columns (`p` by coordinate): bit `j` set when
+/// item `j`'s support contains `x`. Four lanes at a time in `wide`'s vectors (two SSE2
+/// registers on the baseline x86-64 target): `(dx·dx + dy·dy) + dz·dz` and the compare, the
+/// IEEE operations of [`supports`] in the same order, so the same bits.
+#[inline(always)]
+fn supported_mask(x: DVec3, p: [&[f64; LANES]; 3], r2: &[f64; LANES]) -> u32 {
+    use wide::{CmpGe, f64x4};
+    let c = [f64x4::splat(x.x), f64x4::splat(x.y), f64x4::splat(x.z)];
+    let mut bits = 0u32;
+    for j in [0, 4] {
+        let q = |v: &[f64; LANES]| f64x4::new([v[j], v[j + 1], v[j + 2], v[j + 3]]);
+        let (dx, dy, dz) = (c[0] - q(p[0]), c[1] - q(p[1]), c[2] - q(p[2]));
+        let d2 = dx * dx + dy * dy + dz * dz;
+        // `!(d2 >= r2)`: the lanes whose `d2 >= r2` is false (a NaN distance included).
+        let far = d2.cmp_ge(q(r2)).move_mask() as u32;
+        bits |= (!far & 0xF) << j;
+    }
+    bits
 }
 
 /// The points split by support radius into grids of fitting cell sizes (ours): with a
@@ -258,6 +335,62 @@ mod tests {
                 assert_eq!(seen, want, "{x}");
             }
         }
+    }
+
+    /// The vector test keeps exactly the items the scalar test keeps, in rows of every
+    /// length (full blocks of `LANES` and tails), on supports' boundaries (a point at exactly
+    /// its radius is out) and for a NaN query (every visited item in).
+    #[test]
+    fn the_vector_test_is_the_scalar_test() {
+        let mut rng = SplitMix64(9);
+        let mut pts: Vec<DVec3> = (0..700)
+            .map(|_| rng.unit_vector() * rng.next_f64())
+            .collect();
+        // Points at exactly their radius from a query on a grid of dyadic values.
+        let q = DVec3::new(0.25, 0.5, -0.125);
+        pts.extend((0..40).map(|i| q + DVec3::new(0.0625 * f64::from(i % 4), 0.0, 0.0)));
+        let nrm = vec![DVec3::Z; pts.len()];
+        let rad: Vec<f64> = (0..pts.len())
+            .map(|i| {
+                if i >= 700 {
+                    0.0625 * ((i - 700) % 4) as f64
+                } else {
+                    0.05 + 0.3 * rng.next_f64()
+                }
+            })
+            .collect();
+        let lv = Levels::new(&pts, &nrm, &rad, None, 0.2);
+        let dummy = Item {
+            p: DVec3::ZERO,
+            n: DVec3::ZERO,
+            r2: 0.0,
+            b2inv: 0.0,
+        };
+        let mut queries: Vec<DVec3> = (0..400)
+            .map(|_| rng.unit_vector() * 1.2 * rng.next_f64())
+            .collect();
+        queries.push(q);
+        queries.push(DVec3::NAN);
+        let mut boundary = 0;
+        for x in queries {
+            let mut want: Vec<*const Item> = Vec::new();
+            lv.for_each_near(x, |it| {
+                if supports(x, it.p, it.r2) {
+                    want.push(it);
+                }
+                boundary += usize::from(it.r2 > 0.0 && (x - it.p).length_squared() == it.r2);
+            });
+            let mut buf = vec![&dummy; want.len() + 1];
+            let kept = lv.gather(x, &mut buf);
+            let got: Vec<*const Item> = buf[..kept].iter().map(|&r| r as *const Item).collect();
+            assert_eq!(got, want, "{x}");
+            if x.is_nan() {
+                let mut visited = 0;
+                lv.for_each_near(x, |_| visited += 1);
+                assert_eq!(kept, visited);
+            }
+        }
+        assert!(boundary >= 20, "{boundary}");
     }
 
     /// `gather` keeps, in visiting order, exactly the visited items whose support contains
