@@ -118,7 +118,9 @@ fn unsupported_components_are_dropped_and_said() {
         .map(|p| format!("{:.17e} {:.17e} {:.17e}\n", p.x, p.y, p.z))
         .collect();
     std::fs::write(d.join("scan.xyz"), text).unwrap();
-    let size = format!("{:.17e}", 0.008 * diagonal(&m));
+    // At 0.6% of the diagonal, as `rdt-mesher`'s `tests/unsupported.rs` (at 0.8% the scan has
+    // no bubble since its crossings are found to a scan's precision).
+    let size = format!("{:.17e}", 0.006 * diagonal(&m));
     let mesh = |extra: &[&str]| {
         let mut a = vec!["mesh", "-q", "scan.xyz", "--size", &size];
         a.extend(extra);
@@ -136,8 +138,8 @@ fn unsupported_components_are_dropped_and_said() {
             // the output had genus 3 and verify said PASS).
             "handle(s) the data does not show (--keep-unsupported keeps them",
             "closed manifold; genus [0]",
-            // The mesh runs past the ears' data (3.5-4.9% of the diagonal from the source,
-            // measured with trimesh): until 2026-12-05 `data-support` said PASS and called
+            // The mesh runs past the ears' data (up to 5.0% of the diagonal from the source
+            // at 0.6%, 3.5-4.9% at 0.8% before, measured with trimesh): until 2026-12-05 `data-support` said PASS and called
             // those regions bridges over missing data.
             "FAIL data-support: ",
             "unsupported regions extend past the data (where its winding number says outside",
@@ -148,8 +150,13 @@ fn unsupported_components_are_dropped_and_said() {
         .as_array()
         .unwrap();
     assert_eq!(dropped.len(), 1, "{r}");
-    let dec = &r["stats"]["topology_decisions"][0];
-    assert_eq!(dec["kind"], "drop_unsupported_component", "{dec}");
+    // The rules' decisions follow the mesher's own (here a cut of its manifold repair).
+    let decisions = r["stats"]["topology_decisions"].as_array().unwrap();
+    let drops: Vec<_> = (decisions.iter())
+        .filter(|x| x["kind"] == "drop_unsupported_component")
+        .collect();
+    assert_eq!(drops.len(), 1, "{r}");
+    let dec = drops[0];
     assert_eq!(dec["triangles"], dropped[0]["triangles"]);
     let s = mesh(&["--keep-unsupported", "-o", "raw.ply"]);
     has(&s, &["2 components", "FAIL data-support: "]);

@@ -219,6 +219,23 @@ impl T {
             T::Bin(_, a, b) | T::F2(_, a, b) => a.is_const() && b.is_const(),
         }
     }
+    /// The largest |argument| of a `sin` or `cos` in the tree at `p` (0 without them). Above
+    /// about 1e3 an ulp of the argument (from powers rounded differently) is no longer small
+    /// against the period, so two correct evaluators may disagree in every digit:
+    /// `sin(exp(y^-2) + x)` at y = -0.0516 is sin(1.4e162), -0.046 by one and 0.99999 by
+    /// the other (proptest found it, 2026-12-06; kept in `implicit.proptest-regressions`).
+    fn largest_trig_argument(&self, p: [f64; 3]) -> f64 {
+        match self {
+            T::Var(_) | T::Num(_) => 0.0,
+            T::F1(f, a) if *f == "sin" || *f == "cos" => {
+                a.eval(p).abs().max(a.largest_trig_argument(p))
+            }
+            T::Neg(a) | T::PowC(a, _) | T::F1(_, a) => a.largest_trig_argument(p),
+            T::Bin(_, a, b) | T::F2(_, a, b) => {
+                a.largest_trig_argument(p).max(b.largest_trig_argument(p))
+            }
+        }
+    }
     /// Reference: integer powers of non-constants by binary exponentiation (as documented by
     /// the compiler), everything else by the obvious f64 operation.
     fn eval(&self, p: [f64; 3]) -> f64 {
@@ -338,7 +355,9 @@ proptest! {
     fn tree_interpreter_agrees(t in tree(), p in prop::array::uniform3(-2.0f64..2.0)) {
         let e = Expr::parse(&t.src()).unwrap();
         let (a, b) = (e.eval(DVec3::from_array(p)), e.eval_tree(DVec3::from_array(p)));
-        if a.is_finite() && b.is_finite() && a.abs() < 1e6 {
+        // Where the value is well conditioned: finite, moderate, no trigonometric function
+        // of a large argument.
+        if a.is_finite() && b.is_finite() && a.abs() < 1e6 && t.largest_trig_argument(p) < 1e3 {
             prop_assert!((a - b).abs() <= 1e-6 * (1.0 + a.abs()) || (a - b).abs() < 1e-3,
                 "{}: {a} vs {b}", t.src());
         }

@@ -39,6 +39,8 @@ pub(crate) mod linalg;
 mod normals;
 mod surface;
 
+pub use surface::CROSSING_PRECISION;
+
 use crate::BoundingSphere;
 use crate::roots::SplitMix64;
 use far::FarCache;

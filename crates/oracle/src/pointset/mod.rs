@@ -11,8 +11,8 @@ mod xyz;
 
 pub use crate::imls::linalg::plane_residual;
 pub use crate::imls::{
-    MIN_POINTS, PointSetError, PointSetParams, PointSetStats, PointSetSurface, knn_lists,
-    winding_disks,
+    CROSSING_PRECISION, MIN_POINTS, PointSetError, PointSetParams, PointSetStats, PointSetSurface,
+    knn_lists, winding_disks,
 };
 pub use xyz::{PointCloud, XyzError, read_xyz, read_xyz_from};
 
