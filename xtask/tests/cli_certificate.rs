@@ -139,8 +139,8 @@ fn unsupported_components_are_dropped_and_said() {
             "handle(s) the data does not show (--keep-unsupported keeps them",
             "closed manifold; genus [0]",
             // The mesh runs past the ears' data (up to 5.0% of the diagonal from the source
-            // at 0.6%, 3.5-4.9% at 0.8% before, measured with trimesh): until 2026-12-05 `data-support` said PASS and called
-            // those regions bridges over missing data.
+            // at 0.6%, 3.5-4.9% at 0.8% before, measured with trimesh): until 2026-12-05
+            // `data-support` said PASS and called those regions bridges over missing data.
             "FAIL data-support: ",
             "unsupported regions extend past the data (where its winding number says outside",
         ],
