@@ -34,6 +34,9 @@
 //!   the check then runs on the mesh written and lists them
 //!   ([`DataSupport::dropped_components`]).
 //!
+//! - The data the mesh misses inside a covered data component (a thin part with no mesh):
+//!   the *uncovered regions*, listed and not failed ([`uncovered`]).
+//!
 //! - A closed mesh's handles that the data does not show (a tunnel smaller than the band, or
 //!   facing against the data normals): [`handles`], [`DataSupport::unsupported_handles`].
 //!
@@ -54,9 +57,11 @@ use crate::topology::{Dsu, vertex_components};
 mod drop_rule;
 mod handles;
 pub mod regions;
+mod uncovered;
 pub use drop_rule::{Droppable, MAX_DROP_TRIES, droppable_components};
 pub use handles::UnsupportedHandle;
 pub use regions::UnsupportedRegion;
+pub use uncovered::UncoveredRegion;
 
 /// Parameters of the data-support check.
 #[derive(Clone, Debug, PartialEq)]
@@ -145,6 +150,10 @@ pub struct DataSupport {
     /// Data components of at least `min_data_component` points, largest first.
     pub data_components: Vec<DataComponent>,
     pub data_components_total: usize,
+    /// Regions of the data the mesh does not cover (at least `min_data_component` points
+    /// each, largest first; see [`uncovered`]): reported, not failed.
+    pub uncovered_regions: Vec<UncoveredRegion>,
+    pub uncovered_regions_total: usize,
     /// Unsupported regions: those extending past the data first, then largest area first.
     pub unsupported_regions: Vec<UnsupportedRegion>,
     pub unsupported_regions_total: usize,
@@ -275,6 +284,10 @@ impl DataSupport {
             }
         } else {
             s += ", all covered";
+        }
+        if let Some(r) = self.uncovered_regions.first() {
+            s += "; ";
+            s += &r.describe(self.uncovered_regions_total);
         }
         s += &regions::describe(
             &self.unsupported_regions,
@@ -477,6 +490,7 @@ pub fn data_support_oriented(
         .iter()
         .filter(|d| d.covered_share < opts.min_share)
         .count();
+    let uncovered_regions = uncovered::uncovered_regions(&band, &covered, opts.min_data_component);
     // Unsupported regions: triangles with less than half their samples supported, joined
     // through shared vertices.
     let bad: Vec<usize> = (0..mesh.triangles.len())
@@ -514,6 +528,8 @@ pub fn data_support_oriented(
         components: components.into_iter().take(ml.max(1)).collect(),
         data_components_total: data_components.len(),
         data_components: data_components.into_iter().take(ml.max(1)).collect(),
+        uncovered_regions_total: uncovered_regions.len(),
+        uncovered_regions: uncovered_regions.into_iter().take(ml.max(1)).collect(),
         unsupported_regions_total: regions.len(),
         unsupported_regions: regions.into_iter().take(ml).collect(),
         regions_past_data,
