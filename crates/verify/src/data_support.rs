@@ -483,14 +483,16 @@ pub fn data_support_oriented(
         .filter(|c| !c.supported(opts.min_share, opts.min_agreement))
         .count();
     // Data coverage.
-    let covered = covered_points(mesh, &band);
+    let distances = coverage_distances(mesh, &band);
+    let covered: Vec<bool> = distances.iter().map(|&(d, t)| d <= t).collect();
     let mut data_components = data_components(&band, &covered, opts.min_data_component);
     data_components.sort_by_key(|d| std::cmp::Reverse(d.points));
     let uncovered_data_components = data_components
         .iter()
         .filter(|d| d.covered_share < opts.min_share)
         .count();
-    let uncovered_regions = uncovered::uncovered_regions(&band, &covered, opts.min_data_component);
+    let uncovered_regions =
+        uncovered::uncovered_regions(&band, &distances, opts.min_data_component);
     // Unsupported regions: triangles with less than half their samples supported, joined
     // through shared vertices.
     let bad: Vec<usize> = (0..mesh.triangles.len())
@@ -638,13 +640,26 @@ fn component_measures(
 /// Which data points the mesh covers: within their band of it (or twice their spacing,
 /// whichever is larger).
 fn covered_points(mesh: &TriMesh, band: &DataBand) -> Vec<bool> {
+    coverage_distances(mesh, band)
+        .into_iter()
+        .map(|(d, t)| d <= t)
+        .collect()
+}
+
+/// Each data point's distance to the mesh (`∞` when no triangle is found) and its coverage
+/// threshold (its band or twice its spacing, whichever is larger): covered when the distance
+/// is at most the threshold.
+fn coverage_distances(mesh: &TriMesh, band: &DataBand) -> Vec<(f64, f64)> {
     let bvh = crate::intersect::triangle_bvh(mesh);
     let dist = MeshDistance::new(mesh, &bvh);
     (0..band.points.len())
         .into_par_iter()
         .map(|i| {
-            dist.nearest(band.points[i])
-                .is_some_and(|(_, d)| d <= band.band[i].max(2.0 * band.spacing[i]))
+            let t = band.band[i].max(2.0 * band.spacing[i]);
+            let d = dist
+                .nearest(band.points[i])
+                .map_or(f64::INFINITY, |(_, d)| d);
+            (d, t)
         })
         .collect()
 }
