@@ -673,16 +673,7 @@ fn data_groups(band: &DataBand, min_points: usize) -> Vec<Vec<usize>> {
             dsu.union(i as u32, j);
         }
     }
-    let mut index = vec![usize::MAX; n];
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for i in 0..n {
-        let r = dsu.find(i as u32) as usize;
-        if index[r] == usize::MAX {
-            index[r] = groups.len();
-            groups.push(Vec::new());
-        }
-        groups[index[r]].push(i);
-    }
+    let mut groups = dsu.groups((0..n).map(|i| (i, i as u32)));
     groups.retain(|g| g.len() >= min_points.max(1));
     groups
 }
@@ -722,16 +713,7 @@ fn unsupported_regions(
         dsu.union(a, b);
         dsu.union(a, c);
     }
-    let mut index = vec![usize::MAX; nv];
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for &t in bad {
-        let r = dsu.find(mesh.triangles[t][0]) as usize;
-        if index[r] == usize::MAX {
-            index[r] = groups.len();
-            groups.push(Vec::new());
-        }
-        groups[index[r]].push(t);
-    }
+    let groups = dsu.groups(bad.iter().map(|&t| (t, mesh.triangles[t][0])));
     let v = &mesh.vertices;
     groups
         .into_iter()

@@ -93,6 +93,24 @@ impl Dsu {
     pub(crate) fn new(n: usize) -> Self {
         Dsu((0..n as u32).collect())
     }
+    /// `items` grouped by the root of their element (`(item, element)` pairs): the groups in
+    /// the order of their first item, each in the items' order.
+    pub(crate) fn groups(
+        &mut self,
+        items: impl IntoIterator<Item = (usize, u32)>,
+    ) -> Vec<Vec<usize>> {
+        let mut index = vec![usize::MAX; self.0.len()];
+        let mut groups: Vec<Vec<usize>> = Vec::new();
+        for (item, e) in items {
+            let r = self.find(e) as usize;
+            if index[r] == usize::MAX {
+                index[r] = groups.len();
+                groups.push(Vec::new());
+            }
+            groups[index[r]].push(item);
+        }
+        groups
+    }
     pub(crate) fn find(&mut self, mut x: u32) -> u32 {
         while self.0[x as usize] != x {
             let p = self.0[self.0[x as usize] as usize];

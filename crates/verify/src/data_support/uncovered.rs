@@ -75,16 +75,7 @@ pub(super) fn uncovered_regions(
             }
         }
     }
-    let mut index = vec![usize::MAX; n];
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for i in (0..n).filter(|&i| !covered[i]) {
-        let r = dsu.find(i as u32) as usize;
-        if index[r] == usize::MAX {
-            index[r] = groups.len();
-            groups.push(Vec::new());
-        }
-        groups[index[r]].push(i);
-    }
+    let mut groups = dsu.groups((0..n).filter(|&i| !covered[i]).map(|i| (i, i as u32)));
     groups.retain(|g| g.len() >= min_points.max(2));
     // Largest first; ties by first point (groups are in order of their first point).
     groups.sort_by_key(|g| std::cmp::Reverse(g.len()));
