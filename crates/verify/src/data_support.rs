@@ -50,7 +50,7 @@ use meshio::TriMesh;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::distance::{MeshDistance, triangle_samples};
+use crate::distance::triangle_samples;
 use crate::short_loops::ShortLoops;
 use crate::topology::{Dsu, vertex_components};
 
@@ -483,7 +483,7 @@ pub fn data_support_oriented(
         .filter(|c| !c.supported(opts.min_share, opts.min_agreement))
         .count();
     // Data coverage.
-    let distances = coverage_distances(mesh, &band);
+    let distances = uncovered::coverage_distances(mesh, &band.points, &band.band, &band.spacing);
     let covered: Vec<bool> = distances.iter().map(|&(d, t)| d <= t).collect();
     let mut data_components = data_components(&band, &covered, opts.min_data_component);
     data_components.sort_by_key(|d| std::cmp::Reverse(d.points));
@@ -491,8 +491,18 @@ pub fn data_support_oriented(
         .iter()
         .filter(|d| d.covered_share < opts.min_share)
         .count();
-    let uncovered_regions =
-        uncovered::uncovered_regions(&band, &distances, opts.min_data_component);
+    let uncovered_regions: Vec<UncoveredRegion> =
+        uncovered::uncovered_groups(&band.knn, &distances, opts.min_data_component)
+            .into_iter()
+            .map(|g| {
+                let (centroid, extent) = centroid_extent(g.iter().map(|&i| (band.points[i], 1.0)));
+                UncoveredRegion {
+                    points: g.len(),
+                    centroid,
+                    extent,
+                }
+            })
+            .collect();
     // Unsupported regions: triangles with less than half their samples supported, joined
     // through shared vertices.
     let bad: Vec<usize> = (0..mesh.triangles.len())
@@ -640,28 +650,8 @@ fn component_measures(
 /// Which data points the mesh covers: within their band of it (or twice their spacing,
 /// whichever is larger).
 fn covered_points(mesh: &TriMesh, band: &DataBand) -> Vec<bool> {
-    coverage_distances(mesh, band)
-        .into_iter()
-        .map(|(d, t)| d <= t)
-        .collect()
-}
-
-/// Each data point's distance to the mesh (`∞` when no triangle is found) and its coverage
-/// threshold (its band or twice its spacing, whichever is larger): covered when the distance
-/// is at most the threshold.
-fn coverage_distances(mesh: &TriMesh, band: &DataBand) -> Vec<(f64, f64)> {
-    let bvh = crate::intersect::triangle_bvh(mesh);
-    let dist = MeshDistance::new(mesh, &bvh);
-    (0..band.points.len())
-        .into_par_iter()
-        .map(|i| {
-            let t = band.band[i].max(2.0 * band.spacing[i]);
-            let d = dist
-                .nearest(band.points[i])
-                .map_or(f64::INFINITY, |(_, d)| d);
-            (d, t)
-        })
-        .collect()
+    let d = uncovered::coverage_distances(mesh, &band.points, &band.band, &band.spacing);
+    d.into_iter().map(|(d, t)| d <= t).collect()
 }
 
 /// The points of each component of the data's kNN graph with at least `min_points` points.

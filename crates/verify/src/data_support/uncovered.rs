@@ -23,9 +23,12 @@
 //! Invariant: deterministic (union-find over the kNN lists in index order; regions sorted
 //! by size, then first point).
 
+use glam::DVec3;
+use meshio::TriMesh;
+use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{DataBand, centroid_extent};
+use crate::distance::MeshDistance;
 use crate::topology::Dsu;
 
 /// Missed: farther from the mesh than this many coverage thresholds.
@@ -54,18 +57,40 @@ impl UncoveredRegion {
     }
 }
 
-/// The uncovered regions of at least `min_points` points, largest first; `distances`: each
-/// data point's distance to the mesh and coverage threshold.
-pub(super) fn uncovered_regions(
-    band: &DataBand,
+/// Each data point's distance to `mesh` (`∞` when no triangle is found) and its coverage
+/// threshold (`band[i]` or twice `spacing[i]`, whichever is larger): covered when the
+/// distance is at most the threshold.
+pub(super) fn coverage_distances(
+    mesh: &TriMesh,
+    points: &[DVec3],
+    band: &[f64],
+    spacing: &[f64],
+) -> Vec<(f64, f64)> {
+    let bvh = crate::intersect::triangle_bvh(mesh);
+    let dist = MeshDistance::new(mesh, &bvh);
+    (0..points.len())
+        .into_par_iter()
+        .map(|i| {
+            let t = band[i].max(2.0 * spacing[i]);
+            let d = dist.nearest(points[i]).map_or(f64::INFINITY, |(_, d)| d);
+            (d, t)
+        })
+        .collect()
+}
+
+/// The point groups of the uncovered regions of at least `min_points` points, largest first
+/// (ties: by first point); `knn`: the data's neighbour lists; `distances`: each point's
+/// distance to the mesh and coverage threshold ([`coverage_distances`]).
+pub(super) fn uncovered_groups(
+    knn: &[Vec<u32>],
     distances: &[(f64, f64)],
     min_points: usize,
-) -> Vec<UncoveredRegion> {
+) -> Vec<Vec<usize>> {
     // Here "covered" means not missed.
     let covered: Vec<bool> = distances.iter().map(|&(d, t)| d <= MISSED * t).collect();
-    let n = band.points.len();
+    let n = covered.len();
     let mut dsu = Dsu::new(n);
-    for (i, nb) in band.knn.iter().enumerate() {
+    for (i, nb) in knn.iter().enumerate() {
         if covered[i] {
             continue;
         }
@@ -77,17 +102,7 @@ pub(super) fn uncovered_regions(
     }
     let mut groups = dsu.groups((0..n).filter(|&i| !covered[i]).map(|i| (i, i as u32)));
     groups.retain(|g| g.len() >= min_points.max(2));
-    // Largest first; ties by first point (groups are in order of their first point).
+    // Stable: groups are in the order of their first point.
     groups.sort_by_key(|g| std::cmp::Reverse(g.len()));
     groups
-        .into_iter()
-        .map(|g| {
-            let (centroid, extent) = centroid_extent(g.iter().map(|&i| (band.points[i], 1.0)));
-            UncoveredRegion {
-                points: g.len(),
-                centroid,
-                extent,
-            }
-        })
-        .collect()
 }
