@@ -484,7 +484,7 @@ pub fn data_support_oriented(
         .count();
     // Data coverage.
     let distances = uncovered::coverage_distances(mesh, &band.points, &band.band, &band.spacing);
-    let covered: Vec<bool> = distances.iter().map(|&(d, t)| d <= t).collect();
+    let covered = uncovered::within(&distances, 1.0);
     let mut data_components = data_components(&band, &covered, opts.min_data_component);
     data_components.sort_by_key(|d| std::cmp::Reverse(d.points));
     let uncovered_data_components = data_components
@@ -651,7 +651,7 @@ fn component_measures(
 /// whichever is larger).
 fn covered_points(mesh: &TriMesh, band: &DataBand) -> Vec<bool> {
     let d = uncovered::coverage_distances(mesh, &band.points, &band.band, &band.spacing);
-    d.into_iter().map(|(d, t)| d <= t).collect()
+    uncovered::within(&d, 1.0)
 }
 
 /// The points of each component of the data's kNN graph with at least `min_points` points.

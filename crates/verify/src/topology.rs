@@ -144,17 +144,7 @@ pub fn vertex_components(mesh: &TriMesh) -> Vec<Vec<usize>> {
             used[v as usize] = true;
         }
     }
-    let mut index = vec![usize::MAX; n];
-    let mut out: Vec<Vec<usize>> = Vec::new();
-    for v in (0..n).filter(|&v| used[v]) {
-        let r = dsu.find(v as u32) as usize;
-        if index[r] == usize::MAX {
-            index[r] = out.len();
-            out.push(Vec::new());
-        }
-        out[index[r]].push(v);
-    }
-    out
+    dsu.groups((0..n).filter(|&v| used[v]).map(|v| (v, v as u32)))
 }
 
 /// Half-edge record: undirected key, triangle, direction.

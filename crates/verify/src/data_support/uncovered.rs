@@ -78,6 +78,12 @@ pub(super) fn coverage_distances(
         .collect()
 }
 
+/// Per point of `distances` ([`coverage_distances`]): within `k` coverage thresholds of the
+/// mesh (`k` = 1: covered; `k` = [`MISSED`]: not missed).
+pub(super) fn within(distances: &[(f64, f64)], k: f64) -> Vec<bool> {
+    distances.iter().map(|&(d, t)| d <= k * t).collect()
+}
+
 /// The point groups of the uncovered regions of at least `min_points` points, largest first
 /// (ties: by first point); `knn`: the data's neighbour lists; `distances`: each point's
 /// distance to the mesh and coverage threshold ([`coverage_distances`]).
@@ -87,7 +93,7 @@ pub(super) fn uncovered_groups(
     min_points: usize,
 ) -> Vec<Vec<usize>> {
     // Here "covered" means not missed.
-    let covered: Vec<bool> = distances.iter().map(|&(d, t)| d <= MISSED * t).collect();
+    let covered = within(distances, MISSED);
     let n = covered.len();
     let mut dsu = Dsu::new(n);
     for (i, nb) in knn.iter().enumerate() {
