@@ -11,7 +11,7 @@
 //!   triangle's share is that of its samples (a barycentric grid); a mesh component is
 //!   supported when at least [`SupportOptions::min_share`] of its area is.
 //! - A data component (a component of the graph joining every data point to its `k_spacing`
-//!   nearest neighbours; pieces under [`SupportOptions::min_data_component`] points are
+//!   nearest neighbours and to the points within twice its spacing; pieces under [`SupportOptions::min_data_component`] points are
 //!   ignored) is covered when at least `min_share` of its points lie within their band of the
 //!   mesh.
 //! - With oriented data normals (a point set's, given or estimated and oriented): a mesh
@@ -35,14 +35,16 @@
 //!   ([`DataSupport::dropped_components`]).
 //!
 //! - The data the mesh misses inside a covered data component (a thin part with no mesh):
-//!   the *uncovered regions*, listed and not failed ([`uncovered`]).
+//!   the *uncovered regions*, listed; a region the mesh misses by more than its own median
+//!   edge is *lost* and FAILs the check ([`uncovered`]).
 //!
 //! - A closed mesh's handles that the data does not show (a tunnel smaller than the band, or
 //!   facing against the data normals): [`handles`], [`DataSupport::unsupported_handles`].
 //!
 //! Invariants: deterministic (parallel maps collected in order, sequential reductions); the
 //! check FAILs iff some mesh component is unsupported, some data component is uncovered,
-//! some handle is unsupported or some unsupported region extends past the data.
+//! some data region is lost, some handle is unsupported or some unsupported region extends
+//! past the data.
 
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -53,14 +55,17 @@ use serde::Serialize;
 use crate::distance::triangle_samples;
 use crate::short_loops::ShortLoops;
 use crate::topology::{Dsu, vertex_components};
+use uncovered::centroid_extent;
 
 mod drop_rule;
 mod handles;
 pub mod regions;
+mod samples;
 mod uncovered;
 pub use drop_rule::{Droppable, MAX_DROP_TRIES, droppable_components};
 pub use handles::UnsupportedHandle;
 pub use regions::UnsupportedRegion;
+pub use samples::mesh_samples;
 pub use uncovered::UncoveredRegion;
 
 /// Parameters of the data-support check.
@@ -151,9 +156,11 @@ pub struct DataSupport {
     pub data_components: Vec<DataComponent>,
     pub data_components_total: usize,
     /// Regions of the data the mesh does not cover (at least `min_data_component` points
-    /// each, largest first; see [`uncovered`]): reported, not failed.
+    /// each, lost first, then largest; see [`uncovered`]): the lost ones FAIL the check.
     pub uncovered_regions: Vec<UncoveredRegion>,
     pub uncovered_regions_total: usize,
+    /// Uncovered regions that are lost ([`UncoveredRegion::lost`]): each FAILs the check.
+    pub lost_regions: usize,
     /// Unsupported regions: those extending past the data first, then largest area first.
     pub unsupported_regions: Vec<UnsupportedRegion>,
     pub unsupported_regions_total: usize,
@@ -178,12 +185,14 @@ pub struct DataSupport {
 }
 
 impl DataSupport {
-    /// Every mesh component supported and every data component covered.
+    /// Every mesh component supported, every data component covered, no region lost, no
+    /// unsupported handle and no region past the data.
     pub fn passed(&self) -> bool {
         self.unsupported_components == 0
             && self.uncovered_data_components == 0
             && self.unsupported_handles_total == 0
             && self.regions_past_data == 0
+            && self.lost_regions == 0
     }
 
     /// The check's one-line detail.
@@ -287,7 +296,7 @@ impl DataSupport {
         }
         if let Some(r) = self.uncovered_regions.first() {
             s += "; ";
-            s += &r.describe(self.uncovered_regions_total);
+            s += &r.describe(self.uncovered_regions_total, self.lost_regions);
         }
         s += &regions::describe(
             &self.unsupported_regions,
@@ -399,20 +408,6 @@ fn median(mut v: Vec<f64>) -> f64 {
     *v.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
-/// Centroid (weighted) and bounding-box diagonal of weighted points.
-fn centroid_extent(pts: impl Iterator<Item = (DVec3, f64)>) -> ([f64; 3], f64) {
-    let (mut c, mut w) = (DVec3::ZERO, 0.0);
-    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for (p, a) in pts {
-        c += p * a;
-        w += a;
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    let c = if w > 0.0 { c / w } else { 0.5 * (lo + hi) };
-    (c.to_array(), (hi - lo).length())
-}
-
 /// Per triangle of `mesh`: its area and supported share (barycentric samples, 2
 /// subdivisions per edge, plus the centroid); with data normals, also its area times its
 /// agreement (`n_t · n_i`, `i` the data point nearest its centroid).
@@ -491,18 +486,13 @@ pub fn data_support_oriented(
         .iter()
         .filter(|d| d.covered_share < opts.min_share)
         .count();
-    let uncovered_regions: Vec<UncoveredRegion> =
-        uncovered::uncovered_groups(&band.knn, &distances, opts.min_data_component)
-            .into_iter()
-            .map(|g| {
-                let (centroid, extent) = centroid_extent(g.iter().map(|&i| (band.points[i], 1.0)));
-                UncoveredRegion {
-                    points: g.len(),
-                    centroid,
-                    extent,
-                }
-            })
-            .collect();
+    let uncovered_regions = uncovered::regions(
+        mesh,
+        &band.knn,
+        &band.points,
+        &distances,
+        opts.min_data_component,
+    );
     // Unsupported regions: triangles with less than half their samples supported, joined
     // through shared vertices.
     let bad: Vec<usize> = (0..mesh.triangles.len())
@@ -541,6 +531,7 @@ pub fn data_support_oriented(
         data_components_total: data_components.len(),
         data_components: data_components.into_iter().take(ml.max(1)).collect(),
         uncovered_regions_total: uncovered_regions.len(),
+        lost_regions: uncovered_regions.iter().filter(|r| r.lost()).count(),
         uncovered_regions: uncovered_regions.into_iter().take(ml.max(1)).collect(),
         unsupported_regions_total: regions.len(),
         unsupported_regions: regions.into_iter().take(ml).collect(),
@@ -553,6 +544,24 @@ pub fn data_support_oriented(
         unsupported_handles_total: handles.len(),
         unsupported_handles: handles.into_iter().take(ml.max(1)).collect(),
     })
+}
+
+/// The data regions `mesh` loses ([`UncoveredRegion::lost`], as [`data_support`] finds them)
+/// without the rest of the check, for a caller choosing a size; empty without data or mesh.
+pub fn lost_regions(mesh: &TriMesh, data: &[DVec3], opts: &SupportOptions) -> Vec<UncoveredRegion> {
+    let Some(band) = DataBand::new(data, opts).filter(|_| !mesh.triangles.is_empty()) else {
+        return Vec::new();
+    };
+    let distances = uncovered::coverage_distances(mesh, &band.points, &band.band, &band.spacing);
+    let mut r = uncovered::regions(
+        mesh,
+        &band.knn,
+        &band.points,
+        &distances,
+        opts.min_data_component,
+    );
+    r.retain(UncoveredRegion::lost);
+    r
 }
 
 /// The handles of the closed mesh `mesh` that the data does not show ([`handles`]), all of
@@ -654,11 +663,31 @@ fn covered_points(mesh: &TriMesh, band: &DataBand) -> Vec<bool> {
     uncovered::within(&d, 1.0)
 }
 
-/// The points of each component of the data's kNN graph with at least `min_points` points.
+/// The points of each component of the data's graph with at least `min_points` points: each
+/// point joined to its kNN and to every point within twice its spacing. The kNN alone split
+/// non-uniform samples: a dense cluster whose neighbours all lie inside it (measured on
+/// `cow.obj` of `pymeshlab`'s wheel: its triangle samples made 24 kNN components of one
+/// connected mesh, a horn tip of small triangles among them), while a sparse point next to
+/// it reaches it within twice its own spacing.
 fn data_groups(band: &DataBand, min_points: usize) -> Vec<Vec<usize>> {
     let n = band.points.len();
     let mut dsu = Dsu::new(n);
-    for (i, nb) in band.knn.iter().enumerate() {
+    let near: Vec<Vec<u32>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let r = 2.0 * band.spacing[i];
+            let q = band.points[i].to_array();
+            let found = band.tree.query(&q).within::<SquaredEuclidean<f64>>(r * r);
+            found.unsorted().execute().iter().map(|x| x.item).collect()
+        })
+        .collect();
+    for (i, nb) in band
+        .knn
+        .iter()
+        .zip(&near)
+        .enumerate()
+        .map(|(i, (a, b))| (i, a.iter().chain(b)))
+    {
         for &j in nb {
             dsu.union(i as u32, j);
         }
@@ -729,39 +758,6 @@ fn unsupported_regions(
             }
         })
         .collect()
-}
-
-/// Deterministic samples of a mesh's triangles as the data of [`data_support`]: a barycentric
-/// grid on each triangle with `ceil(longest edge / h)` subdivisions (at most 64), `h` such that
-/// the whole mesh gets about `target` samples, plus the vertices.
-pub fn mesh_samples(mesh: &TriMesh, target: usize) -> Vec<DVec3> {
-    let v = &mesh.vertices;
-    let area: f64 = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| v[i as usize]);
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .sum();
-    let h = (2.0 * area / target.max(1) as f64).sqrt();
-    let mut out: Vec<DVec3> = v.clone();
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| v[i as usize]);
-        let e = (b - a).length().max((c - b).length()).max((a - c).length());
-        let n = if h > 0.0 {
-            (e / h).ceil().clamp(1.0, 64.0) as usize
-        } else {
-            1
-        };
-        if n > 1 {
-            let mut s = Vec::new();
-            triangle_samples(a, b, c, n, &mut s);
-            // The corners are already in (the vertices).
-            out.extend(s.into_iter().filter(|p| *p != a && *p != b && *p != c));
-        }
-    }
-    out
 }
 
 /// Add the `data-support` check (and section) to `report`; SKIP if the check could not run.

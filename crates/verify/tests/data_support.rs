@@ -191,10 +191,11 @@ fn a_hole_in_the_scan_is_an_unsupported_region_and_missed_data_fails() {
 
 /// A part of the data with no mesh, within one data component: a thin tail of points
 /// leaving the bunny's scan (as the chameleon of pymeshlab's wheel lost most of its tail at
-/// `--size 1.0`, 2026-12-06). The component is covered (over half its points are), so the
-/// verdict stays; the tail is listed as an uncovered region, and nothing is listed without it.
+/// `--size 1.0`, 2026-12-06). The component is covered (over half its points are), but the
+/// tail is an uncovered region, lost (far beyond one median edge of the mesh), and FAILs;
+/// nothing is listed without it.
 #[test]
-fn a_missing_part_of_the_data_is_listed_as_an_uncovered_region() {
+fn a_missing_part_of_the_data_is_a_lost_region_and_fails() {
     let m = bunny();
     let d = diagonal(&m);
     let pts = scan(&m, 0.0);
@@ -240,11 +241,105 @@ fn a_missing_part_of_the_data_is_listed_as_an_uncovered_region() {
     );
     assert!((c.y - right.y).abs() < rho && (c.z - right.z).abs() < rho);
     assert!(
-        r.detail()
-            .contains("1 data regions the mesh does not cover (largest: "),
+        u.lost() && r.lost_regions == 1 && !r.passed(),
         "{}",
         r.detail()
     );
+    assert!(
+        r.detail()
+            .contains("1 data regions lost, the mesh farther from them than 1 of its"),
+        "{}",
+        r.detail()
+    );
+}
+
+/// The lost rule's scale is the mesh's own: on a coarse sphere (median edge about 0.3), a
+/// stub of data 0.2 out is missed (over three coverage thresholds of dense data) but within
+/// one median edge: listed, PASS; a tail 1.0 out is lost: FAIL.
+#[test]
+fn a_miss_within_one_mesh_edge_is_listed_and_a_longer_one_is_lost() {
+    let m = uv_sphere(8, 16);
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let n = 80_000;
+    let sphere: Vec<DVec3> = (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect();
+    let dir = DVec3::new(1.0, 0.3, 0.2).normalize();
+    let (u, v) = dir.any_orthonormal_pair();
+    let tail = |len: f64| -> Vec<DVec3> {
+        let mut t = Vec::new();
+        let mut h = 1.0;
+        while h <= 1.0 + len {
+            for k in 0..13 {
+                let a = std::f64::consts::TAU * k as f64 / 13.0;
+                t.push(dir * h + 0.02 * (u * a.cos() + v * a.sin()));
+            }
+            h += 0.01;
+        }
+        t
+    };
+    let run = |len: f64| {
+        let mut data = sphere.clone();
+        data.extend(tail(len));
+        data_support(&m, &data, &SupportOptions::default()).unwrap()
+    };
+    let stub = run(0.2);
+    assert_eq!(stub.uncovered_regions_total, 1, "{}", stub.detail());
+    let r = &stub.uncovered_regions[0];
+    assert!(r.distance_in_edges < 1.0 && !r.lost(), "{}", stub.detail());
+    assert!(stub.passed() && stub.lost_regions == 0, "{}", stub.detail());
+    assert!(
+        stub.detail()
+            .contains("1 data regions the mesh does not cover (largest: "),
+        "{}",
+        stub.detail()
+    );
+    let long = run(1.0);
+    assert!(
+        long.lost_regions == 1 && !long.passed(),
+        "{}",
+        long.detail()
+    );
+    assert!(
+        long.uncovered_regions[0].distance_in_edges > 2.0,
+        "{}",
+        long.detail()
+    );
+}
+
+/// A closed latitude-longitude sphere of radius 1: `rings` bands, `sectors` per band.
+fn uv_sphere(rings: usize, sectors: usize) -> TriMesh {
+    let mut vertices = vec![DVec3::Z, -DVec3::Z];
+    for i in 1..rings {
+        let phi = std::f64::consts::PI * i as f64 / rings as f64;
+        for j in 0..sectors {
+            let th = std::f64::consts::TAU * j as f64 / sectors as f64;
+            vertices.push(DVec3::new(
+                phi.sin() * th.cos(),
+                phi.sin() * th.sin(),
+                phi.cos(),
+            ));
+        }
+    }
+    let at = |i: usize, j: usize| (2 + (i - 1) * sectors + j % sectors) as u32;
+    let mut triangles = Vec::new();
+    for j in 0..sectors {
+        triangles.push([0, at(1, j), at(1, j + 1)]);
+        triangles.push([1, at(rings - 1, j + 1), at(rings - 1, j)]);
+        for i in 1..rings - 1 {
+            triangles.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            triangles.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    TriMesh {
+        vertices,
+        triangles,
+    }
 }
 
 #[test]

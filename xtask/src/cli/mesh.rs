@@ -313,6 +313,9 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         })
         .map_err(|e| cli_error(e, &spec))?;
     bar.finish_and_clear();
+    for n in &out.size_halvings {
+        eprintln!("note: {n}");
+    }
     if out.mesh.triangles.is_empty() {
         bail!(
             "{spec}: the mesh is empty ({} sample points, no facet on the surface); nothing written. \
@@ -332,6 +335,8 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         print_two_pass_verdict(&out, &out_path);
     } else {
         print_single(&spec, &out, &out_path);
+        // (After a halving the forecast is the suggested size's, not the size's.)
+        let forecast = forecast.filter(|_| out.size_halvings.is_empty());
         if let Some(n) = forecast.and_then(|f| f.overshoot(out.mesh.vertices.len())) {
             eprintln!("note: {n}");
         }

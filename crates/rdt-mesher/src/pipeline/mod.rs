@@ -27,6 +27,7 @@
 #![deny(missing_docs)]
 
 mod angle_sources;
+mod auto_size;
 mod budget;
 mod error;
 mod forecast;

@@ -249,6 +249,10 @@ pub struct Outcome {
     pub adaptive: Option<AdaptiveOutcome>,
     /// The input's notes and the size chosen.
     pub notes: Vec<String>,
+    /// Meshes and point sets without a requested size: one note per halving of the
+    /// suggested size because its mesh lost a part of the data (also in `notes`; see the
+    /// pipeline's `auto_size` module). Empty otherwise.
+    pub size_halvings: Vec<String>,
     /// Mesh input with sharp edges (single pass): the output's distance to them.
     pub sharp_edges: Option<SharpEdges>,
     /// The verification report, when requested.
@@ -271,6 +275,7 @@ impl Outcome {
             two_pass: None,
             adaptive: None,
             notes: Vec::new(),
+            size_halvings: Vec::new(),
             sharp_edges: None,
             report: None,
             verdict: Verdict::Pass,

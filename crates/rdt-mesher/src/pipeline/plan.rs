@@ -275,6 +275,9 @@ impl Plan<'_, '_> {
         progress: &mut (dyn FnMut(Event) + Send),
     ) -> Result<Outcome, PipelineError> {
         let mut out = match self.mode {
+            Mode::Constant(sigma) if super::auto_size::applies(self.input, self.request) => {
+                self.auto_size(sigma, progress)?
+            }
             Mode::Constant(sigma) => self.single_pass(sigma, progress)?,
             Mode::TwoPass { epsilon, dm_inf } => self.two_passes(epsilon, dm_inf, progress)?,
             Mode::Adaptive { epsilon } => self.adaptive_rounds(epsilon, progress)?,
@@ -288,6 +291,63 @@ impl Plan<'_, '_> {
         sigma: f64,
         progress: &mut (dyn FnMut(Event) + Send),
     ) -> Result<Outcome, PipelineError> {
+        let mut out = self.mesh_constant(sigma, progress)?;
+        out.notes.splice(0..0, self.notes.iter().cloned());
+        self.verify_constant(&mut out, sigma, progress);
+        Ok(out)
+    }
+
+    /// A mesh and a point set without a requested size: the suggested size, halved while the
+    /// output loses parts of the data (see [`super::auto_size`]), then verified.
+    fn auto_size(
+        self,
+        sigma: f64,
+        progress: &mut (dyn FnMut(Event) + Send),
+    ) -> Result<Outcome, PipelineError> {
+        let mut sigma = sigma;
+        let mut out = self.mesh_constant(sigma, progress)?;
+        let mut notes = Vec::new();
+        for k in 0..=super::auto_size::HALVINGS {
+            // The lost regions are the report's when verified (no second measure).
+            self.verify_constant(&mut out, sigma, progress);
+            if k == super::auto_size::HALVINGS {
+                break;
+            }
+            let lost = match &out.report {
+                Some(r) => super::auto_size::reported_lost(r),
+                None => super::auto_size::first_lost(self.input, &out.mesh, sigma),
+            };
+            let Some(lost) = lost else {
+                break;
+            };
+            let req = Request {
+                size: SizeRequest::Size(0.5 * sigma),
+                ..self.request.clone()
+            };
+            let next = plan(self.input, &req).ok().filter(|p| {
+                super::auto_size::affordable(p.forecast.as_ref(), p.budgets.mesher_cap())
+            });
+            let Some(next) = next else {
+                notes.push(super::auto_size::over_budget(sigma, &lost));
+                break;
+            };
+            notes.push(super::auto_size::halving(sigma, &lost));
+            sigma *= 0.5;
+            out = next.mesh_constant(sigma, progress)?;
+        }
+        out.size_halvings = notes.clone();
+        notes.extend(std::mem::take(&mut out.notes));
+        out.notes = self.notes.iter().cloned().chain(notes).collect();
+        Ok(out)
+    }
+
+    /// Mesh at the constant size `sigma`, with the data rules, the forecast's overshoot and
+    /// the sharp edges' figures (its only notes: the plan's are the caller's); not verified.
+    fn mesh_constant(
+        &self,
+        sigma: f64,
+        progress: &mut (dyn FnMut(Event) + Send),
+    ) -> Result<Outcome, PipelineError> {
         let surface = self.input.surface();
         let result =
             crate::mesh_with_progress(surface, &self.options, &mut |p| progress(Event::Meshing(p)))
@@ -298,12 +358,12 @@ impl Plan<'_, '_> {
                 })?;
         let mut out = Outcome::new(result);
         out.sigma = Some(sigma);
-        out.notes = self.notes;
         if !self.request.keep_unsupported {
             data_rules(&mut out, self.input, sigma, &self.options);
         }
         if let Some(n) = self
             .forecast
+            .as_ref()
             .and_then(|f| f.overshoot(out.mesh.vertices.len()))
         {
             out.notes.push(n);
@@ -313,20 +373,31 @@ impl Plan<'_, '_> {
             out.notes.push(s.to_string());
             out.sharp_edges = Some(s);
         }
-        if self.request.verify {
-            progress(Event::Verifying);
-            let epsilon = (self.request.certify_epsilon).or(self.input.dm_inf().map(|d| sigma / d));
-            let mut vopts = verify_options(self.input, self.request, &out, epsilon);
-            // sigma / d_M^inf when no eps was asked for (see `verify::Options`).
-            vopts.epsilon_derived = self.request.certify_epsilon.is_none();
-            let mut report = verify::check_against(&out.mesh, surface, &vopts);
-            let dropped = super::unsupported::dropped(&out.stats);
-            data_support(&mut report, self.input, &out.mesh, sigma, &dropped);
-            let decisions = &out.stats.topology_decisions;
-            super::angle_sources::annotate(&mut report, &out.mesh, decisions, vopts.min_angle_deg);
-            out.report = Some(report);
-        }
         Ok(out)
+    }
+
+    /// The `verify` report of `out`, meshed at the constant size `sigma`, when asked for.
+    fn verify_constant(
+        &self,
+        out: &mut Outcome,
+        sigma: f64,
+        progress: &mut (dyn FnMut(Event) + Send),
+    ) {
+        if !self.request.verify {
+            return;
+        }
+        progress(Event::Verifying);
+        let surface = self.input.surface();
+        let epsilon = (self.request.certify_epsilon).or(self.input.dm_inf().map(|d| sigma / d));
+        let mut vopts = verify_options(self.input, self.request, out, epsilon);
+        // sigma / d_M^inf when no eps was asked for (see `verify::Options`).
+        vopts.epsilon_derived = self.request.certify_epsilon.is_none();
+        let mut report = verify::check_against(&out.mesh, surface, &vopts);
+        let dropped = super::unsupported::dropped(&out.stats);
+        data_support(&mut report, self.input, &out.mesh, sigma, &dropped);
+        let decisions = &out.stats.topology_decisions;
+        super::angle_sources::annotate(&mut report, &out.mesh, decisions, vopts.min_angle_deg);
+        out.report = Some(report);
     }
 
     fn two_passes(
