@@ -110,8 +110,12 @@ impl Grid {
         grid
     }
 
+    /// The cell of `v` along `axis`: `⌊(v − lo) / cell⌋` clamped to the grid (0 for NaN).
+    /// Truncation is the floor on the positive values it is applied to (`f64::floor` is a
+    /// library call on the baseline x86-64 target: about 40 instructions).
+    #[inline(always)]
     fn coord(&self, v: f64, axis: usize) -> usize {
-        let c = ((v - self.lo[axis]) * self.inv).floor();
+        let c = (v - self.lo[axis]) * self.inv;
         if c <= 0.0 {
             0
         } else {
