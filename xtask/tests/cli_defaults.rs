@@ -319,3 +319,37 @@ fn the_cargo_alias_does_not_hide_the_build() {
         "{alias}"
     );
 }
+
+/// A thin part the suggested size loses (`fixtures/meshes/ball_with_leg.off`, a unit ball
+/// with a leg of radius 0.04): without `--size` the size is halved, with a note naming the
+/// part, and the mesh keeps the leg and PASSes; asked for, the suggested size FAILs
+/// `data-support` and says to try a smaller `--size`.
+#[test]
+fn a_lost_part_halves_the_default_size_with_a_note() {
+    let d = dir("lost-part");
+    let file = fixture("meshes/ball_with_leg.off");
+    let (out, err) = mesh_ok(&d, &format!("{file} -o a.ply --report a.json"));
+    has(
+        &err,
+        &[
+            "note: no --size: using the input's suggested size 0.08845",
+            "note: size 0.08845 lost a part of the data (",
+            "median edges from the mesh): meshing again at 0.04423",
+        ],
+    );
+    has(&out, &["closed manifold", "genus [0]", "verify: PASS"]);
+    let r = report(&d, "a.json");
+    let sigma = r["sigma"].as_f64().unwrap();
+    assert!((0.04422..0.04423).contains(&sigma), "{sigma}");
+    let o = mesh(&d, &format!("{file} --size 0.08845 -o b.ply"));
+    let text = format!("{}{}", stdout(&o), stderr(&o));
+    has(
+        &text,
+        &[
+            "FAIL data-support",
+            "data regions lost",
+            "try a smaller --size",
+        ],
+    );
+    assert!(!text.contains("meshing again"), "{text}");
+}
