@@ -32,9 +32,9 @@
 //! assert!(!s.seed_points(1).is_empty());
 //! ```
 
-// Two `unsafe` blocks, each with its proof comment, of one kind: calling a `target_feature`
-// (AVX) function after detecting the feature (the IMLS grid's support test in `imls::grid`,
-// the kernel sums in `imls::kernel`); everything else is safe.
+// One `unsafe` block, with its proof comment: calling a `target_feature` function after
+// detecting the feature (the IMLS grid's AVX support test, `imls::grid`); everything else is
+// safe.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
