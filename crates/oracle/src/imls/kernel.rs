@@ -203,32 +203,8 @@ impl PointSetSurface {
     /// f den`, `dnum = ∇f den`, `dden = 0`). The gradient is the reweighted quotient's with
     /// the `α_i` held fixed (not the exact derivative): the oracles only use it for Newton
     /// steps inside a bracket.
-    ///
-    /// On x86-64 CPUs with AVX (detected at run time), the passes are compiled for AVX
-    /// ([`Self::sums_avx`]): the same IEEE operations in the same order (no FMA), in fewer
-    /// instructions (three-operand forms).
     #[inline]
-    #[allow(unsafe_code)]
     pub(super) fn sums_impl<const GRAD: bool>(&self, x: DVec3) -> Sums {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: `sums_avx`'s only requirement is that the CPU supports AVX (its
-            // `target_feature`), which was detected just above.
-            return unsafe { self.sums_avx::<GRAD>(x) };
-        }
-        self.sums_body::<GRAD>(x)
-    }
-
-    /// [`Self::sums_impl`] compiled for AVX.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn sums_avx<const GRAD: bool>(&self, x: DVec3) -> Sums {
-        self.sums_body::<GRAD>(x)
-    }
-
-    /// The body of [`Self::sums_impl`].
-    #[inline(always)]
-    fn sums_body<const GRAD: bool>(&self, x: DVec3) -> Sums {
         // The points whose support contains x, gathered once for every pass.
         let mut buf: [&Item; KEEP + 1] = [&NO_ITEM; KEEP + 1];
         let kept = self.grid.gather(x, &mut buf);
@@ -276,7 +252,7 @@ impl PointSetSurface {
 
     /// A robust pass's value: `Σ w n_i·(x − p_i) / Σ w`, or with midpoint normals
     /// `Σ w ½(n_i + n)·(x − p_i) / Σ w` (`n` the pass's normal at `x`).
-    #[inline(always)]
+    #[inline]
     fn pass_value(&self, r: &Sums, normal: DVec3) -> f64 {
         if self.midpoint {
             0.5 * (r.num + normal.dot(r.dsum)) / r.den
@@ -321,7 +297,7 @@ impl PointSetSurface {
     /// The plain pass (with gradients) over the gathered points `its` (all within their
     /// support): the operations of [`Self::add`] without a normal, keeping each point's `u`,
     /// `u²` and `n·(x − p)` in `pre`.
-    #[inline(always)]
+    #[inline]
     fn plain_pass(&self, x: DVec3, its: &[&Item], pre: &mut Pre) -> Sums {
         let mut s = Sums {
             band2: if self.banded { f64::INFINITY } else { 0.0 },
@@ -354,7 +330,7 @@ impl PointSetSurface {
     /// A reweighted pass over the gathered points `its` with the kernel terms `pre` of the
     /// plain pass: the operations of [`Self::add`] with `normal`, computing only what
     /// [`Self::sums_impl`] reads of it (`num`, `den` and, if `GRAD`, `dnum` and `dden`).
-    #[inline(always)]
+    #[inline]
     fn reweighted_pass<const GRAD: bool>(
         &self,
         x: DVec3,
