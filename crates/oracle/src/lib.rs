@@ -32,10 +32,7 @@
 //! assert!(!s.seed_points(1).is_empty());
 //! ```
 
-// One `unsafe` block, with its proof comment: calling a `target_feature` function after
-// detecting the feature (the IMLS grid's AVX support test, `imls::grid`); everything else is
-// safe.
-#![deny(unsafe_code)]
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod catalog;

@@ -148,40 +148,8 @@ impl Grid {
     /// test loaded a 64-byte item and cost about 22 instructions: on the 50k-point bunny
     /// scan a gather scans 239 items and keeps 22 on average, and the gathers were 32% of the
     /// whole command's instructions (valgrind, one thread); with the mask, 25%.
-    /// On x86-64 CPUs with AVX (detected at run time), the test runs on 256-bit vectors
-    /// ([`supported_mask_avx`]: the same IEEE operations, so the same bits): on the bunny
-    /// scan the gathers took 2.25 G instructions instead of 3.12 G (valgrind, one thread).
     #[inline]
-    #[allow(unsafe_code)]
     pub fn gather<'a>(&'a self, x: DVec3, r: f64, buf: &mut [&'a Item], kept: &mut usize) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: `gather_avx`'s only requirement is that the CPU supports AVX (its
-            // `target_feature`), which was detected just above.
-            unsafe { self.gather_avx(x, r, buf, kept) };
-            return;
-        }
-        self.gather_with(x, r, buf, kept, supported_mask);
-    }
-
-    /// [`Grid::gather`] with the AVX test.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn gather_avx<'a>(&'a self, x: DVec3, r: f64, buf: &mut [&'a Item], kept: &mut usize) {
-        self.gather_with(x, r, buf, kept, |x, p, r2| supported_mask_avx(x, p, r2));
-    }
-
-    /// [`Grid::gather`] with the vector test `mask` ([`supported_mask`] or
-    /// [`supported_mask_avx`]).
-    #[inline(always)]
-    fn gather_with<'a>(
-        &'a self,
-        x: DVec3,
-        r: f64,
-        buf: &mut [&'a Item],
-        kept: &mut usize,
-        mask: impl Fn(DVec3, [&[f64; LANES]; 3], &[f64; LANES]) -> u32,
-    ) {
         let last = buf.len() - 1;
         let k = &self.keys;
         self.for_each_range(x, r, |s, e| {
@@ -195,7 +163,7 @@ impl Grid {
                 let at = |v: &'a [f64]| -> &'a [f64; LANES] {
                     v[i..i + LANES].try_into().expect("LANES entries")
                 };
-                let mut bits = mask(x, [at(&k.x), at(&k.y), at(&k.z)], at(&k.r2));
+                let mut bits = supported_mask(x, [at(&k.x), at(&k.y), at(&k.z)], at(&k.r2));
                 while bits != 0 {
                     put(i + bits.trailing_zeros() as usize);
                     bits &= bits - 1;
@@ -271,38 +239,6 @@ fn supported_mask(x: DVec3, p: [&[f64; LANES]; 3], r2: &[f64; LANES]) -> u32 {
         let d2 = dx * dx + dy * dy + dz * dz;
         // `!(d2 >= r2)`: the lanes whose `d2 >= r2` is false (a NaN distance included).
         let far = d2.cmp_ge(q(r2)).move_mask() as u32;
-        bits |= (!far & 0xF) << j;
-    }
-    bits
-}
-
-/// [`supported_mask`] on 256-bit AVX vectors (four lanes in one register): the same IEEE
-/// operations in the same order (`(dx·dx + dy·dy) + dz·dz`, an ordered `>=` compare that is
-/// false on NaN), so the same bits.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-fn supported_mask_avx(x: DVec3, p: [&[f64; LANES]; 3], r2: &[f64; LANES]) -> u32 {
-    use std::arch::x86_64::{
-        _CMP_GE_OQ, _mm256_add_pd, _mm256_cmp_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set_pd,
-        _mm256_set1_pd, _mm256_sub_pd,
-    };
-    let c = [
-        _mm256_set1_pd(x.x),
-        _mm256_set1_pd(x.y),
-        _mm256_set1_pd(x.z),
-    ];
-    let mut bits = 0u32;
-    for j in [0, 4] {
-        let q = |v: &[f64; LANES]| _mm256_set_pd(v[j + 3], v[j + 2], v[j + 1], v[j]);
-        let dx = _mm256_sub_pd(c[0], q(p[0]));
-        let dy = _mm256_sub_pd(c[1], q(p[1]));
-        let dz = _mm256_sub_pd(c[2], q(p[2]));
-        let d2 = _mm256_add_pd(
-            _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
-            _mm256_mul_pd(dz, dz),
-        );
-        let far = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(d2, q(r2))) as u32;
         bits |= (!far & 0xF) << j;
     }
     bits
@@ -453,13 +389,6 @@ mod tests {
             let mut buf = vec![&DUMMY; want.len() + 1];
             let kept = lv.gather(x, &mut buf);
             let got: Vec<*const Item> = buf[..kept].iter().map(|&r| r as *const Item).collect();
-            assert_eq!(got, want, "{x}");
-            // The baseline (SSE2) test too, whichever `gather` used.
-            let mut sse2 = 0;
-            for (g, r) in &lv.levels {
-                g.gather_with(x, *r, &mut buf, &mut sse2, supported_mask);
-            }
-            let got: Vec<*const Item> = buf[..sse2].iter().map(|&r| r as *const Item).collect();
             assert_eq!(got, want, "{x}");
             if x.is_nan() {
                 let mut visited = 0;
