@@ -454,11 +454,12 @@ fn components_sampled_check(
     };
     let far = format!(
         "{} of {} seed points of S farther from the mesh than {threshold} (largest threshold \
-         {:.3e}, farthest seed {:.3e})",
+         {:.3e}, farthest seed {:.3e}){}",
         cov.uncovered,
         seeds.len(),
         cov.tolerance,
         cov.seeds.iter().map(|s| s.distance).fold(0.0, f64::max),
+        worst_uncovered(&cov),
     );
     let (status, detail) = if let Some(img) = surface.as_image() {
         // Images: the voxel scan names each seed's component, so a far seed is a missed
@@ -516,6 +517,21 @@ fn components_sampled_check(
     };
     r.push("components-sampled", status, detail);
     r.components_sampled = Some(cov);
+}
+
+/// Where the uncovered seed farthest past its threshold is (empty when every seed is covered).
+fn worst_uncovered(cov: &certificate::ComponentCoverage) -> String {
+    cov.seeds
+        .iter()
+        .filter(|s| !s.covered)
+        .max_by(|a, b| (a.distance / a.tolerance).total_cmp(&(b.distance / b.tolerance)))
+        .map_or(String::new(), |s| {
+            format!(
+                "; the farthest past its threshold at ({:.4}, {:.4}, {:.4}): {:.3e} from the mesh, \
+                 threshold {:.3e}",
+                s.seed[0], s.seed[1], s.seed[2], s.distance, s.tolerance
+            )
+        })
 }
 
 /// The `hausdorff` line: each side's figure, what it is and how it was measured.

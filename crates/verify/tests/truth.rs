@@ -214,6 +214,9 @@ fn one_sphere_of_two_nested_fails_the_coverage_of_the_other() {
         },
     );
     assert_eq!(r.status("components-sampled"), Some(Status::Fail));
+    // The line names the missed seed (on the inner sphere, at x = 0.5).
+    let d = &r.check("components-sampled").unwrap().detail;
+    assert!(d.contains("at (0.5000, 0.0000, 0.0000)"), "{d}");
     let g = r.geometry.as_ref().unwrap();
     // The inner sphere is 0.5 from the outer mesh (minus the chord error).
     assert!(
