@@ -219,7 +219,6 @@ impl PointSetSurface {
         })
     }
 
-    /// Deterministic well-spread sample of point indices (for seeds).
     /// The centroid of point `i` and its [`SEED_NEIGHBOURS`] nearest neighbours within the
     /// median kernel radius: where a seed starts its projection. Why not the point itself:
     /// an extreme or random point of a noisy scan can be an outlier several noise widths off
@@ -247,6 +246,7 @@ impl PointSetSurface {
         if n == 0 { p } else { sum / n as f64 }
     }
 
+    /// Deterministic well-spread sample of point indices (for seeds).
     fn spread_indices(&self, count: usize, seed: u64) -> Vec<usize> {
         let mut rng = SplitMix64(seed ^ 0x0B5E_55ED);
         let n = self.points.len();
