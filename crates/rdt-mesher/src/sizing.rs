@@ -2,7 +2,7 @@
 //! (Chazal & Lieutier), and the two-pass mesher built on it.
 
 use crate::{Criteria, Progress, Sizing};
-use crate::{MeshError, MeshOptions, MeshResult, mesh_with_progress};
+use crate::{MeshError, MeshOptions, MeshResult, StopReason, mesh_with_progress};
 use delaunay3::Triangulation;
 use geom::kdtree::PointTree;
 use glam::DVec3;
@@ -264,6 +264,9 @@ pub struct TwoPass {
     pub dm_inf_estimate: f64,
     /// Lower bound of the second pass's size field (see [`second_pass`]).
     pub floor: f64,
+    /// The second pass did not run: the first spent the time limit (or was cancelled), and
+    /// `second` is the first pass's mesh, the mesh so far.
+    pub second_skipped: bool,
 }
 
 /// Result of [`second_pass`].
@@ -275,6 +278,8 @@ pub struct SecondPass {
     pub dm_inf_estimate: f64,
     /// See [`TwoPass::floor`].
     pub floor: f64,
+    /// See [`TwoPass::second_skipped`].
+    pub skipped: bool,
 }
 
 /// eps' / eps in the second pass (section 6.5: "some eps' slightly smaller than eps").
@@ -336,7 +341,7 @@ fn check_eps(eps: f64) -> Result<(), MeshError> {
 /// vertices, then a pass with the 1-Lipschitz [`adaptive_field`] (eps' = 0.9 eps), with control
 /// points taken from the first pass's mesh ([`CONTROL_PER_COMPONENT`] spread vertices of every
 /// component). `eps` must be in (0, 1) and `dm_inf` positive. `base` gives everything else
-/// (oracle, angle, budgets, seed).
+/// (oracle, angle, budgets, seed); its `time_limit` bounds the two passes together.
 ///
 /// ```
 /// use rdt_mesher::{sizing::two_pass, MeshOptions};
@@ -374,8 +379,18 @@ pub fn two_pass(
         size: Some(Sizing::Constant(sigma0)),
         ..base.criteria.clone()
     };
+    let start = std::time::Instant::now();
     let first = mesh_with_progress(surface, &o1, progress)?;
-    let sp = second_pass(surface, &first, eps, sigma0, base, progress)?;
+    // `time_limit` bounds both passes: the second gets the time left, and a stop there
+    // reports the limit given.
+    let mut o2 = base.clone();
+    o2.time_limit = base.time_limit.map(|t| t.saturating_sub(start.elapsed()));
+    let mut sp = second_pass(surface, &first, eps, sigma0, &o2, progress)?;
+    if let (Some(StopReason::TimeLimit { seconds }), Some(t)) =
+        (&mut sp.result.stats.stopped_by, base.time_limit)
+    {
+        *seconds = t.as_secs_f64();
+    }
     Ok(TwoPass {
         first,
         second: sp.result,
@@ -384,6 +399,7 @@ pub fn two_pass(
         medial: sp.medial,
         dm_inf_estimate: sp.dm_inf_estimate,
         floor: sp.floor,
+        second_skipped: sp.skipped,
     })
 }
 
@@ -395,6 +411,9 @@ pub fn two_pass(
 /// surface of constant d_M gets the first pass's size. A floor at sigma_0 alone is wrong when
 /// the d_M^inf given is too large (the chair at --dm-inf 0.1, whose d_M^inf is about 0.077):
 /// sigma_0 > eps d_M where d_M is smallest, and the second pass stayed that coarse there.
+///
+/// With no time left (`base.time_limit` zero) or `base.cancel` cancelled, the pass is not
+/// run: its result is `first`'s and its estimate empty (see [`SecondPass::skipped`]).
 pub fn second_pass(
     surface: &dyn Surface,
     first: &MeshResult,
@@ -404,11 +423,16 @@ pub fn second_pass(
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<SecondPass, MeshError> {
     check_eps(eps)?;
-    let medial = Arc::new(MedialAxisEstimate::new(
-        &first.mesh.vertices,
-        LAMBDA_FACTOR * sigma0,
-        surface.bounding_sphere(),
-    )?);
+    // No time left (a `time_limit` of zero) or cancelled: the first pass's mesh stands, and
+    // no estimate is made (an empty one: no medial point, minimum +inf).
+    let skipped = base.time_limit == Some(std::time::Duration::ZERO)
+        || base.cancel.as_ref().is_some_and(|c| c.is_cancelled());
+    let (lambda, keep) = (LAMBDA_FACTOR * sigma0, surface.bounding_sphere());
+    let medial = Arc::new(if skipped {
+        MedialAxisEstimate::from_poles(&[], lambda, keep)
+    } else {
+        MedialAxisEstimate::new(&first.mesh.vertices, lambda, keep)?
+    });
     let eps_prime = EPS_PRIME_FACTOR * eps;
     let m = medial.min_radius;
     let floor = if m > 0.0 {
@@ -429,13 +453,18 @@ pub fn second_pass(
         &first.mesh,
         CONTROL_PER_COMPONENT,
     ));
-    let result = mesh_with_progress(surface, &o2, progress)?;
+    let result = if skipped {
+        first.clone()
+    } else {
+        mesh_with_progress(surface, &o2, progress)?
+    };
     Ok(SecondPass {
         result,
         medial,
         eps_prime,
         dm_inf_estimate: m,
         floor,
+        skipped,
     })
 }
 

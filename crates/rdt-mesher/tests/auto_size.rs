@@ -62,3 +62,39 @@ fn a_lost_leg_halves_the_default_size_and_a_requested_size_fails() {
         .fold(f64::MIN, f64::max);
     assert!(tip > 2.3, "{tip}");
 }
+
+/// A mesh stopped by a budget is not halved: its missing parts are the budget's. Here the
+/// run is interrupted (`Request::cancel`, what the CLI's Ctrl-C sets) at the first progress
+/// event, after a few hundred insertions, deterministically. Before, the size was halved
+/// anyway and the halved run, cancelled at once, was the output: an empty mesh (measured).
+#[test]
+fn an_interrupted_mesh_is_not_halved_and_is_kept() {
+    let m = ball_with_leg();
+    let input = Input::mesh(&m, "ball-with-leg", "ball-with-leg".into(), false).unwrap();
+    let cancel = rdt_mesher::Cancel::default();
+    let req = Request {
+        cancel: Some(cancel.clone()),
+        ..Default::default()
+    };
+    let suggested = input.default_size.unwrap();
+    let out = plan(&input, &req)
+        .unwrap()
+        .execute(&mut |e| {
+            if matches!(e, rdt_mesher::pipeline::Event::Meshing(_)) {
+                cancel.cancel();
+            }
+        })
+        .unwrap();
+    assert_eq!(
+        out.stats.stopped_by,
+        Some(rdt_mesher::StopReason::Cancelled)
+    );
+    assert_eq!(out.sigma, Some(suggested));
+    assert!(out.mesh.vertices.len() > 100, "{}", out.mesh.vertices.len());
+    assert_eq!(out.size_halvings.len(), 1, "{:?}", out.size_halvings);
+    assert!(
+        out.size_halvings[0].contains("not halved"),
+        "{:?}",
+        out.size_halvings
+    );
+}

@@ -615,6 +615,18 @@ fn print_two_pass(spec: &str, out: &Outcome) {
     let tp = out.two_pass.as_ref().expect("a two-pass outcome");
     let (s1, s2) = (&tp.first.stats, &out.stats);
     let (e, dm) = (tp.epsilon, tp.dm_inf);
+    if tp.second_skipped {
+        outln!(
+            "{spec}: first pass (sigma_0 = {e} * {dm} = {:.5}): {} vertices, {} facets in {:.3} s; \
+             {}",
+            tp.sigma0,
+            s1.vertices,
+            s1.facets,
+            s1.time_total_s,
+            pipeline::SECOND_SKIPPED
+        );
+        return;
+    }
     outln!(
         "{spec}: first pass (sigma_0 = {e} * {dm} = {:.5}): {} vertices in {:.3} s; second pass \
          (sigma = max({:.5}, {:.4} d_M)): {} vertices, {} facets in {:.3} s (Delaunay {:.3} s, \
@@ -665,6 +677,11 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
     if let Verdict::Fail(failures) = &out.verdict {
         for f in failures {
             if let Failure::Stopped(stage) = f {
+                // A skipped second pass is the first (its line says so).
+                let skipped = out.two_pass.as_ref().is_some_and(|t| t.second_skipped);
+                if skipped && *stage == pipeline::Stage::Second {
+                    continue;
+                }
                 let st = out.stats_of(*stage);
                 let name = if *stage == pipeline::Stage::First {
                     "first"

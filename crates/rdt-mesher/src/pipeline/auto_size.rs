@@ -17,6 +17,10 @@
 //! halving verifies its mesh once more); with `--no-verify`, the data-support measure alone:
 //! fertility at its default size (95k samples) took 0.40-0.47 s and now 0.69-0.74 s.
 //!
+//! Budgets: `--time-limit` bounds the whole run, every halving included (each gets the time
+//! left); a mesh stopped by a budget is not halved (its missing parts are the budget's), and
+//! when the run at the halved size is stopped by one, the previous mesh is kept.
+//!
 //! Invariant: deterministic (the same meshes at the same sizes, the check's order).
 
 use meshio::TriMesh;
@@ -66,6 +70,44 @@ pub(crate) fn halving(sigma: f64, lost: &UncoveredRegion) -> String {
     )
 }
 
+/// The note when the mesh at `sigma` was stopped by a budget (`--max-vertices`,
+/// `--time-limit`, an interrupt): its missing parts are the budget's, and a finer size would
+/// stop sooner, so the size stays. `None` when no budget stopped it (a stalled manifold patch
+/// is not a budget: a finer size can mend it).
+pub(crate) fn stopped(sigma: f64, stats: &crate::Stats) -> Option<String> {
+    use crate::StopReason::{Cancelled, MaxVertices, TimeLimit};
+    match stats.stopped_by.as_ref()? {
+        r @ (MaxVertices { .. } | TimeLimit { .. } | Cancelled) => Some(format!(
+            "size {sigma:.5}: the run stopped at {r} before the criteria were met, so the size is \
+             not halved (a finer size would stop sooner)"
+        )),
+        _ => None,
+    }
+}
+
+/// The note when the run at half `sigma` was stopped by a budget (`why`, from [`stopped`]'s
+/// reason) and the mesh at `sigma` is kept.
+pub(crate) fn halving_stopped(
+    sigma: f64,
+    lost: &UncoveredRegion,
+    why: &crate::StopReason,
+) -> String {
+    format!(
+        "size {sigma:.5} lost a part of the data ({}); meshing again at {:.5} stopped at {why} \
+         before the criteria were met, so the mesh at {sigma:.5} is kept",
+        located(lost),
+        0.5 * sigma
+    )
+}
+
+/// The time left of `limit` since `start` (`None` without a limit; zero when spent).
+pub(crate) fn time_left(
+    start: std::time::Instant,
+    limit: Option<std::time::Duration>,
+) -> Option<std::time::Duration> {
+    limit.map(|t| t.saturating_sub(start.elapsed()))
+}
+
 /// The note when the budgets refuse the halving from `sigma`.
 pub(crate) fn over_budget(sigma: f64, lost: &UncoveredRegion) -> String {
     format!(
@@ -82,4 +124,26 @@ fn located(r: &UncoveredRegion) -> String {
         "{} points, {:.3e} across, at ({:.4}, {:.4}, {:.4}), {:.1} median edges from the mesh",
         r.points, r.extent, r.centroid[0], r.centroid[1], r.centroid[2], r.distance_in_edges
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The time left of `--time-limit` after some of it is spent, and none once it is.
+    #[test]
+    fn a_halving_gets_the_time_left() {
+        use std::time::{Duration, Instant};
+        let start = Instant::now() - Duration::from_secs(3);
+        let left = time_left(start, Some(Duration::from_secs(10))).unwrap();
+        assert!(
+            left <= Duration::from_secs(7) && left > Duration::from_secs(5),
+            "{left:?}"
+        );
+        assert_eq!(
+            time_left(start, Some(Duration::from_secs(2))),
+            Some(Duration::ZERO)
+        );
+        assert_eq!(time_left(start, None), None);
+    }
 }

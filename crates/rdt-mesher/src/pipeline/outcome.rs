@@ -119,6 +119,9 @@ pub struct TwoPassOutcome {
     pub dm_inf_estimate: f64,
     /// The first pass.
     pub first: MeshResult,
+    /// No second pass ran: the first used the whole time limit (or was interrupted), and the
+    /// output is its mesh (the estimate fields are then empty: no medial point, +inf).
+    pub second_skipped: bool,
 }
 
 impl TwoPassOutcome {

@@ -13,7 +13,7 @@ use super::forecast::{AreaEstimate, Forecast};
 use super::input::Input;
 use super::outcome::{Outcome, SharpEdges, TwoPassOutcome};
 use super::request::{Request, SizeRequest};
-use crate::{Criteria, MeshOptions, Progress, Sizing};
+use crate::{Criteria, MeshOptions, Progress, Sizing, StopReason};
 
 /// What a run reports while it works (see [`run_with_progress`](super::run_with_progress)).
 ///
@@ -35,6 +35,10 @@ pub enum Event {
     /// Adaptive mode: a round's estimate, before the round runs.
     Round(crate::adaptive::Round),
 }
+
+/// The note of a two-pass run whose second pass did not run.
+pub const SECOND_SKIPPED: &str = "the first pass used the whole --time-limit (or was \
+     interrupted): no second pass; the output is the first pass's mesh so far";
 
 /// How sigma was chosen.
 #[derive(Clone, Copy, Debug)]
@@ -304,36 +308,56 @@ impl Plan<'_, '_> {
         sigma: f64,
         progress: &mut (dyn FnMut(Event) + Send),
     ) -> Result<Outcome, PipelineError> {
+        use super::auto_size as auto;
+        let start = std::time::Instant::now();
         let mut sigma = sigma;
         let mut out = self.mesh_constant(sigma, progress)?;
         let mut notes = Vec::new();
-        for k in 0..=super::auto_size::HALVINGS {
+        for k in 0..=auto::HALVINGS {
             // The lost regions are the report's when verified (no second measure).
             self.verify_constant(&mut out, sigma, progress);
-            if k == super::auto_size::HALVINGS {
+            if k == auto::HALVINGS {
+                break;
+            }
+            if let Some(n) = auto::stopped(sigma, &out.stats) {
+                notes.push(n);
                 break;
             }
             let lost = match &out.report {
-                Some(r) => super::auto_size::reported_lost(r),
-                None => super::auto_size::first_lost(self.input, &out.mesh, sigma),
+                Some(r) => auto::reported_lost(r),
+                None => auto::first_lost(self.input, &out.mesh, sigma),
             };
             let Some(lost) = lost else {
                 break;
             };
+            // The halved run gets the time left of `--time-limit`.
             let req = Request {
                 size: SizeRequest::Size(0.5 * sigma),
+                time_limit: auto::time_left(start, self.request.time_limit),
                 ..self.request.clone()
             };
-            let next = plan(self.input, &req).ok().filter(|p| {
-                super::auto_size::affordable(p.forecast.as_ref(), p.budgets.mesher_cap())
-            });
+            let next = plan(self.input, &req)
+                .ok()
+                .filter(|p| auto::affordable(p.forecast.as_ref(), p.budgets.mesher_cap()));
             let Some(next) = next else {
-                notes.push(super::auto_size::over_budget(sigma, &lost));
+                notes.push(auto::over_budget(sigma, &lost));
                 break;
             };
-            notes.push(super::auto_size::halving(sigma, &lost));
+            let halved = next.mesh_constant(0.5 * sigma, progress)?;
+            if auto::stopped(0.5 * sigma, &halved.stats).is_some() {
+                let why = match (&halved.stats.stopped_by, self.request.time_limit) {
+                    // The budget the user gave, not the time that was left of it.
+                    (Some(StopReason::TimeLimit { .. }), Some(t)) => StopReason::TimeLimit {
+                        seconds: t.as_secs_f64(),
+                    },
+                    (w, _) => w.clone().unwrap_or(StopReason::Cancelled),
+                };
+                notes.push(auto::halving_stopped(sigma, &lost, &why));
+                break;
+            }
+            notes.push(auto::halving(sigma, &lost));
             sigma *= 0.5;
-            out = next.mesh_constant(sigma, progress)?;
+            out = halved;
         }
         out.size_halvings = notes.clone();
         notes.extend(std::mem::take(&mut out.notes));
@@ -417,6 +441,9 @@ impl Plan<'_, '_> {
         })?;
         let mut out = Outcome::new(tp.second);
         out.notes = self.notes;
+        if tp.second_skipped {
+            out.notes.push(SECOND_SKIPPED.into());
+        }
         if !self.request.keep_unsupported {
             data_rules(&mut out, self.input, tp.sigma0, &self.options);
         }
@@ -444,6 +471,7 @@ impl Plan<'_, '_> {
             medial_points: tp.medial.len(),
             dm_inf_estimate: tp.dm_inf_estimate,
             first: tp.first,
+            second_skipped: tp.second_skipped,
         });
         Ok(out)
     }

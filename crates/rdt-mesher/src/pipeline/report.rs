@@ -156,6 +156,7 @@ pub fn mesh_report(
                 "initialization": request.initialization.name(),
                 "sigma0": tp.sigma0, "eps_prime": tp.eps_prime, "notes": out.notes,
                 "first": tp.first.stats, "second": out.stats, "verify": out.report,
+                "second_skipped": tp.second_skipped,
             }),
         ),
     }
