@@ -423,3 +423,31 @@ fn lipschitz_field_gives_the_exact_size_criterion() {
         assert!(matches!(c.validate(), Err(MeshError::InvalidLipschitz(_))));
     }
 }
+
+/// A first pass that is interrupted (or spends the whole time limit) is the output: no second
+/// pass runs from its partial sample, and the result says so. Deterministic: the run is
+/// cancelled at the first progress event.
+#[test]
+fn an_interrupted_first_pass_skips_the_second() {
+    let s = catalog::surface("ellipsoid").unwrap();
+    let cancel = rdt_mesher::Cancel::default();
+    let base = MeshOptions {
+        cancel: Some(cancel.clone()),
+        ..MeshOptions::default()
+    };
+    let tp = two_pass(&s, 0.2, 0.16, &base, &mut |_| cancel.cancel()).unwrap();
+    assert!(tp.second_skipped);
+    assert_eq!(
+        tp.first.stats.stopped_by,
+        Some(rdt_mesher::StopReason::Cancelled)
+    );
+    assert_eq!(tp.second.mesh.vertices, tp.first.mesh.vertices);
+    assert!(
+        tp.first.mesh.vertices.len() >= 100,
+        "{}",
+        tp.first.mesh.vertices.len()
+    );
+    // Not interrupted: both passes run.
+    let tp = two_pass(&s, 0.3, 0.16, &MeshOptions::default(), &mut |_| {}).unwrap();
+    assert!(!tp.second_skipped && tp.second.stats.stopped_by.is_none());
+}

@@ -85,6 +85,17 @@ pub(crate) fn stopped(sigma: f64, stats: &crate::Stats) -> Option<String> {
     }
 }
 
+/// The note when no time is left of `--time-limit` (`limit` seconds) to mesh again at half
+/// `sigma`: the mesh at `sigma` is kept.
+pub(crate) fn no_time_left(sigma: f64, lost: &UncoveredRegion, limit: f64) -> String {
+    format!(
+        "size {sigma:.5} lost a part of the data ({}); no time is left of --time-limit \
+         ({limit:.3} s) to mesh again at {:.5}, so the mesh at {sigma:.5} is kept",
+        located(lost),
+        0.5 * sigma
+    )
+}
+
 /// The note when the run at half `sigma` was stopped by a budget (`why`, from [`stopped`]'s
 /// reason) and the mesh at `sigma` is kept.
 pub(crate) fn halving_stopped(

@@ -330,10 +330,15 @@ impl Plan<'_, '_> {
             let Some(lost) = lost else {
                 break;
             };
-            // The halved run gets the time left of `--time-limit`.
+            // The halved run gets the time left of `--time-limit` (none left: no halving).
+            let left = auto::time_left(start, self.request.time_limit);
+            if let (Some(std::time::Duration::ZERO), Some(t)) = (left, self.request.time_limit) {
+                notes.push(auto::no_time_left(sigma, &lost, t.as_secs_f64()));
+                break;
+            }
             let req = Request {
                 size: SizeRequest::Size(0.5 * sigma),
-                time_limit: auto::time_left(start, self.request.time_limit),
+                time_limit: left,
                 ..self.request.clone()
             };
             let next = plan(self.input, &req)
