@@ -2,7 +2,7 @@
 //! (Chazal & Lieutier), and the two-pass mesher built on it.
 
 use crate::{Criteria, Progress, Sizing};
-use crate::{MeshError, MeshOptions, MeshResult, StopReason, mesh_with_progress};
+use crate::{MeshError, MeshOptions, MeshResult, mesh_with_progress};
 use delaunay3::Triangulation;
 use geom::kdtree::PointTree;
 use glam::DVec3;
@@ -386,11 +386,8 @@ pub fn two_pass(
     let mut o2 = base.clone();
     o2.time_limit = base.time_limit.map(|t| t.saturating_sub(start.elapsed()));
     let mut sp = second_pass(surface, &first, eps, sigma0, &o2, progress)?;
-    if let (Some(StopReason::TimeLimit { seconds }), Some(t)) =
-        (&mut sp.result.stats.stopped_by, base.time_limit)
-    {
-        *seconds = t.as_secs_f64();
-    }
+    let stop = &mut sp.result.stats.stopped_by;
+    *stop = stop.take().map(|r| r.with_time_limit(base.time_limit));
     Ok(TwoPass {
         first,
         second: sp.result,

@@ -46,6 +46,36 @@ pub enum StopReason {
     },
 }
 
+impl StopReason {
+    /// Whether a budget stopped the run (`max_vertices`, `time_limit`, a cancel), not the
+    /// manifold patch: its missing parts are the budget's.
+    pub fn is_budget(&self) -> bool {
+        matches!(
+            self,
+            StopReason::MaxVertices { .. } | StopReason::TimeLimit { .. } | StopReason::Cancelled
+        )
+    }
+
+    /// The reason as the caller's budget says it: a run that got only the time left of a
+    /// `limit` spread over several runs reports `limit`, not its share.
+    ///
+    /// ```
+    /// use rdt_mesher::StopReason;
+    /// use std::time::Duration;
+    /// let r = StopReason::TimeLimit { seconds: 0.25 };
+    /// let given = r.with_time_limit(Some(Duration::from_secs(2)));
+    /// assert_eq!(given, StopReason::TimeLimit { seconds: 2.0 });
+    /// ```
+    pub fn with_time_limit(self, limit: Option<std::time::Duration>) -> StopReason {
+        match (self, limit) {
+            (StopReason::TimeLimit { .. }, Some(t)) => StopReason::TimeLimit {
+                seconds: t.as_secs_f64(),
+            },
+            (r, _) => r,
+        }
+    }
+}
+
 impl fmt::Display for StopReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

@@ -675,10 +675,10 @@ fn print_two_pass_verdict(out: &Outcome, out_path: &Path) {
     print_cut_handles(out);
     print_data_failures(out);
     if let Verdict::Fail(failures) = &out.verdict {
+        // A skipped second pass is the first (its line says so).
+        let skipped = out.two_pass.as_ref().is_some_and(|t| t.second_skipped);
         for f in failures {
             if let Failure::Stopped(stage) = f {
-                // A skipped second pass is the first (its line says so).
-                let skipped = out.two_pass.as_ref().is_some_and(|t| t.second_skipped);
                 if skipped && *stage == pipeline::Stage::Second {
                     continue;
                 }

@@ -70,19 +70,19 @@ pub(crate) fn halving(sigma: f64, lost: &UncoveredRegion) -> String {
     )
 }
 
-/// The note when the mesh at `sigma` was stopped by a budget (`--max-vertices`,
-/// `--time-limit`, an interrupt): its missing parts are the budget's, and a finer size would
-/// stop sooner, so the size stays. `None` when no budget stopped it (a stalled manifold patch
-/// is not a budget: a finer size can mend it).
-pub(crate) fn stopped(sigma: f64, stats: &crate::Stats) -> Option<String> {
-    use crate::StopReason::{Cancelled, MaxVertices, TimeLimit};
-    match stats.stopped_by.as_ref()? {
-        r @ (MaxVertices { .. } | TimeLimit { .. } | Cancelled) => Some(format!(
-            "size {sigma:.5}: the run stopped at {r} before the criteria were met, so the size is \
-             not halved (a finer size would stop sooner)"
-        )),
-        _ => None,
-    }
+/// The budget that stopped a run (`--max-vertices`, `--time-limit`, an interrupt), if any:
+/// its missing parts are the budget's, and a finer size would stop sooner. A stalled
+/// manifold patch is not a budget (a finer size can mend it).
+pub(crate) fn budget_stop(stats: &crate::Stats) -> Option<&crate::StopReason> {
+    stats.stopped_by.as_ref().filter(|r| r.is_budget())
+}
+
+/// The note when the mesh at `sigma` was stopped by the budget `why`: the size stays.
+pub(crate) fn stopped(sigma: f64, why: &crate::StopReason) -> String {
+    format!(
+        "size {sigma:.5}: the run stopped at {why} before the criteria were met, so the size is \
+         not halved (a finer size would stop sooner)"
+    )
 }
 
 /// The note when no time is left of `--time-limit` (`limit` seconds) to mesh again at half
@@ -96,8 +96,8 @@ pub(crate) fn no_time_left(sigma: f64, lost: &UncoveredRegion, limit: f64) -> St
     )
 }
 
-/// The note when the run at half `sigma` was stopped by a budget (`why`, from [`stopped`]'s
-/// reason) and the mesh at `sigma` is kept.
+/// The note when the run at half `sigma` was stopped by the budget `why` and the mesh at
+/// `sigma` is kept.
 pub(crate) fn halving_stopped(
     sigma: f64,
     lost: &UncoveredRegion,

@@ -13,7 +13,7 @@ use super::forecast::{AreaEstimate, Forecast};
 use super::input::Input;
 use super::outcome::{Outcome, SharpEdges, TwoPassOutcome};
 use super::request::{Request, SizeRequest};
-use crate::{Criteria, MeshOptions, Progress, Sizing, StopReason};
+use crate::{Criteria, MeshOptions, Progress, Sizing};
 
 /// What a run reports while it works (see [`run_with_progress`](super::run_with_progress)).
 ///
@@ -319,8 +319,8 @@ impl Plan<'_, '_> {
             if k == auto::HALVINGS {
                 break;
             }
-            if let Some(n) = auto::stopped(sigma, &out.stats) {
-                notes.push(n);
+            if let Some(why) = auto::budget_stop(&out.stats) {
+                notes.push(auto::stopped(sigma, why));
                 break;
             }
             let lost = match &out.report {
@@ -349,14 +349,9 @@ impl Plan<'_, '_> {
                 break;
             };
             let halved = next.mesh_constant(0.5 * sigma, progress)?;
-            if auto::stopped(0.5 * sigma, &halved.stats).is_some() {
-                let why = match (&halved.stats.stopped_by, self.request.time_limit) {
-                    // The budget the user gave, not the time that was left of it.
-                    (Some(StopReason::TimeLimit { .. }), Some(t)) => StopReason::TimeLimit {
-                        seconds: t.as_secs_f64(),
-                    },
-                    (w, _) => w.clone().unwrap_or(StopReason::Cancelled),
-                };
+            if let Some(why) = auto::budget_stop(&halved.stats) {
+                // The budget the user gave, not the time that was left of it.
+                let why = why.clone().with_time_limit(self.request.time_limit);
                 notes.push(auto::halving_stopped(sigma, &lost, &why));
                 break;
             }
