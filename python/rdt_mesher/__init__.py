@@ -419,7 +419,9 @@ def _mesh_arrays(vertices, faces):
 def remesh(vertices, faces, *, smooth_polyhedron: bool = False,
            progress: Optional[Callable[[dict], Any]] = None, **criteria) -> Mesh:
     """Remesh a closed triangle mesh (its exact triangles, or with ``smooth_polyhedron`` an
-    IMLS approximation), as the CLI remeshes a mesh file."""
+    IMLS approximation), as the CLI remeshes a mesh file. ``epsilon`` without ``dm_inf``
+    meshes the IMLS approximation: the triangles have d_M = 0 at their edges, so no
+    eps-sample of them exists."""
     v, fa = _mesh_arrays(vertices, faces)
     return Mesh(_core.remesh(v, fa, bool(smooth_polyhedron), _params(**criteria), progress))
 

@@ -181,6 +181,12 @@ struct Params {
 }
 
 impl Params {
+    /// An epsilon that estimates d_M (`SizeRequest::estimates_dm`): a mesh is then opened as
+    /// its smooth approximation, as the CLI does (its triangles have d_M = 0 at their edges).
+    fn estimates_dm(&self) -> bool {
+        self.request().is_ok_and(|r| r.size.estimates_dm())
+    }
+
     fn request(&self) -> PyResult<Request> {
         let bad = |m: String| PyValueError::new_err(m);
         let size = match (self.size, self.epsilon) {
@@ -548,7 +554,7 @@ fn mesh_spec<'py>(
             dark_foreground,
             background,
         },
-        smooth_polyhedron,
+        smooth_polyhedron: smooth_polyhedron || params.estimates_dm(),
         ..Default::default()
     };
     if let Some(h) = spacing {
@@ -647,7 +653,8 @@ fn remesh<'py>(
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mesh = trimesh_of(&vertices, &faces)?;
-    let open = Box::new(move || Input::mesh(&mesh, "mesh", "mesh".into(), smooth_polyhedron));
+    let smooth = smooth_polyhedron || params.estimates_dm();
+    let open = Box::new(move || Input::mesh(&mesh, "mesh", "mesh".into(), smooth));
     run(py, "mesh", open, &params, progress)
 }
 

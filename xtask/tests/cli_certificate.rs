@@ -187,3 +187,30 @@ fn unsupported_components_are_dropped_and_said() {
         "{line}"
     );
 }
+
+/// `--epsilon` on a mesh from `fixtures/` without `--dm-inf` (issue 18): its smooth IMLS
+/// approximation is meshed to eps (the exact triangles have d_M = 0 at their edges; before,
+/// the rounds ran to the vertex budget), a note says why, and the report carries the rounds.
+#[test]
+fn epsilon_on_a_mesh_meshes_its_smooth_approximation() {
+    let (d, o) = run_in(
+        "epsilon-mesh",
+        &format!(
+            "mesh {} --epsilon 0.5 -o f.ply --report r.json",
+            common::fixture("models/fertility.ply")
+        ),
+    );
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    has(
+        &common::stderr(&o),
+        &["--epsilon on a mesh: meshing its smooth IMLS approximation"],
+    );
+    let s = stdout(&o);
+    has(&s, &["stable estimate", "genus [4]", "verify: PASS"]);
+    let r = json(&d.join("r.json"));
+    let a = &r["adaptive"];
+    assert_eq!(a["converged"], true, "{a}");
+    let eps = r["verify"]["certificate"]["eps_achieved"].as_f64().unwrap();
+    assert!(eps <= 0.5, "{eps}");
+    assert!(a["rounds"].as_array().unwrap().len() >= 2);
+}

@@ -32,7 +32,14 @@
 //! one estimate, after round k when its floor is not capped and the points it should need,
 //! sum over E of max(1, (sigma_{k-1} / sigma_k)^2), are fewer than (1 + [`STABLE_GROWTH`]) |E|.
 //! Also after [`MAX_ROUNDS`] rounds, or at a budget (then the certificate says how far the
-//! output is).
+//! output is). A round whose size function should need more points than
+//! `MeshOptions::max_vertices` (the sum over E of max(1, (sigma_{k-1} / sigma_k)^2)) is not
+//! started, nor one whose floor eps' m_k is below [`PRECISION_FACTOR`] times the oracle's
+//! precision (`Surface::tolerance`: d_M falls where the oracle cannot resolve S, e.g. at a
+//! cusp): the output is the last complete round, every facet refined to its field
+//! ([`EarlyStop`]), where a round stopped halfway by the budget left a mesh that was not a
+//! closed manifold (the exact bunny at eps 0.3: 2 million vertices, min angle 23.6 deg, 42
+//! non-manifold edges).
 //!
 //! What is proven and what is estimated: the paper's theorems hold where the final sigma <=
 //! eps d_M. d_M itself is estimated: the pole of a sample p is at distance >= the radius of
@@ -62,6 +69,10 @@ pub const STABLE_GROWTH: f64 = 0.05;
 /// where the estimate dropped): the smoothed bunny at eps 0.5 and 0.4 needs 18 (with 16 it
 /// stopped at the limit with a certificate of 0.6321 for 0.5).
 pub const MAX_ROUNDS: usize = 40;
+/// The rounds stop when the next floor would be below this many times the oracle's precision
+/// (the smoothed fandisk at eps 0.5: its estimate fell from 1.6e-4 to 1.4e-8 over 22 rounds,
+/// a bounding radius of about 4, and ran to the vertex budget).
+pub const PRECISION_FACTOR: f64 = 100.0;
 
 /// What one round started from (reported before it runs).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -101,6 +112,30 @@ pub struct Adaptive {
     pub dm_inf_estimate: f64,
     /// The rounds stopped because the estimate was stable (not on a budget or round limit).
     pub converged: bool,
+    /// Why the rounds stopped before the next one (see the module docs): the output is then
+    /// the last complete round. `None`: stable, the round limit, or a budget within a round.
+    pub early_stop: Option<EarlyStop>,
+}
+
+/// Why the adaptive rounds did not start the next round (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub enum EarlyStop {
+    /// Its size function should need more points than `MeshOptions::max_vertices`.
+    OverBudget {
+        /// About how many points it should need.
+        vertices: usize,
+    },
+    /// Its floor eps' m would be below [`PRECISION_FACTOR`] times the oracle's precision:
+    /// d_M falls to a scale the oracle cannot resolve (a singular point of S, such as a
+    /// cusp), so no eps-sample is in reach.
+    BelowPrecision {
+        /// The estimate m of d_M^inf.
+        dm_inf: f64,
+        /// The sample point where the estimate is smallest.
+        at: [f64; 3],
+        /// The oracle's precision (`Surface::tolerance`).
+        tolerance: f64,
+    },
 }
 
 /// The size function of the current round (see the module docs).
@@ -283,6 +318,43 @@ fn settled(eps: f64, eval: &[DistanceAndOld]) -> bool {
     !eval.iter().any(|&(d, old)| old > eps * d)
 }
 
+/// Points the size function max(`floor`, eps' d) should need: the sample's density grows as
+/// (old sigma / new sigma)^2 where the size shrinks.
+fn predicted_points(eval: &[DistanceAndOld], eps_prime: f64, floor: f64) -> f64 {
+    eval.iter()
+        .map(|&(d, old)| (old / (eps_prime * d).max(floor)).powi(2).max(1.0))
+        .sum()
+}
+
+/// Whether the next round, of floor eps' m (m the estimate of d_M^inf: the least of the
+/// distances `eval` at `sample`) and about `predicted` points, is not started (see
+/// [`EarlyStop`]): below [`PRECISION_FACTOR`] times the oracle's precision `tolerance`, or
+/// over the vertex budget. `None` for an empty sample.
+fn stop_before(
+    eps_prime: f64,
+    tolerance: f64,
+    predicted: f64,
+    base: &MeshOptions,
+    sample: &[DVec3],
+    eval: &[DistanceAndOld],
+) -> Option<EarlyStop> {
+    let i = (0..eval.len()).min_by(|&i, &j| eval[i].0.total_cmp(&eval[j].0))?;
+    let m = eval[i].0;
+    // (A NaN estimate is not below the precision: the budget and round limits hold.)
+    if eps_prime * m < PRECISION_FACTOR * tolerance {
+        return Some(EarlyStop::BelowPrecision {
+            dm_inf: m,
+            at: sample.get(i).map_or([f64::NAN; 3], |p| p.to_array()),
+            tolerance,
+        });
+    }
+    base.max_vertices
+        .is_some_and(|cap| predicted > cap as f64)
+        .then(|| EarlyStop::OverBudget {
+            vertices: predicted.min(usize::MAX as f64) as usize,
+        })
+}
+
 /// Adaptive eps-sampling of `surface` (see the module docs): `eps` in (0, 1); `base` gives
 /// everything but the size (oracle, angle, budgets, seed). `on_round` sees each round
 /// before it runs.
@@ -345,6 +417,7 @@ pub fn adaptive(
     let mut latest = f64::INFINITY;
     let mut last_round = false;
     let mut last_poles: Option<LastPoles> = None;
+    let mut early_stop = None;
     let result = crate::mesher::mesh_in_rounds(surface, &opts, progress, &mut |end| {
         let RoundEnd { sample, tri, sizes } = end;
         if last_round {
@@ -367,12 +440,7 @@ pub fn adaptive(
         // (A NaN estimate counts as capped.)
         let capped = (eps_prime * m).partial_cmp(&cap) != Some(std::cmp::Ordering::Greater);
         let floor = if capped { cap } else { eps_prime * m };
-        // Points the new size function should need: the sample's density grows as
-        // (old sigma / new sigma)^2 where the size shrinks.
-        let predicted: f64 = eval
-            .iter()
-            .map(|&(d, old)| (old / (eps_prime * d).max(floor)).powi(2).max(1.0))
-            .sum();
+        let predicted = predicted_points(&eval, eps_prime, floor);
         let round = Round {
             round: k,
             vertices: sample.len(),
@@ -391,7 +459,10 @@ pub fn adaptive(
         // Few points to add: refine to this estimate and stop (no estimate after it).
         last_round =
             !capped && k >= 2 && settled && predicted < (1.0 + STABLE_GROWTH) * sample.len() as f64;
-        if k >= MAX_ROUNDS {
+        // (An early stop keeps the last complete round, not one stopped halfway.)
+        let tolerance = surface.tolerance();
+        early_stop = stop_before(eps_prime, tolerance, predicted, base, sample, &eval);
+        if k >= MAX_ROUNDS || early_stop.is_some() {
             return Ok(None);
         }
         last_capped = capped;
@@ -417,5 +488,6 @@ pub fn adaptive(
         floor: f.floor,
         dm_inf_estimate: latest,
         converged,
+        early_stop,
     })
 }

@@ -246,3 +246,125 @@ fn adaptive_on_a_smoothed_mesh_meets_its_own_certificate() {
         assert!(worst <= eps, "eps {eps}: max r / d_M = {worst}");
     }
 }
+
+/// `--epsilon` without d_M^inf on the exact triangles of a mesh is refused before meshing:
+/// they have d_M = 0 at every edge that is not flat, so no eps-sample exists. Before, the
+/// rounds ran to the vertex budget (the bunny fixture at eps 0.3: 2 million vertices in 64 s,
+/// not a closed manifold). With d_M^inf given, the two passes run as asked; opened smooth,
+/// the mesh is meshed to eps, with a note.
+#[test]
+fn epsilon_on_the_exact_triangles_of_a_mesh_is_refused() {
+    use rdt_mesher::pipeline::{InputOptions, PipelineError, plan};
+    let path = format!(
+        "{}/../../fixtures/meshes/cube.off",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let exact = Input::open(&path, &InputOptions::default()).unwrap();
+    assert!(exact.exact_polyhedron);
+    for size in [
+        SizeRequest::Epsilon {
+            epsilon: 0.3,
+            dm_inf: None,
+        },
+        SizeRequest::Adaptive { epsilon: 0.3 },
+    ] {
+        let req = Request {
+            size,
+            ..Default::default()
+        };
+        match plan(&exact, &req) {
+            Err(PipelineError::EpsilonOnTriangles { sharp_edges, .. }) => {
+                assert_eq!(sharp_edges, 12)
+            }
+            Err(e) => panic!("{size:?}: {e}"),
+            Ok(_) => panic!("{size:?}: planned on the exact triangles"),
+        }
+    }
+    let two_pass = Request {
+        size: SizeRequest::Epsilon {
+            epsilon: 0.3,
+            dm_inf: Some(0.1),
+        },
+        ..Default::default()
+    };
+    assert!(plan(&exact, &two_pass).is_ok());
+    let smooth = Input::open(
+        &path,
+        &InputOptions {
+            smooth_polyhedron: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(!smooth.exact_polyhedron);
+    let req = Request {
+        size: SizeRequest::Epsilon {
+            epsilon: 0.3,
+            dm_inf: None,
+        },
+        ..Default::default()
+    };
+    let p = plan(&smooth, &req).unwrap();
+    assert!(
+        p.notes()
+            .iter()
+            .any(|n| n == rdt_mesher::pipeline::SMOOTH_FOR_EPSILON)
+    );
+}
+
+/// A round whose size function should need more points than the vertex budget is not
+/// started: the output is the last complete round (every facet refined to its field, a closed
+/// manifold), where the budget used to stop a round halfway.
+#[test]
+fn a_round_over_the_vertex_budget_is_not_started() {
+    let s = catalog::surface("ellipsoid").unwrap();
+    let cap = 3000;
+    let opts = MeshOptions {
+        max_vertices: Some(cap),
+        ..Default::default()
+    };
+    let a = adaptive(&s, 0.09, &opts, &mut |_| {}, &mut |_| {}).unwrap();
+    let Some(rdt_mesher::adaptive::EarlyStop::OverBudget { vertices }) = a.early_stop else {
+        panic!("{:?}", a.early_stop);
+    };
+    assert!(vertices > cap, "{vertices}");
+    assert!(!a.converged);
+    let st = &a.result.stats;
+    assert!(st.criteria_met && st.stopped_by.is_none(), "{st:?}");
+    assert!(a.result.mesh.vertices.len() <= cap);
+    assert!(verify::topology::analyze(&a.result.mesh, 1).is_closed_oriented_manifold());
+}
+
+/// Where the d_M estimate falls within 100 times the oracle's precision (a cube's edges,
+/// here with a coarse precision of 2e-3 so that the first estimate shows it), the rounds stop
+/// with the last complete round and name where the estimate is smallest: by an edge.
+#[test]
+fn a_d_m_below_the_oracle_precision_stops_the_rounds() {
+    use oracle::implicit::ImplicitSurface;
+    let bs = oracle::BoundingSphere {
+        center: DVec3::ZERO,
+        radius: 1.0,
+    };
+    let cube = ImplicitSurface::builder(|p: DVec3| p.abs().max_element() - 0.5, bs)
+        .tolerance(2e-3)
+        .build()
+        .unwrap();
+    let a = adaptive(
+        &cube,
+        0.3,
+        &MeshOptions::default(),
+        &mut |_| {},
+        &mut |_| {},
+    )
+    .unwrap();
+    let Some(rdt_mesher::adaptive::EarlyStop::BelowPrecision { dm_inf, at, .. }) = a.early_stop
+    else {
+        panic!("{:?}", a.early_stop);
+    };
+    assert!(0.27 * dm_inf < 100.0 * 2e-3, "{dm_inf}");
+    // (Round 0's sample, sigma_0 = 0.05: within two spacings of an edge.)
+    let near_face = at.iter().filter(|c| (c.abs() - 0.5).abs() < 0.1).count();
+    assert!(near_face >= 2, "not on an edge: {at:?}");
+    assert!(a.result.stats.criteria_met);
+    assert!(verify::topology::analyze(&a.result.mesh, 1).is_closed_oriented_manifold());
+}

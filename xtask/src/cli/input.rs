@@ -197,6 +197,12 @@ pub fn cli_error(e: PipelineError, spec: &str) -> anyhow::Error {
             "--epsilon needs d_M^inf, which {spec} does not provide: pass --dm-inf VALUE \
              (`cargo xtask paper-table` prints estimates) or use --size"
         ),
+        PipelineError::EpsilonOnTriangles { sharp_edges, .. } => anyhow::anyhow!(
+            "{spec}: --epsilon without --dm-inf on the exact triangles of a mesh: d_M = 0 at \
+             every edge that is not flat ({sharp_edges} edges with normals more than 30 deg \
+             apart), so no eps-sample of them exists; add --smooth-polyhedron to mesh its \
+             smooth approximation to --epsilon, or give --size"
+        ),
         PipelineError::OverBudget {
             forecast,
             budget,

@@ -257,7 +257,14 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         .input
         .clone()
         .unwrap_or_else(|| "implicit:torus".to_string());
-    let opened = input::open(&spec, a.bounding_sphere.as_deref(), &a.surface)?;
+    let req = request(a)?;
+    // A mesh under an --epsilon that estimates d_M: its smooth approximation (the plan
+    // refuses the exact triangles, which have d_M = 0 at their edges; a note says so).
+    let surface = SurfaceOptions {
+        smooth_polyhedron: a.surface.smooth_polyhedron || req.size.estimates_dm(),
+        ..a.surface.clone()
+    };
+    let opened = input::open(&spec, a.bounding_sphere.as_deref(), &surface)?;
     let out_path = a
         .output
         .clone()
@@ -282,7 +289,6 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         outputs.push(("--html", h.as_path()));
     }
     super::output::check_outputs(Some(Path::new(&spec)), &outputs)?;
-    let req = request(a)?;
     let plan = pipeline::plan(&opened, &req).map_err(|e| cli_error(e, &spec))?;
     for n in plan.notes() {
         eprintln!("note: {n}");

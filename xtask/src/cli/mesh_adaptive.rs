@@ -2,7 +2,7 @@
 //! adaptive mode (`rdt_mesher::adaptive`, after the paper's section 6.5): one per round, and
 //! a summary with the certificate's achieved epsilon.
 
-use rdt_mesher::adaptive::Round;
+use rdt_mesher::adaptive::{EarlyStop, Round};
 use rdt_mesher::pipeline::Outcome;
 
 /// The line of one round, printed before it runs.
@@ -36,6 +36,25 @@ pub fn summary(spec: &str, out: &Outcome) -> String {
         });
     let how = if a.converged {
         "stable estimate".to_string()
+    } else if let Some(stop) = a.early_stop {
+        let (next, last) = (a.rounds.len(), a.rounds.len().saturating_sub(1));
+        match stop {
+            EarlyStop::OverBudget { vertices } => format!(
+                "stopped before round {next}: it should need about {vertices} vertices, over \
+                 the vertex budget (--max-vertices); the output is round {last}'s, complete"
+            ),
+            EarlyStop::BelowPrecision {
+                dm_inf,
+                at,
+                tolerance,
+            } => format!(
+                "stopped before round {next}: the d_M estimate falls to {dm_inf:.3e} at \
+                 ({:.4}, {:.4}, {:.4}), within 100 times the oracle's precision {tolerance:.1e} \
+                 (a singular point of S: no eps-sample is in reach; --size gives a uniform \
+                 mesh); the output is round {last}'s, complete",
+                at[0], at[1], at[2]
+            ),
+        }
     } else if let Some(s) = &out.stats.stopped_by {
         format!("stopped by {s}")
     } else {
@@ -45,7 +64,8 @@ pub fn summary(spec: &str, out: &Outcome) -> String {
         "{spec}: adaptive eps = {} ({} rounds, {how}): sigma = max({:.5}, {:.4} d_M), d_M^inf \
          estimate {:.4}; {achieved} (d_M by Voronoi poles of the final sample)",
         a.epsilon,
-        a.rounds.len() + 1,
+        // (Round 0 and the rounds estimated, but for one not started.)
+        a.rounds.len() + usize::from(a.early_stop.is_none()),
         a.floor,
         a.eps_prime,
         a.dm_inf_estimate

@@ -83,6 +83,21 @@ pub enum PipelineError {
         /// The input's name.
         input: String,
     },
+    /// An epsilon that estimates d_M ([`super::SizeRequest::estimates_dm`]) on the exact
+    /// triangles of a mesh ([`super::Input::exact_polyhedron`]): refused before meshing.
+    #[error(
+        "{input}: epsilon without dm_inf on the exact triangles of a mesh: d_M = 0 at every \
+         edge that is not flat ({sharp_edges} edges with normals more than 30 deg apart), so \
+         no loose eps-sample exists and the rounds would refine until a budget stops them; \
+         open the mesh with InputOptions::smooth_polyhedron to mesh its smooth approximation \
+         to epsilon, or request a size"
+    )]
+    EpsilonOnTriangles {
+        /// The input's name.
+        input: String,
+        /// Its edges with normals more than 30 degrees apart.
+        sharp_edges: usize,
+    },
     /// The forecast of the requested size exceeds a budget: refused before meshing.
     #[error(
         "{input}: the forecast is {forecast}, over {budget}: sigma = {fits} fits (or raise \

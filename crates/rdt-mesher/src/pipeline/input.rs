@@ -201,6 +201,10 @@ pub struct Input<'s> {
     /// A closed, oriented, manifold input mesh: its components and genera, which the output
     /// must match (`verify`'s `input-topology` check) or say why not.
     pub source_topology: Option<super::source_topology::SourceTopology>,
+    /// Mesh input meshed as its exact triangles (not `InputOptions::smooth_polyhedron`):
+    /// d_M = 0 at every edge that is not flat, so no loose eps-sample of it exists and
+    /// [`super::plan`] refuses an `--epsilon` that would estimate d_M from it.
+    pub exact_polyhedron: bool,
 }
 
 impl std::fmt::Debug for Input<'_> {
@@ -248,6 +252,7 @@ impl<'s> Input<'s> {
             support_data: None,
             support_normals: None,
             source_topology: None,
+            exact_polyhedron: false,
         }
     }
 
@@ -660,6 +665,7 @@ impl Input<'static> {
         input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);
         input.support_data = Some(support);
         input.source_topology = source_topology;
+        input.exact_polyhedron = !smooth;
         Ok(input)
     }
 }

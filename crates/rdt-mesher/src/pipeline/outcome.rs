@@ -160,6 +160,8 @@ pub struct AdaptiveOutcome {
     pub rounds: Vec<crate::adaptive::Round>,
     /// Stopped on a stable estimate (not on a budget or the round limit).
     pub converged: bool,
+    /// Why the rounds stopped before the next one (the output is the last complete round).
+    pub early_stop: Option<crate::adaptive::EarlyStop>,
 }
 
 /// Sharp edges of a mesh input and how far the output is from them.

@@ -10,7 +10,7 @@
 use super::budget::{self, Budgets};
 use super::error::PipelineError;
 use super::forecast::{AreaEstimate, Forecast};
-use super::input::Input;
+use super::input::{Input, InputKind};
 use super::outcome::{Outcome, SharpEdges, TwoPassOutcome};
 use super::request::{Request, SizeRequest};
 use crate::{Criteria, MeshOptions, Progress, Sizing};
@@ -120,6 +120,11 @@ pub fn plan<'p, 's>(
     })
 }
 
+/// The note of an `--epsilon` (d_M estimated) on a smoothed mesh.
+pub const SMOOTH_FOR_EPSILON: &str = "--epsilon on a mesh: meshing its smooth IMLS approximation \
+     (--smooth-polyhedron); the triangles themselves have d_M = 0 at every edge that is not \
+     flat, so no eps-sample of them exists (--size meshes the triangles)";
+
 /// The size mode of `request`, validated and checked against the budgets, and its forecast.
 fn size_mode(
     input: &Input<'_>,
@@ -128,6 +133,15 @@ fn size_mode(
     notes: &mut Vec<String>,
 ) -> Result<(Mode, Option<Forecast>), PipelineError> {
     let area = || area_of(input, request);
+    if input.kind == InputKind::Polyhedron && request.size.estimates_dm() {
+        if input.exact_polyhedron {
+            return Err(PipelineError::EpsilonOnTriangles {
+                input: input.name.clone(),
+                sharp_edges: input.sharp_edges.len(),
+            });
+        }
+        notes.push(SMOOTH_FOR_EPSILON.to_string());
+    }
     Ok(match request.size {
         SizeRequest::Size(s) => {
             if !(s > 0.0 && s.is_finite()) {
@@ -527,6 +541,7 @@ impl Plan<'_, '_> {
             dm_inf_estimate: a.dm_inf_estimate,
             rounds: a.rounds,
             converged: a.converged,
+            early_stop: a.early_stop,
         });
         Ok(out)
     }

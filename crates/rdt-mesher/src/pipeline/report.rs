@@ -147,6 +147,8 @@ pub fn mesh_report(
                 "notes": out.notes,
                 "stats": out.stats,
                 "verify": out.report,
+                // The adaptive rounds of an --epsilon without d_M^inf (null otherwise).
+                "adaptive": out.adaptive,
             }),
         ),
         Some(tp) => finish(

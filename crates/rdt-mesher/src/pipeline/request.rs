@@ -40,6 +40,27 @@ pub enum SizeRequest {
     },
 }
 
+impl SizeRequest {
+    /// Whether this size estimates d_M from the surface on an input that gives no d_M^inf
+    /// (a mesh): [`SizeRequest::Adaptive`], or [`SizeRequest::Epsilon`] without `dm_inf`.
+    /// The exact triangles of a mesh have d_M = 0 at every edge that is not flat, so front
+    /// ends open a mesh with `InputOptions::smooth_polyhedron` for such a size (and
+    /// [`super::plan`] refuses it on the exact triangles).
+    ///
+    /// ```
+    /// use rdt_mesher::pipeline::SizeRequest;
+    /// assert!(SizeRequest::Epsilon { epsilon: 0.3, dm_inf: None }.estimates_dm());
+    /// assert!(!SizeRequest::Epsilon { epsilon: 0.3, dm_inf: Some(0.1) }.estimates_dm());
+    /// assert!(!SizeRequest::Size(0.1).estimates_dm());
+    /// ```
+    pub fn estimates_dm(&self) -> bool {
+        matches!(
+            self,
+            SizeRequest::Adaptive { .. } | SizeRequest::Epsilon { dm_inf: None, .. }
+        )
+    }
+}
+
 /// A meshing request: everything but the surface. `Request::default()` is what
 /// `cargo xtask mesh` does without options.
 ///
