@@ -65,3 +65,16 @@ def test_every_dtype(dtype):
     vol = ball_volume(24, 8.0) > 0
     m = rdt_mesher.mesh_image(vol.astype(dtype), iso=0.5, size=1.0)
     assert m.to_trimesh().is_watertight
+
+
+def test_epsilon_on_a_mesh_meshes_its_smooth_approximation():
+    # The exact triangles have d_M = 0 at their edges (no eps-sample): mesh_file and remesh
+    # mesh the IMLS approximation for an epsilon without dm_inf, as the CLI does.
+    m = rdt_mesher.mesh_file(f"{FIXTURES}/models/fertility.ply", epsilon=0.5)
+    notes = " ".join(m.report["notes"])
+    assert "--epsilon on a mesh: meshing its smooth IMLS approximation" in notes
+    assert m.report["adaptive"]["converged"] and m.report["genus"] == [4]
+    assert m.report["verify"]["certificate"]["eps_achieved"] <= 0.5
+    r = rdt_mesher.remesh(m.vertices, m.faces, epsilon=0.5)
+    assert "--epsilon on a mesh" in " ".join(r.report["notes"])
+    assert r.to_trimesh().is_watertight

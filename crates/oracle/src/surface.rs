@@ -117,6 +117,14 @@ pub trait Surface: Send + Sync {
         project_robust(self, p)
     }
 
+    /// Whether [`Surface::project`] is the exact closest point of what `verify` measures the
+    /// mesh against (the input triangles of a smoothed polyhedron), so that no search along
+    /// rays can find a nearer one. Default: false (a projection by gradient steps may stop at
+    /// a point that is not the nearest, and `verify` checks it by rays).
+    fn exact_projection(&self) -> bool {
+        false
+    }
+
     /// How far (degrees) the direction of [`Surface::gradient`] at `p` may be from the normal
     /// of the surface the data stands for, because of the data's own rounding. 0 (the
     /// default) for exact backends; images with integer voxels bound it from the rounding of
@@ -173,6 +181,9 @@ impl<S: Surface + ?Sized> Surface for &S {
     }
     fn project(&self, p: DVec3) -> Option<DVec3> {
         (**self).project(p)
+    }
+    fn exact_projection(&self) -> bool {
+        (**self).exact_projection()
     }
     fn normal_uncertainty_deg(&self, p: DVec3) -> f64 {
         (**self).normal_uncertainty_deg(p)

@@ -189,6 +189,9 @@ impl<'a> Measure<'a> {
                 ls.tolerance_at(Precision::Fine, 0.0),
                 ls.tolerance_at(Precision::Coarse, 0.0)
             ),
+            Measure::Project(s) if s.exact_projection() => {
+                "distance to the exact closest point of the input triangles".into()
+            }
             Measure::Project(_) => "distance to the surface's projection of the sample, checked \
                  by rays from the sample where it is farther than half the triangle's longest \
                  edge (an upper bound: a point of S)"
@@ -212,7 +215,9 @@ impl<'a> Measure<'a> {
             Measure::Project(s) => {
                 let q = s.project(p).filter(|q| q.is_finite());
                 let d = q.map(|q| (p - q).length());
-                if d.is_some_and(|d| d <= 0.5 * edge) {
+                // An exact closest point needs no check (rays would measure another surface:
+                // a smoothed mesh's IMLS fit instead of its input triangles).
+                if d.is_some_and(|d| d <= 0.5 * edge || s.exact_projection()) {
                     return Some((q?, d?, Flag::Exact, d?));
                 }
                 let r = oracle::roots::nearest_crossing_on_rays(*s, p)

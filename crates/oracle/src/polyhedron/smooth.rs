@@ -228,4 +228,9 @@ impl Surface for SmoothPolyhedron {
     fn project(&self, p: DVec3) -> Option<DVec3> {
         self.exact.project(p)
     }
+    /// `verify` measures a smoothed mesh against the input triangles: [`Surface::project`]
+    /// is their exact closest point.
+    fn exact_projection(&self) -> bool {
+        true
+    }
 }
