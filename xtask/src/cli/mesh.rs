@@ -46,7 +46,9 @@ pub struct MeshArgs {
     pub size: Option<f64>,
     /// Adaptive size in (0, 1): finer where the surface is curved or close to itself, in two
     /// passes (a uniform pass at epsilon times the smallest feature size, then sizes of 0.9
-    /// epsilon times the local feature size; the paper's section 6.5, d_M^inf and d_M).
+    /// epsilon times the local feature size; the paper's section 6.5, d_M^inf and d_M). On a
+    /// mesh without --dm-inf: its smooth approximation, as --smooth-polyhedron (the triangles
+    /// have no eps-sample).
     #[arg(long, allow_hyphen_values = true, value_parser = epsilon("--epsilon"))]
     pub epsilon: Option<f64>,
     /// The smallest feature size (the paper's d_M^inf: the least distance from the surface to
