@@ -326,25 +326,27 @@ fn predicted_points(eval: &[DistanceAndOld], eps_prime: f64, floor: f64) -> f64 
         .sum()
 }
 
-/// Whether the next round, of floor eps' m (m the estimate of d_M^inf: the least of the
-/// distances `eval` at `sample`) and about `predicted` points, is not started (see
+/// Whether the next round, of floor eps' m (m the round's estimate of d_M^inf, the least of
+/// the distances `eval` at `sample`) and about `predicted` points, is not started (see
 /// [`EarlyStop`]): below [`PRECISION_FACTOR`] times the oracle's precision `tolerance`, or
-/// over the vertex budget. `None` for an empty sample.
+/// over the vertex budget.
 fn stop_before(
-    eps_prime: f64,
+    (eps_prime, m): (f64, f64),
     tolerance: f64,
     predicted: f64,
     base: &MeshOptions,
     sample: &[DVec3],
     eval: &[DistanceAndOld],
 ) -> Option<EarlyStop> {
-    let i = (0..eval.len()).min_by(|&i, &j| eval[i].0.total_cmp(&eval[j].0))?;
-    let m = eval[i].0;
     // (A NaN estimate is not below the precision: the budget and round limits hold.)
     if eps_prime * m < PRECISION_FACTOR * tolerance {
+        // Where the estimate is m (searched only here: a rare stop).
+        let at = eval.iter().position(|e| e.0 == m);
         return Some(EarlyStop::BelowPrecision {
             dm_inf: m,
-            at: sample.get(i).map_or([f64::NAN; 3], |p| p.to_array()),
+            at: at
+                .and_then(|i| sample.get(i))
+                .map_or([f64::NAN; 3], |p| p.to_array()),
             tolerance,
         });
     }
@@ -461,7 +463,7 @@ pub fn adaptive(
             !capped && k >= 2 && settled && predicted < (1.0 + STABLE_GROWTH) * sample.len() as f64;
         // (An early stop keeps the last complete round, not one stopped halfway.)
         let tolerance = surface.tolerance();
-        early_stop = stop_before(eps_prime, tolerance, predicted, base, sample, &eval);
+        early_stop = stop_before((eps_prime, m), tolerance, predicted, base, sample, &eval);
         if k >= MAX_ROUNDS || early_stop.is_some() {
             return Ok(None);
         }
