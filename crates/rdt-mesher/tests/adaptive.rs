@@ -171,6 +171,21 @@ fn adaptive_certificate_matches_the_true_dm_and_two_pass_count() {
         cert.eps_achieved
     );
     assert!(cert.eps_achieved <= eps && truth <= eps);
+    // The S -> mesh side is measured from points of S other than the mesher's sample: the
+    // sample is the mesh's vertices, so from it every distance was 0 (until 2026-12-07 the
+    // report said "S->mesh max 0.000e0 (N given samples)", a figure that measured nothing).
+    let g = out.report.as_ref().unwrap().geometry.as_ref().unwrap();
+    assert!(
+        !g.surface_samples_source.contains("given"),
+        "{}",
+        g.surface_samples_source
+    );
+    assert!(
+        g.surface_to_mesh.max > 0.0 && g.surface_to_mesh.max <= 2.0 * g.mesh_to_surface.max,
+        "S->mesh {:?}, mesh->S {:?}",
+        g.surface_to_mesh,
+        g.mesh_to_surface
+    );
     let two = run(
         &input,
         &Request {

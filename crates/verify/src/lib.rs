@@ -81,8 +81,9 @@ pub enum DmSource {
     Constant(f64),
     /// A known d_M function and its supremum over S (e.g. `|x|` near the unit sphere, sup 1).
     Function { dm: DmFn, sup: f64 },
-    /// Estimated by Voronoi poles ([`MedialAxisEstimate`]) from the dense surface samples
-    /// ([`Options::surface_samples`], else the mesh vertices).
+    /// Estimated by Voronoi poles ([`MedialAxisEstimate`]) from [`Options::dm_samples`], else
+    /// the dense surface samples ([`Options::surface_samples`], unlabelled), else the mesh
+    /// vertices.
     Poles,
 }
 
@@ -118,6 +119,10 @@ pub struct Options {
     /// samples serve the S -> mesh distances only: [`DmSource::Poles`] then estimates d_M
     /// from the mesh vertices.
     pub surface_samples_source: Option<String>,
+    /// Samples of S for [`DmSource::Poles`] alone, when they must not serve the S -> mesh
+    /// distances: the mesher's own sample E (the mesh's vertices, so every S -> mesh
+    /// distance from them is about 0, a figure that measures nothing).
+    pub dm_samples: Option<Vec<DVec3>>,
     /// FAIL the Hausdorff check above this distance (default: report only).
     pub max_hausdorff: Option<f64>,
     /// Requested epsilon of the loose epsilon-sample certificate.
@@ -161,6 +166,7 @@ impl Default for Options {
             samples_per_edge: 4,
             surface_samples: None,
             surface_samples_source: None,
+            dm_samples: None,
             max_hausdorff: None,
             epsilon: None,
             epsilon_derived: false,

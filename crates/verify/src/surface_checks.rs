@@ -128,11 +128,12 @@ fn dm_source(
         DmSource::Function { dm, sup } => Some((dm.clone(), *sup, "given function".into())),
         DmSource::Poles => {
             // Labelled samples (input triangles, noisy points) serve the distances only.
-            let samples = opts
-                .surface_samples
-                .as_deref()
-                .filter(|_| opts.surface_samples_source.is_none())
-                .unwrap_or(&mesh.vertices);
+            let samples = opts.dm_samples.as_deref().unwrap_or_else(|| {
+                opts.surface_samples
+                    .as_deref()
+                    .filter(|_| opts.surface_samples_source.is_none())
+                    .unwrap_or(&mesh.vertices)
+            });
             match MedialAxisEstimate::new(samples, None) {
                 Ok(m) => {
                     let sup = {

@@ -349,7 +349,7 @@ fn certify(s: &dyn Surface, samples: &[glam::DVec3], second: &MeshResult, eps: f
         surface_balls: Some(balls),
         epsilon: Some(eps),
         dm: verify::DmSource::Poles,
-        surface_samples: Some(samples.to_vec()),
+        dm_samples: Some(samples.to_vec()),
         ..Default::default()
     };
     let rep = verify::check_against(&second.mesh, s, &vo);

@@ -523,7 +523,9 @@ impl Plan<'_, '_> {
             let eps = Some(self.request.certify_epsilon.unwrap_or(epsilon));
             let vopts = verify::Options {
                 dm: verify::DmSource::Poles,
-                surface_samples: Some(out.sample.clone()),
+                // The final sample gives d_M; the S -> mesh side is measured from the points
+                // of S found for the mesh samples (the sample is the mesh's own vertices).
+                dm_samples: Some(out.sample.clone()),
                 ..verify_options(self.input, self.request, &out, eps)
             };
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
