@@ -56,7 +56,8 @@ fn one_volume_in_every_format_gives_the_same_mesh() {
             "oblique",
             &[
                 "blob_oblique.nii.gz",
-                "blob_oblique.nrrd",
+                "blob_oblique_pair.hdr",
+                "blob_oblique_pair.img",
                 "blob_oblique_gz.nrrd",
                 "blob_oblique_detached.nhdr",
                 "blob_oblique.mha",
@@ -234,6 +235,32 @@ fn bad_nrrd_files_give_one_error_line() {
     edit(&p, "type: int64", "type: int16");
     edit(&p, "left-posterior-superior", "mars-frame");
     refused(&d, &p, &["space", "mars-frame"]);
+}
+
+/// Volume formats the mesher does not read are named, with the conversion, in one error
+/// line (they said "unknown mesh file extension" and advised renaming the file).
+#[test]
+fn unsupported_volume_formats_name_the_conversion() {
+    let d = scratch("unsupported_volumes");
+    for (name, words) in [
+        (
+            "T1.mgz",
+            &["T1.mgz", "FreeSurfer", "mri_convert", ".nii.gz"][..],
+        ),
+        ("scan.PAR", &["Philips", "dcm2niix"][..]),
+        ("brain.mnc", &["MINC", "mnc2nii"][..]),
+        ("slice.dcm", &["DICOM", "dcm2niix"][..]),
+        ("vol.npy", &["numpy", "mesh_image"][..]),
+    ] {
+        let p = d.join(name);
+        std::fs::write(&p, b"not read").unwrap();
+        refused(&d, &p, words);
+        let line = one_error_line(
+            &xtask(&d, &["mesh", "-q", p.to_str().unwrap(), "--iso", "500"]),
+            &[],
+        );
+        assert!(!line.contains("mesh file extension"), "{line}");
+    }
 }
 
 #[test]

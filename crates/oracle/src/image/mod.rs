@@ -80,7 +80,8 @@ pub use nrrd::read_nrrd;
 pub(crate) use shared::with_view;
 pub use shared::{SharedVoxels, VoxelSource, VoxelView};
 pub use stack::{
-    LoadOptions, RawOptions, load_volume, read_raw, read_slice_folder, read_tiff_stack,
+    IMAGE_EXTENSIONS, LoadOptions, RawOptions, is_image_file_name, load_volume, read_raw,
+    read_slice_folder, read_tiff_stack, unsupported_volume_format,
 };
 pub use surface::{ImageOptions, ImageSurface, trilinear};
 pub use topology::{Join, Node, Topology};

@@ -36,6 +36,79 @@ fn spacing_affine(spacing: Option<[f64; 3]>) -> Result<DAffine3, ImageError> {
     Ok(DAffine3::from_mat3(DMat3::from_diagonal(DVec3::from(s))))
 }
 
+/// The file name endings [`load_volume`] reads as images (lower case; `.gz` variants of the
+/// NIfTI ones included).
+pub const IMAGE_EXTENSIONS: [&str; 13] = [
+    ".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz", ".nrrd", ".nhdr", ".mha", ".mhd",
+    ".tif", ".tiff", ".raw",
+];
+
+/// Whether the file name (any case) ends with one of [`IMAGE_EXTENSIONS`].
+///
+/// ```
+/// use oracle::image::is_image_file_name;
+/// assert!(is_image_file_name("Brain.NII.GZ") && is_image_file_name("anat.hdr"));
+/// assert!(!is_image_file_name("bunny.ply"));
+/// ```
+pub fn is_image_file_name(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    IMAGE_EXTENSIONS.iter().any(|e| lower.ends_with(e))
+}
+
+/// For a volume format this crate does not read (FreeSurfer, Philips, MINC, AFNI, ECAT,
+/// DICOM, numpy), its name and how to convert it to one it reads; `None` for any other
+/// name.
+///
+/// ```
+/// use oracle::image::unsupported_volume_format;
+/// assert!(unsupported_volume_format("T1.mgz").unwrap().0.contains("FreeSurfer"));
+/// assert!(unsupported_volume_format("bunny.ply").is_none());
+/// ```
+pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static str)> {
+    let lower = name.to_ascii_lowercase();
+    const FORMATS: [(&[&str], &str, &str); 7] = [
+        (
+            &[".mgz", ".mgh", ".mgh.gz"],
+            "a FreeSurfer MGH/MGZ volume",
+            "convert it with `mri_convert IN OUT.nii.gz` or nibabel (`nibabel.save(nibabel.load(IN), 'OUT.nii.gz')`)",
+        ),
+        (
+            &[".par", ".rec"],
+            "a Philips PAR/REC volume",
+            "convert it with `dcm2niix` or nibabel's `parrec2nii`",
+        ),
+        (
+            &[".mnc", ".mnc.gz"],
+            "a MINC volume",
+            "convert it with `mnc2nii` or nibabel (`nibabel.save(nibabel.load(IN), 'OUT.nii.gz')`)",
+        ),
+        (
+            &[".head", ".brik", ".brik.gz"],
+            "an AFNI volume",
+            "convert it with `3dAFNItoNIFTI` or nibabel",
+        ),
+        (
+            &[".v"],
+            "an ECAT volume",
+            "convert it with nibabel (`nibabel.save(nibabel.load(IN), 'OUT.nii.gz')`)",
+        ),
+        (
+            &[".dcm", ".ima"],
+            "a DICOM file",
+            "convert the series with `dcm2niix` to a .nii.gz",
+        ),
+        (
+            &[".npy", ".npz"],
+            "a numpy array",
+            "mesh it from Python with `rdt_mesher.mesh_image(array, spacing=...)`, or save it as NIfTI with nibabel",
+        ),
+    ];
+    FORMATS
+        .iter()
+        .find(|(ends, _, _)| ends.iter().any(|e| lower.ends_with(e)))
+        .map(|&(_, what, how)| (what, how))
+}
+
 /// Read a volume from `path`: a folder of slices, an OME-Zarr folder (with `.zattrs`,
 /// `.zgroup` or `zarr.json`), `.nii`/`.nii.gz`/`.hdr`/`.img`, `.nrrd`/`.nhdr`, `.mha`/`.mhd`,
 /// a `.tif`/`.tiff` (multi-page) or, with `opts.raw`, a raw file.
@@ -61,7 +134,13 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let ends = |s: &str| name.ends_with(s);
-    if ends(".nii") || ends(".nii.gz") || ends(".hdr") || ends(".hdr.gz") || ends(".img") {
+    if ends(".nii")
+        || ends(".nii.gz")
+        || ends(".hdr")
+        || ends(".hdr.gz")
+        || ends(".img")
+        || ends(".img.gz")
+    {
         read_nifti(path)
     } else if ends(".nrrd") || ends(".nhdr") {
         read_nrrd(path)

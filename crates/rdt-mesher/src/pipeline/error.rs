@@ -42,6 +42,20 @@ pub enum PipelineError {
         /// The catalog's names.
         names: Vec<&'static str>,
     },
+    /// A volume format the image backend does not read (FreeSurfer, MINC, DICOM, ...).
+    #[error(
+        "{spec}: {what} is not a format this mesher reads; {how}. The images read are \
+         .nii, .nii.gz, .hdr/.img, .nrrd, .nhdr, .mha, .mhd, .tif/.tiff, .raw (with --dims and \
+         --dtype), OME-Zarr folders and folders of slices"
+    )]
+    UnsupportedVolume {
+        /// The path given.
+        spec: String,
+        /// The format it is, e.g. "a FreeSurfer MGH/MGZ volume".
+        what: &'static str,
+        /// How to convert it.
+        how: &'static str,
+    },
     /// A backend refused the input (`context` says which step, `source` why).
     #[error("{context}")]
     Backend {

@@ -356,6 +356,13 @@ impl Input<'static> {
         if is_image_spec(spec, opts.load.raw.is_some()) {
             return open_image(spec, opts);
         }
+        if let Some((what, how)) = oracle::image::unsupported_volume_format(spec) {
+            return Err(PipelineError::UnsupportedVolume {
+                spec: spec.to_string(),
+                what,
+                how,
+            });
+        }
         let as_points = match opts.read_as {
             Some(ReadAs::Points) => true,
             Some(ReadAs::Mesh) => false,
@@ -370,8 +377,9 @@ impl Input<'static> {
 }
 
 /// Whether [`Input::open`] reads the (existing) file or folder `spec` as an image: a folder,
-/// an image extension (`.nii`, `.nii.gz`, `.nrrd`, `.nhdr`, `.mha`, `.mhd`, `.tif`, `.tiff`,
-/// `.raw`), or `raw` (a raw-volume layout is given). A folder is a slice stack or an
+/// an image extension ([`oracle::image::IMAGE_EXTENSIONS`]: `.nii`, `.nii.gz`, a `.hdr`/`.img`
+/// pair, `.nrrd`, `.nhdr`, `.mha`, `.mhd`, `.tif`, `.tiff`, `.raw`), or `raw` (a raw-volume
+/// layout is given). A folder is a slice stack or an
 /// OME-Zarr store.
 ///
 /// ```
@@ -381,14 +389,7 @@ impl Input<'static> {
 /// assert!(is_image_spec("volume.bin", true));
 /// ```
 pub fn is_image_spec(spec: &str, raw: bool) -> bool {
-    let lower = spec.to_lowercase();
-    Path::new(spec).is_dir()
-        || [
-            ".nii", ".nii.gz", ".nrrd", ".nhdr", ".mha", ".mhd", ".tif", ".tiff", ".raw",
-        ]
-        .iter()
-        .any(|e| lower.ends_with(e))
-        || raw
+    Path::new(spec).is_dir() || oracle::image::is_image_file_name(spec) || raw
 }
 
 fn open_implicit(rest: &str, bs: Option<BoundingSphere>) -> Result<Input<'static>, PipelineError> {
