@@ -76,11 +76,14 @@ fn main() {
         if exact.points == scan.points {
             let en = exact.normals.as_ref().unwrap();
             for half in [true, false] {
-                let (mut flipped, mut total) = (0, 0);
+                let (mut flipped, mut total, mut badly) = (0, 0, 0);
                 let mut at = Vec::new();
                 for (i, p) in scan.points.iter().enumerate() {
                     if (p.x < cx) == half {
                         total += 1;
+                        if s.normals()[i].dot(en[i]) < -0.5 {
+                            badly += 1;
+                        }
                         if s.normals()[i].dot(en[i]) < 0.0 {
                             flipped += 1;
                             at.push(*p);
@@ -88,7 +91,8 @@ fn main() {
                     }
                 }
                 println!(
-                    "{} half: {flipped} of {total} estimated normals point inward; e.g. {:?}",
+                    "{} half: {flipped} of {total} estimated normals point inward ({badly} by more \
+                     than 120 degrees from the source's); e.g. {:?}",
                     if half { "sparse" } else { "dense" },
                     at.iter()
                         .step_by((at.len() / 4).max(1))
