@@ -148,6 +148,10 @@ pub struct Options {
     /// vertex lies on their voxel-scan components, those count as dropped, not missed
     /// ([`scan_components::account`]).
     pub dropped_points: Vec<DVec3>,
+    /// Images: of those removed pieces, a point of each that the repair removed as a sliver
+    /// (not on request); listed here instead of in `dropped_points`, so that the accounting
+    /// says which rule removed a component.
+    pub sliver_points: Vec<DVec3>,
     /// Point sets and meshes: the triangles of the output's components removed because the
     /// input data does not support them (the mesher's `drop_unsupported_component`
     /// decisions). Such a component is a component of S (the point-set or winding-number
@@ -176,6 +180,7 @@ impl Default for Options {
             seed: 0,
             seed_tolerance: None,
             dropped_points: Vec::new(),
+            sliver_points: Vec::new(),
             dropped_triangles: Vec::new(),
         }
     }

@@ -77,8 +77,12 @@ pub struct ScanComponents {
     pub split: usize,
     /// Scan components with vertices on them but no piece of their own.
     pub joined: usize,
-    /// Scan components removed on request.
+    /// Scan components removed by a stated rule of the mesher: on request
+    /// (`--min-component`) or as slivers (see `dropped_slivers`).
     pub dropped: usize,
+    /// Of `dropped`, those whose pieces the repair removed as slivers (pieces with no
+    /// interior vertex: components the size does not resolve), not on request.
+    pub dropped_slivers: usize,
     /// Scan components with no piece, not removed on request.
     pub missed: usize,
     /// Scan components of zero volume (not surfaces), without a piece.
@@ -114,7 +118,15 @@ impl ScanComponents {
         for (n, what) in [
             (self.split, "split into pieces"),
             (self.joined, "joined to a neighbour's piece"),
-            (self.dropped, "dropped (--min-component)"),
+            (
+                self.dropped - self.dropped_slivers,
+                "dropped (--min-component)",
+            ),
+            (
+                self.dropped_slivers,
+                "dropped as slivers (pieces with no interior vertex: the size does not resolve \
+                 them; a smaller --size keeps them)",
+            ),
             (self.missed, "missed"),
             (
                 self.vanishing,
@@ -133,7 +145,12 @@ impl ScanComponents {
 /// The accounting of `mesh` against `image`'s voxel scan; `dropped`: a point of each mesh
 /// piece removed by a stated rule (their components count as dropped, not missed, when no
 /// vertex of the mesh is on them).
-pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) -> ScanComponents {
+pub fn account(
+    mesh: &TriMesh,
+    image: &ImageSurface,
+    dropped: &[glam::DVec3],
+    slivers: &[glam::DVec3],
+) -> ScanComponents {
     let topo = image.topology();
     let n = topo.component_seeds.len();
     let pieces = crate::topology::vertex_components(mesh);
@@ -165,10 +182,13 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
             _ => unassigned += 1,
         }
     }
-    let mut was_dropped = vec![false; n];
-    for &p in dropped {
-        if let Some(c) = image.component_of(p).filter(|&c| c < n) {
-            was_dropped[c] = true;
+    // 1: on request; 2: a sliver only (a request wins where both are).
+    let mut was_dropped = vec![0u8; n];
+    for (points, why) in [(slivers, 2), (dropped, 1)] {
+        for &p in points {
+            if let Some(c) = image.component_of(p).filter(|&c| c < n) {
+                was_dropped[c] = why;
+            }
         }
     }
     let mut components: Vec<ScanComponent> = (0..n)
@@ -177,7 +197,7 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
             let fate = match per[i] {
                 0 if vanishing => Fate::Vanishing,
                 0 if touched[i] => Fate::Joined,
-                0 if was_dropped[i] => Fate::Dropped,
+                0 if was_dropped[i] > 0 => Fate::Dropped,
                 0 => Fate::Missed,
                 1 => return None,
                 _ => Fate::Split,
@@ -223,6 +243,10 @@ pub fn account(mesh: &TriMesh, image: &ImageSurface, dropped: &[glam::DVec3]) ->
         split: count(Fate::Split),
         joined: count(Fate::Joined),
         dropped: count(Fate::Dropped),
+        dropped_slivers: components
+            .iter()
+            .filter(|c| c.fate == Fate::Dropped && was_dropped[c.index] == 2)
+            .count(),
         missed: count(Fate::Missed),
         vanishing: count(Fate::Vanishing),
         unassigned_pieces: unassigned,

@@ -599,9 +599,15 @@ fn verify_options(
             .iter()
             .filter_map(|d| match d.kind {
                 crate::DecisionKind::DropSmallComponent { vertex, .. } => Some(vertex),
-                crate::DecisionKind::DropSliver => Some(d.center),
                 _ => None,
             })
+            .collect(),
+        sliver_points: out
+            .stats
+            .topology_decisions
+            .iter()
+            .filter(|d| matches!(d.kind, crate::DecisionKind::DropSliver))
+            .map(|d| d.center)
             .collect(),
         dropped_triangles: out.dropped_triangles.clone(),
         ..Default::default()
