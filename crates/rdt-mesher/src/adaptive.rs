@@ -97,9 +97,13 @@ pub struct Round {
 pub struct Adaptive {
     /// The mesh of the last round.
     pub result: MeshResult,
-    /// The rounds after round 0, in order; the last one may be the stopping check only
-    /// (`stopped_on_stable`).
+    /// The rounds after round 0, in order; the last one may be an estimate only, its round
+    /// not run ([`Adaptive::last_estimate_only`]).
     pub rounds: Vec<Round>,
+    /// The last of `rounds` is an estimate whose round was not run: it found the estimate
+    /// stable, or an early stop; the output is then the round before it. (False when every
+    /// round estimated was run, e.g. a last round of few points, or the round limit.)
+    pub last_estimate_only: bool,
     /// eps' = 0.9 eps.
     pub eps_prime: f64,
     /// The constant size of round 0.
@@ -420,6 +424,7 @@ pub fn adaptive(
     let mut last_round = false;
     let mut last_poles: Option<LastPoles> = None;
     let mut early_stop = None;
+    let mut estimate_only = false;
     let result = crate::mesher::mesh_in_rounds(surface, &opts, progress, &mut |end| {
         let RoundEnd { sample, tri, sizes } = end;
         if last_round {
@@ -456,6 +461,7 @@ pub fn adaptive(
         rounds.push(round);
         if stable {
             converged = true;
+            estimate_only = true;
             return Ok(None);
         }
         // Few points to add: refine to this estimate and stop (no estimate after it).
@@ -465,6 +471,7 @@ pub fn adaptive(
         let tolerance = surface.tolerance();
         early_stop = stop_before((eps_prime, m), tolerance, predicted, base, sample, &eval);
         if k >= MAX_ROUNDS || early_stop.is_some() {
+            estimate_only = true;
             return Ok(None);
         }
         last_capped = capped;
@@ -484,6 +491,7 @@ pub fn adaptive(
     Ok(Adaptive {
         result,
         rounds,
+        last_estimate_only: estimate_only,
         eps_prime,
         sigma0,
         medial: f.medial.clone(),

@@ -348,6 +348,14 @@ fn a_round_over_the_vertex_budget_is_not_started() {
     assert!(st.criteria_met && st.stopped_by.is_none(), "{st:?}");
     assert!(a.result.mesh.vertices.len() <= cap);
     assert!(verify::topology::analyze(&a.result.mesh, 1).is_closed_oriented_manifold());
+    // The last round was an estimate only: the output is the sample it was made from (the
+    // summary counted it as run until 2026-12-07: "11 rounds, stopped before round 11").
+    assert!(a.last_estimate_only);
+    assert_eq!(a.result.sample.len(), a.rounds.last().unwrap().vertices);
+    // A stable estimate is not run either.
+    let b = adaptive(&s, 0.3, &MeshOptions::default(), &mut |_| {}, &mut |_| {}).unwrap();
+    assert!(b.converged && b.last_estimate_only, "{:?}", b.rounds);
+    assert_eq!(b.result.sample.len(), b.rounds.last().unwrap().vertices);
 }
 
 /// Where the d_M estimate falls within 100 times the oracle's precision (a cube's edges,

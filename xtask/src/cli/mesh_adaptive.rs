@@ -8,9 +8,10 @@ use rdt_mesher::pipeline::Outcome;
 /// The line of one round, printed before it runs.
 pub fn round_line(r: &Round) -> String {
     format!(
-        "round {}: {} vertices, d_M^inf estimate {:.4}, sigma = max({:.5}, eps' d_M){}, \
-         {} medial points, {:.2} s",
+        "round {} (from round {}'s {} vertices): d_M^inf estimate {:.4}, sigma = max({:.5}, \
+         eps' d_M){}, {} medial points, {:.2} s",
         r.round,
+        r.round.saturating_sub(1),
         r.vertices,
         r.dm_inf_estimate,
         r.floor,
@@ -65,7 +66,7 @@ pub fn summary(spec: &str, out: &Outcome) -> String {
          estimate {:.4}; {achieved} (d_M by Voronoi poles of the final sample)",
         a.epsilon,
         // (Round 0 and the rounds estimated, but for one not started.)
-        a.rounds.len() + usize::from(a.early_stop.is_none()),
+        a.rounds.len() + usize::from(!a.last_estimate_only),
         a.floor,
         a.eps_prime,
         a.dm_inf_estimate

@@ -158,6 +158,9 @@ pub struct AdaptiveOutcome {
     pub dm_inf_estimate: f64,
     /// The rounds after round 0.
     pub rounds: Vec<crate::adaptive::Round>,
+    /// The last of `rounds` is an estimate whose round was not run
+    /// ([`crate::adaptive::Adaptive::last_estimate_only`]).
+    pub last_estimate_only: bool,
     /// Stopped on a stable estimate (not on a budget or the round limit).
     pub converged: bool,
     /// Why the rounds stopped before the next one (the output is the last complete round).

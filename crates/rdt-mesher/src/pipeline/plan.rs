@@ -542,6 +542,7 @@ impl Plan<'_, '_> {
             floor: a.floor,
             dm_inf_estimate: a.dm_inf_estimate,
             rounds: a.rounds,
+            last_estimate_only: a.last_estimate_only,
             converged: a.converged,
             early_stop: a.early_stop,
         });
