@@ -315,3 +315,37 @@ fn a_smoothed_mesh_is_measured_against_its_input_triangles() {
     );
     assert!(ms > 0.01, "the rounded corners are measured: {ms:e}");
 }
+
+/// On the exact triangles of a mesh the S -> mesh side of the Hausdorff figure is measured
+/// from samples of the input triangles, so it sees what the mesh cuts off: the tetrahedron at
+/// size 0.06928 is 0.14 from its corners (the sharp-edge line says so). Until 2026-12-07 it
+/// was measured from the points of S found for the mesh samples, and the report said 3.2e-2.
+#[test]
+fn the_hausdorff_figure_of_a_mesh_input_sees_its_cut_corners() {
+    use rdt_mesher::pipeline::{Input, POLYHEDRON_SAMPLES, Request, SizeRequest, run};
+    let path = format!(
+        "{}/../../fixtures/meshes/tetrahedron.ply",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let input = Input::open(&path, &Default::default()).unwrap();
+    let req = Request {
+        size: SizeRequest::Size(0.06928),
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+    let cut = *out
+        .sharp_edges
+        .as_ref()
+        .unwrap()
+        .deviation
+        .as_ref()
+        .unwrap();
+    let g = out.report.as_ref().unwrap().geometry.clone().unwrap();
+    eprintln!(
+        "cut corners {cut:.4e}; S->mesh {:.4e} ({})",
+        g.surface_to_mesh.max, g.surface_samples_source
+    );
+    assert!(cut > 0.1, "{cut}");
+    assert!(g.surface_samples_source.ends_with(POLYHEDRON_SAMPLES));
+    assert!(g.hausdorff >= 0.9 * cut, "{} vs {cut}", g.hausdorff);
+}

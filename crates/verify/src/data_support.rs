@@ -147,6 +147,9 @@ pub struct DataSupport {
     /// Estimated noise ν (normal spread of the data).
     pub noise: f64,
     pub median_band: f64,
+    /// The floor of every point's band ([`SupportOptions::min_band`]: `mesh` uses half the
+    /// size asked, `verify --against` half the mesh's mean edge).
+    pub min_band: f64,
     /// Share of the whole mesh area within the band.
     pub supported_share: f64,
     /// Every mesh component, in the order of [`crate::topology::vertex_components`].
@@ -199,10 +202,12 @@ impl DataSupport {
     pub fn detail(&self) -> String {
         let fmt_p = |p: [f64; 3]| format!("({:.4}, {:.4}, {:.4})", p[0], p[1], p[2]);
         let mut s = format!(
-            "{:.1}% of the area within the band of {} data points (median band {:.3e} = 2 x spacing {:.3e} + 3 x noise {:.3e})",
+            "{:.1}% of the area within the band of {} data points (median band {:.3e}; a point's \
+             band: 2 x spacing + 3 x noise, at least {:.3e}; median spacing {:.3e}, noise {:.3e})",
             100.0 * self.supported_share,
             self.data_points,
             self.median_band,
+            self.min_band,
             self.median_spacing,
             self.noise
         );
@@ -521,6 +526,7 @@ pub fn data_support_oriented(
         median_spacing: med_spacing,
         noise: band.noise,
         median_band: band.median_band(),
+        min_band: opts.min_band,
         supported_share: if total_area > 0.0 {
             supported_area / total_area
         } else {

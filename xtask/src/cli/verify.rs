@@ -181,15 +181,12 @@ fn reference_samples(
 ) -> Option<(Vec<glam::DVec3>, String)> {
     use rdt_mesher::pipeline::InputKind;
     match opened.kind {
-        InputKind::Polyhedron if !o.smooth_polyhedron => {
-            let m = meshio::read(spec).ok()?;
-            let mut pts = Vec::new();
-            for t in &m.triangles {
-                let [a, b, c] = t.map(|i| m.vertices[i as usize]);
-                verify::distance::triangle_samples(a, b, c, 4, &mut pts);
-            }
-            Some((pts, "samples of the input triangles (S itself)".into()))
-        }
+        // The samples `mesh` measures from: those of the triangles bounding the solid (an
+        // interior membrane or the buried faces of overlapping shells are not S).
+        InputKind::Polyhedron if !o.smooth_polyhedron => opened
+            .support_data
+            .clone()
+            .map(|pts| (pts, rdt_mesher::pipeline::POLYHEDRON_SAMPLES.into())),
         InputKind::PointSet => {
             let pts = if spec.to_ascii_lowercase().ends_with(".xyz") {
                 oracle::pointset::read_xyz(spec).ok()?.points

@@ -183,7 +183,8 @@ pub struct Input<'s> {
     pub max_control_points: usize,
     /// What was found when opening (printed by the CLI as `note:` lines).
     pub notes: Vec<String>,
-    /// Mesh input: its sharp edges (normals more than [`SHARP_DEG`] apart).
+    /// Mesh input: its sharp edges (normals more than [`SHARP_DEG`] apart); on a broken mesh
+    /// (open, crossing itself), only their parts on the boundary of the solid that is meshed.
     pub sharp_edges: Vec<(DVec3, DVec3)>,
     /// What was measured when opening.
     pub stats: InputStats,
@@ -573,6 +574,30 @@ impl Input<'static> {
 /// Samples of an input mesh's triangles for the `data-support` check (about this many).
 const MESH_SUPPORT_SAMPLES: usize = 40_000;
 
+/// The parts of `edges` on the boundary of the solid {w > 1/2} of a broken mesh: each edge
+/// cut in [`EDGE_PIECES`], a piece kept where its midpoint bounds the solid (an edge buried
+/// in an overlapping shell is not an edge of S: the sharp-edge line measured 0.5 on the
+/// union of two overlapping unit cubes, whose mesh is right).
+fn edges_bounding_the_solid(
+    poly: &oracle::polyhedron::PolyhedronSurface,
+    edges: &[(DVec3, DVec3)],
+) -> Vec<(DVec3, DVec3)> {
+    use rayon::prelude::*;
+    edges
+        .par_iter()
+        .flat_map_iter(|&(a, b)| {
+            (0..EDGE_PIECES).filter_map(move |k| {
+                let t = |i: usize| a + (b - a) * (i as f64 / EDGE_PIECES as f64);
+                let (p, q) = (t(k), t(k + 1));
+                poly.bounds_solid_at(0.5 * (p + q)).then_some((p, q))
+            })
+        })
+        .collect()
+}
+
+/// Pieces of a sharp edge in [`edges_bounding_the_solid`].
+const EDGE_PIECES: usize = 8;
+
 fn open_mesh(spec: &str, smooth: bool) -> Result<Input<'static>, PipelineError> {
     let path = Path::new(spec);
     let mesh = meshio::read(path).map_err(PipelineError::read)?;
@@ -609,13 +634,16 @@ impl Input<'static> {
             .then(|| super::source_topology::SourceTopology::of(&welded))
             .flatten();
         let size = poly.suggested_size();
-        let sharp_edges = poly.sharp_edges(SHARP_DEG);
+        let mut sharp_edges = poly.sharp_edges(SHARP_DEG);
+        let sharp_count = sharp_edges.len();
         // The data the output must stay near: samples of the input triangles, on a broken
         // mesh only those on the boundary of the solid {w > 1/2} that is meshed (an interior
         // membrane or the inner sheet of overlapping shells is not part of S: `data-support`
         // FAILed `sphere_membrane.off` at every size, its membrane "not covered").
         let mut support = verify::data_support::mesh_samples(mesh, MESH_SUPPORT_SAMPLES);
+        // (A closed mesh crossing itself is not watertight for the oracle either.)
         if !poly.is_watertight() {
+            sharp_edges = edges_bounding_the_solid(&poly, &sharp_edges);
             use rayon::prelude::*;
             let kept: Vec<_> = support
                 .par_iter()
@@ -632,7 +660,7 @@ impl Input<'static> {
             mesh.vertices.len(),
             mesh.triangles.len(),
             polyhedron_summary(&pstats),
-            sharp_edges.len(),
+            sharp_count,
         )];
         let area = AreaEstimate {
             area: super::forecast::triangle_area(mesh),
@@ -660,7 +688,7 @@ impl Input<'static> {
         );
         input.default_size = Some(size);
         input.notes = notes;
-        input.stats.sharp_edges = Some(sharp_edges.len());
+        input.stats.sharp_edges = Some(sharp_count);
         input.stats.polyhedron = Some(pstats);
         input.sharp_edges = sharp_edges;
         input.area = (area.area > 0.0 && area.area.is_finite()).then_some(area);

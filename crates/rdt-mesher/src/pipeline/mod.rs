@@ -57,7 +57,9 @@ pub use input::{
 pub use outcome::{
     AdaptiveOutcome, Failure, Outcome, SharpEdges, Stage, TwoPassOutcome, Verdict, verify_balls,
 };
-pub use plan::{Event, Plan, SECOND_SKIPPED, SMOOTH_FOR_EPSILON, data_support, plan};
+pub use plan::{
+    Event, POLYHEDRON_SAMPLES, Plan, SECOND_SKIPPED, SMOOTH_FOR_EPSILON, data_support, plan,
+};
 pub use request::{Request, SizeRequest, cgal_criteria};
 
 /// Mesh `input` as `request` asks: [`plan`] then [`Plan::execute`].

@@ -192,7 +192,12 @@ pub struct SharpEdges {
 }
 
 impl SharpEdges {
-    pub(crate) fn measure(edges: &[(DVec3, DVec3)], mesh: &TriMesh, sigma: f64) -> SharpEdges {
+    pub(crate) fn measure(
+        edges: &[(DVec3, DVec3)],
+        input_edges: usize,
+        mesh: &TriMesh,
+        sigma: f64,
+    ) -> SharpEdges {
         let dev = oracle::polyhedron::PolyhedronSurface::new(mesh)
             .map(|out| oracle::polyhedron::sharp_edge_deviation(edges, &out, sigma / 4.0))
             .map_err(|e| e.to_string());
@@ -205,7 +210,7 @@ impl SharpEdges {
             .iter()
             .fold((lo, hi), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         SharpEdges {
-            input_edges: edges.len(),
+            input_edges,
             deviation: dev,
             bbox_diagonal: (diag.1 - diag.0).length(),
             edges: edges.to_vec(),

@@ -407,7 +407,8 @@ impl Plan<'_, '_> {
             out.notes.push(n);
         }
         if !self.input.sharp_edges.is_empty() {
-            let s = SharpEdges::measure(&self.input.sharp_edges, &out.mesh, sigma);
+            let n = (self.input.stats.sharp_edges).unwrap_or(self.input.sharp_edges.len());
+            let s = SharpEdges::measure(&self.input.sharp_edges, n, &out.mesh, sigma);
             out.notes.push(s.to_string());
             out.sharp_edges = Some(s);
         }
@@ -464,10 +465,15 @@ impl Plan<'_, '_> {
         if self.request.verify {
             progress(Event::Verifying);
             let eps = Some(self.request.certify_epsilon.unwrap_or(epsilon));
+            // d_M from the first pass's vertices, and S -> mesh from them too unless the
+            // input's own samples are S (an exact polyhedron).
+            let base = verify_options(self.input, self.request, &out, eps);
+            let first = tp.first.mesh.vertices.clone();
             let vopts = verify::Options {
                 dm: verify::DmSource::Poles,
-                surface_samples: Some(tp.first.mesh.vertices.clone()),
-                ..verify_options(self.input, self.request, &out, eps)
+                dm_samples: Some(first.clone()),
+                surface_samples: base.surface_samples.clone().or(Some(first)),
+                ..base
             };
             let mut report = verify::check_against(&out.mesh, surface, &vopts);
             let dropped = super::unsupported::dropped(&out.stats);
@@ -574,6 +580,10 @@ pub fn data_support(
     verify::data_support::add_check_oriented(report, mesh, data, normals, dropped, &opts);
 }
 
+/// How the S -> mesh samples of an exact polyhedron are described in the report.
+pub const POLYHEDRON_SAMPLES: &str =
+    "area-uniform samples of the input triangles bounding the solid (S itself)";
+
 /// The verifier's options common to both modes: the mesh's surface balls, the certified
 /// `epsilon`, the requested angle bound (less 1e-9 for rounding), the control points as
 /// component seeds, the request's seed, and a point of each component dropped by a stated
@@ -587,7 +597,19 @@ fn verify_options(
     epsilon: Option<f64>,
 ) -> verify::Options {
     let angle = request.min_angle_deg;
+    // The exact triangles of a mesh are S itself: the S -> mesh side is measured from their
+    // samples (those bounding the solid), as `verify --against` does; from the points of S
+    // found for the mesh samples it missed the cut corners (the tetrahedron at size 0.069:
+    // 3.2e-2 where its corners are 0.14 from the mesh).
+    let (surface_samples, surface_samples_source) = match &input.support_data {
+        Some(s) if input.exact_polyhedron => {
+            (Some(s.clone()), Some(POLYHEDRON_SAMPLES.to_string()))
+        }
+        _ => (None, None),
+    };
     verify::Options {
+        surface_samples,
+        surface_samples_source,
         samples_per_edge: 2,
         surface_balls: Some(super::verify_balls(&out.balls)),
         epsilon,
