@@ -147,8 +147,7 @@ pub struct DataSupport {
     /// Estimated noise ν (normal spread of the data).
     pub noise: f64,
     pub median_band: f64,
-    /// The floor of every point's band ([`SupportOptions::min_band`]: `mesh` uses half the
-    /// size asked, `verify --against` half the mesh's mean edge).
+    /// The floor of every point's band ([`SupportOptions::min_band`]).
     pub min_band: f64,
     /// Share of the whole mesh area within the band.
     pub supported_share: f64,

@@ -26,7 +26,28 @@ use glam::DVec3;
 /// Most samples in one triangle-free stretch of a segment.
 const MAX_STRETCH_SAMPLES: usize = 16;
 
+/// Pieces of an edge in [`PolyhedronSurface::boundary_parts`].
+const EDGE_PIECES: usize = 8;
+
 impl PolyhedronSurface {
+    /// The parts of `edges` (segments on the input triangles, e.g. its sharp edges) on the
+    /// boundary of the solid {w > 1/2}: each edge cut in eight, a piece kept where its
+    /// midpoint bounds the solid ([`Self::bounds_solid_at`]). An edge buried in an
+    /// overlapping shell is not an edge of the solid's surface.
+    pub fn boundary_parts(&self, edges: &[(DVec3, DVec3)]) -> Vec<(DVec3, DVec3)> {
+        use rayon::prelude::*;
+        edges
+            .par_iter()
+            .flat_map_iter(|&(a, b)| {
+                (0..EDGE_PIECES).filter_map(move |k| {
+                    let t = |i: usize| a + (b - a) * (i as f64 / EDGE_PIECES as f64);
+                    let (p, q) = (t(k), t(k + 1));
+                    self.bounds_solid_at(0.5 * (p + q)).then_some((p, q))
+                })
+            })
+            .collect()
+    }
+
     /// Whether the triangle with leaf-order index `k` separates {w > 1/2} from its complement
     /// at the point `p` of it: `1/2 − w` has opposite signs at `p ± δ n` (`n` its unit
     /// normal, `δ` 1e-6 of the bounding box diagonal).

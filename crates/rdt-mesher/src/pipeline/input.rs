@@ -574,30 +574,6 @@ impl Input<'static> {
 /// Samples of an input mesh's triangles for the `data-support` check (about this many).
 const MESH_SUPPORT_SAMPLES: usize = 40_000;
 
-/// The parts of `edges` on the boundary of the solid {w > 1/2} of a broken mesh: each edge
-/// cut in [`EDGE_PIECES`], a piece kept where its midpoint bounds the solid (an edge buried
-/// in an overlapping shell is not an edge of S: the sharp-edge line measured 0.5 on the
-/// union of two overlapping unit cubes, whose mesh is right).
-fn edges_bounding_the_solid(
-    poly: &oracle::polyhedron::PolyhedronSurface,
-    edges: &[(DVec3, DVec3)],
-) -> Vec<(DVec3, DVec3)> {
-    use rayon::prelude::*;
-    edges
-        .par_iter()
-        .flat_map_iter(|&(a, b)| {
-            (0..EDGE_PIECES).filter_map(move |k| {
-                let t = |i: usize| a + (b - a) * (i as f64 / EDGE_PIECES as f64);
-                let (p, q) = (t(k), t(k + 1));
-                poly.bounds_solid_at(0.5 * (p + q)).then_some((p, q))
-            })
-        })
-        .collect()
-}
-
-/// Pieces of a sharp edge in [`edges_bounding_the_solid`].
-const EDGE_PIECES: usize = 8;
-
 fn open_mesh(spec: &str, smooth: bool) -> Result<Input<'static>, PipelineError> {
     let path = Path::new(spec);
     let mesh = meshio::read(path).map_err(PipelineError::read)?;
@@ -643,7 +619,7 @@ impl Input<'static> {
         let mut support = verify::data_support::mesh_samples(mesh, MESH_SUPPORT_SAMPLES);
         // (A closed mesh crossing itself is not watertight for the oracle either.)
         if !poly.is_watertight() {
-            sharp_edges = edges_bounding_the_solid(&poly, &sharp_edges);
+            sharp_edges = poly.boundary_parts(&sharp_edges);
             use rayon::prelude::*;
             let kept: Vec<_> = support
                 .par_iter()
