@@ -171,37 +171,17 @@ fn an_interior_membrane_is_not_data_the_remesh_must_cover() {
 /// `verify --max-hausdorff 0.05` FAILed it (the real-data sweep of 2026-12-07).
 #[test]
 fn buried_faces_and_edges_of_overlapping_shells_are_not_measured() {
-    let cube = |dx: f64| {
-        let v: Vec<glam::DVec3> = (0..8)
-            .map(|i| glam::DVec3::new((i & 1) as f64 + dx, ((i >> 1) & 1) as f64, (i >> 2) as f64))
-            .collect();
-        let t: [[u32; 3]; 12] = [
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        (v, t)
-    };
-    let (mut vertices, mut triangles) = (Vec::new(), Vec::new());
-    for dx in [0.0, 0.5] {
-        let (v, t) = cube(dx);
-        let base = vertices.len() as u32;
-        vertices.extend(v);
-        triangles.extend(t.iter().map(|f| f.map(|i| i + base)));
-    }
-    let mesh = meshio::TriMesh {
-        vertices,
-        triangles,
-    };
+    let cube = meshio::read(format!(
+        "{}/../../fixtures/meshes/cube.off",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let mut mesh = cube.clone();
+    let n = cube.vertices.len() as u32;
+    mesh.vertices
+        .extend(cube.vertices.iter().map(|&v| v + glam::DVec3::X * 0.5));
+    mesh.triangles
+        .extend(cube.triangles.iter().map(|t| t.map(|i| i + n)));
     let input = Input::mesh(&mesh, "two_cubes", "two_cubes".into(), false).unwrap();
     let out = run(&input, &Default::default()).expect("meshing");
     let r = out.report.as_ref().expect("verified");
