@@ -237,6 +237,9 @@ pub struct HausdorffBound {
     /// eps < 0.096 (epsilon_1): the theorem applies.
     pub applicable: bool,
     pub holds: bool,
+    /// The measured figure is over the bound by less than its precision (the true figure
+    /// may be on either side): neither PASS nor FAIL.
+    pub undecided: bool,
 }
 
 /// Lemma 3.1's bound, in degrees, on the angle between the line normal to a restricted
@@ -270,5 +273,6 @@ pub fn hausdorff_bound(eps: f64, dm_sup: f64, hausdorff: f64) -> HausdorffBound 
         hausdorff,
         applicable: eps < EPSILON_1,
         holds: hausdorff <= bound,
+        undecided: false,
     }
 }

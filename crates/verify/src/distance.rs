@@ -94,6 +94,9 @@ pub struct Geometry {
     pub mesh_to_surface: DistanceStats,
     /// How the mesh -> S distances were measured.
     pub mesh_to_surface_method: String,
+    /// The reported mesh -> S maximum is at most this much above the true one (images: the
+    /// branch and bound's tolerance there; 0 where the distances are exact).
+    pub mesh_to_surface_precision: f64,
     /// Samples for which no point of S was found: not measured (excluded from the figures;
     /// the `hausdorff` check FAILs on them).
     pub projection_failures: usize,
@@ -546,11 +549,16 @@ pub(crate) fn geometry_labelled(
         ),
     };
     let mesh_to_surface = m2s.stats();
+    let m2s_max = mesh_to_surface.max;
     let hausdorff = mesh_to_surface.max.max(surface_to_mesh.max);
     let bounding_radius = surface.bounding_sphere().radius;
     Geometry {
         mesh_to_surface,
         mesh_to_surface_method: measure.describe(),
+        mesh_to_surface_precision: match &measure {
+            Measure::LevelSet(ls) => ls.tolerance_at(Precision::Fine, m2s_max),
+            Measure::Project(_) => 0.0,
+        },
         projection_failures: n.fails,
         corrected_projections: n.corrected,
         bounded_only: n.bounded,

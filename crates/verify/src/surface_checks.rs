@@ -209,7 +209,18 @@ fn certificate_checks(
         _ => detail,
     };
     r.push("loose-epsilon", status, detail);
-    let hb = certificate::hausdorff_bound(cert.eps_achieved, *sup, hausdorff.unwrap_or(f64::NAN));
+    let mut hb =
+        certificate::hausdorff_bound(cert.eps_achieved, *sup, hausdorff.unwrap_or(f64::NAN));
+    // The least the true figure can be: the exact S -> mesh side, and the mesh -> S maximum
+    // less its precision (an image's branch and bound reports an upper bound).
+    let least = r.geometry.as_ref().and_then(|g| {
+        (g.bounded_only == 0).then(|| {
+            g.surface_to_mesh
+                .max
+                .max(g.mesh_to_surface.max - g.mesh_to_surface_precision)
+        })
+    });
+    hb.undecided = !hb.holds && least.is_some_and(|l| l <= hb.bound);
     let figures = format!(
         "measured Hausdorff {:.3e} vs 4.5 eps^2 d_M^sup = {:.3e} (eps {:.4}, d_M^sup {:.4}){note}",
         hb.hausdorff, hb.bound, hb.eps, hb.dm_sup
@@ -226,6 +237,18 @@ fn certificate_checks(
         (
             Status::Info,
             format!("{figures}; no guarantee: the loose epsilon-sample certificate does not hold"),
+        )
+    } else if hb.applicable && hb.undecided {
+        (
+            Status::Info,
+            format!(
+                "{figures}; not decided: the measured figure is an upper bound within {:.1e} \
+                 (the true one is at least {:.3e}), on both sides of the bound",
+                r.geometry
+                    .as_ref()
+                    .map_or(0.0, |g| g.mesh_to_surface_precision),
+                least.unwrap_or(f64::NAN)
+            ),
         )
     } else if hb.applicable {
         (pass_fail(hb.holds), figures)
