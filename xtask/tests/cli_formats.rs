@@ -263,6 +263,16 @@ fn unsupported_volume_formats_name_the_conversion() {
     }
 }
 
+/// A colour TIFF stored plane by plane decoded as its red plane alone and was meshed
+/// without a word (scikit-image's `multipage_rgb.tif`, the real-data sweep of 2026-12-07):
+/// it is refused by its colour type.
+#[test]
+fn a_colour_tiff_is_refused_not_meshed_from_one_channel() {
+    let d = scratch("colour_tiff");
+    let p = copy("skimage_multipage_rgb.tif", &d);
+    refused(&d, &p, &["skimage_multipage_rgb.tif", "RGB", "not grey"]);
+}
+
 #[test]
 fn bad_metaimage_files_give_one_error_line() {
     let d = scratch("bad_mha");

@@ -382,6 +382,19 @@ pub fn read_tiff_stack(path: &Path, spacing: Option<[f64; 3]>) -> Result<Volume,
                 found_h: ph,
             });
         }
+        // A colour page stored plane by plane decodes as its first plane alone: refuse it
+        // by its colour type, not by the sample count.
+        let colour = dec.colortype().map_err(dec_err)?;
+        if !matches!(colour, tiff::ColorType::Gray(_)) {
+            return Err(ImageError::Decode {
+                path: path.to_path_buf(),
+                detail: format!(
+                    "page {nz} is {colour:?}, not grey: only single-channel stacks are read; \
+                     convert it to grey first (e.g. tifffile and numpy, or ImageJ's 8-bit \
+                     conversion)"
+                ),
+            });
+        }
         let img = dec.read_image().map_err(dec_err)?;
         let n = (w as usize) * (h as usize);
         let bad = |found: &str, expected: &str| ImageError::SliceType {
