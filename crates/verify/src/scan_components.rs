@@ -143,8 +143,9 @@ impl ScanComponents {
 }
 
 /// The accounting of `mesh` against `image`'s voxel scan; `dropped`: a point of each mesh
-/// piece removed by a stated rule (their components count as dropped, not missed, when no
-/// vertex of the mesh is on them).
+/// piece removed on request, `slivers`: of each removed by the repair as a sliver (their
+/// components count as dropped, not missed, when no vertex of the mesh is on them; the
+/// slivers' also in `dropped_slivers`).
 pub fn account(
     mesh: &TriMesh,
     image: &ImageSurface,
