@@ -479,3 +479,64 @@ fn components_dropped_as_slivers_are_not_said_to_be_on_request() {
     );
     assert!(acc.summary().contains("dropped as slivers"));
 }
+
+/// A binary mask of a real MRI (the T1 crop above 197, as a segmentation threshold would make
+/// it) has 371 faces where bright voxels touch only along an edge or at a corner. At the
+/// midpoint 0.5 the level set is pinched there (not a surface): the mesh needed 119
+/// topological decisions with needle triangles and verify FAILed its angles (the real-data
+/// sweep of 2026-12-07). At the default level, 19/36, each contact is a neck: no decision, every
+/// scan component meshed, PASS; the midpoint given as `--iso` is still honoured (and noted).
+#[test]
+fn a_real_mask_with_diagonal_contacts_meshes_without_decisions() {
+    use oracle::image::{BINARY_LEVEL, Volume, Voxels};
+    let p = format!(
+        "{}/../../fixtures/images/mni_t1_crop56.nii.gz",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let t1 = oracle::image::load_volume(std::path::Path::new(&p), &LoadOptions::default())
+        .expect("the fixture opens");
+    let mask: Vec<u8> = (0..t1.len())
+        .map(|i| (t1.voxels().get_f64(i) > 197.0) as u8)
+        .collect();
+    let vol = Volume::new(t1.dims(), Voxels::U8(mask), t1.affine()).expect("a volume");
+    let run = |iso: Option<f64>| {
+        let opts = ImageOptions {
+            iso,
+            ..Default::default()
+        };
+        let s = ImageSurface::new(vol.clone(), &opts).expect("a binary image");
+        let contacts = s.contacts();
+        let iso = s.iso();
+        let input = rdt_mesher::pipeline::Input::image(s, "mask");
+        let out = rdt_mesher::pipeline::run(&input, &Default::default()).expect("meshing");
+        (contacts, iso, input.notes.clone(), out)
+    };
+    let (contacts, iso, notes, out) = run(None);
+    assert_eq!((contacts, iso), (Some((371, true)), BINARY_LEVEL));
+    assert!(
+        notes.iter().any(|n| n.contains("371 grid face(s)")),
+        "{notes:?}"
+    );
+    assert!(out.stats.topology_decisions.is_empty());
+    let rep = out.report.as_ref().expect("verified");
+    for name in verify::CLOSED_MANIFOLD_CHECKS {
+        assert_eq!(rep.status(name), Some(verify::Status::Pass), "{name}");
+    }
+    let acc = rep.scan_components.as_ref().expect("an image's accounting");
+    assert_eq!(
+        (acc.meshed, acc.dropped, acc.missed),
+        (113, 0, 0),
+        "{}",
+        acc.summary()
+    );
+    assert!(rep.passed(), "{}", rep.summary());
+    let (contacts, iso, notes, out) = run(Some(0.5));
+    assert_eq!((contacts, iso), (Some((371, false)), 0.5));
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("--iso 0.5: 371 grid face(s)")),
+        "{notes:?}"
+    );
+    assert!(out.stats.topology_decisions.len() > 50);
+}

@@ -17,7 +17,10 @@
 //! 5. for greyscale images (not binary, not a label), the smallest radius of curvature at the
 //!    seed points (see [`curvature_radius`]) also bounds it, since the medial axis reaches the
 //!    centres of curvature: the estimate is the smaller of the two, clamped below by the
-//!    smallest voxel size.
+//!    smallest voxel size;
+//! 6. a two-valued image with contacts (voxels touching only along an edge or at a corner,
+//!    see [`ImageSurface::contacts`]): at most [`CONTACT_DM_VOXELS`](super::CONTACT_DM_VOXELS)
+//!    of the smallest voxel size, d_M at the necks the level leaves there.
 //!
 //! Accuracy (tests, voxel size 1): ball R = 12 (signed distance or binary) gives 10.9 and 10.4,
 //! i.e. R minus about one voxel; a torus of tube radius 3 gives 1.7 (the estimate loses about
@@ -253,7 +256,14 @@ pub(crate) fn dm_inf_estimate(s: &ImageSurface) -> Option<f64> {
         (Some(t), Some(c)) => Some(t.min(c)),
         (t, c) => t.or(c),
     };
-    est.map(|e| e.max(h))
+    // A two-valued image whose midpoint pinches the level set: the level is moved off it and
+    // leaves a neck at each contact, with d_M about a sixth of a voxel (see `pinch`), finer
+    // than the ridges and the clamp see.
+    let contact = match s.contacts() {
+        Some((n, _)) if n > 0 => super::CONTACT_DM_VOXELS * h,
+        _ => f64::INFINITY,
+    };
+    est.map(|e| e.max(h).min(contact))
 }
 
 /// Smallest radius of curvature over the seed points (component seeds and the strided extra

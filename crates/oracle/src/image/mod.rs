@@ -64,6 +64,7 @@ mod nifti_io;
 mod nrrd;
 mod oracle;
 mod orient;
+mod pinch;
 mod shared;
 mod stack;
 mod surface;
@@ -77,6 +78,7 @@ pub use error::ImageError;
 pub use metaimage::read_metaimage;
 pub use nifti_io::{NiftiWriteOptions, Qform, nifti_affine, read_nifti, write_nifti};
 pub use nrrd::read_nrrd;
+pub use pinch::{BINARY_LEVEL, CONTACT_DM_VOXELS};
 pub(crate) use shared::with_view;
 pub use shared::{SharedVoxels, VoxelSource, VoxelView};
 pub use stack::{

@@ -13,11 +13,14 @@ use std::sync::OnceLock;
 /// How an [`ImageSurface`] picks its level set.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ImageOptions {
-    /// Iso value (in scaled intensity units). Default: halfway between the two values of a
-    /// binary image; required otherwise.
+    /// Iso value (in scaled intensity units). Default for a binary image: halfway between its
+    /// two values, or [`BINARY_LEVEL`](super::BINARY_LEVEL) of the way from the background
+    /// value to the foreground value when the midpoint pinches the level set (voxels touching
+    /// only along an edge or at a corner; see [`ImageSurface::contacts`]); required otherwise.
     pub iso: Option<f64>,
-    /// Mesh the boundary of the voxels equal to this label (indicator function, iso 0.5,
-    /// trilinear). Overrides `iso`; `dark_foreground` and `background` are ignored.
+    /// Mesh the boundary of the voxels equal to this label (indicator function, trilinear, at
+    /// the level 0.5, or [`BINARY_LEVEL`](super::BINARY_LEVEL) when 0.5 pinches it, as for a
+    /// binary image). Overrides `iso`; `dark_foreground` and `background` are ignored.
     pub label: Option<i64>,
     /// The inside is where the intensity is **below** the iso value (default: above).
     pub dark_foreground: bool,
@@ -30,15 +33,21 @@ pub struct ImageOptions {
 pub(super) enum Mode {
     /// value = a * raw + b.
     Intensity { a: f64, b: f64 },
-    /// value = 0.5 - interp(indicator(slope * raw + inter == label)).
-    Label { label: f64, slope: f64, inter: f64 },
+    /// value = level - interp(indicator(slope * raw + inter == label)).
+    Label {
+        label: f64,
+        slope: f64,
+        inter: f64,
+        level: f64,
+    },
 }
 
 /// A level set of a [`Volume`] as a [`Surface`], in world coordinates.
 ///
 /// `value(p)` = `s * (I(affine⁻¹ p) - iso)` where `I` is the trilinear interpolant of the scaled
 /// intensities (background outside the grid) and `s = -1` (bright foreground inside) or `+1`
-/// (`dark_foreground`). With a label, `value = 0.5 - I_L` for the label's indicator `I_L`.
+/// (`dark_foreground`). With a label, `value = level - I_L` for the label's indicator `I_L`
+/// (the level 0.5, or [`BINARY_LEVEL`](super::BINARY_LEVEL): [`ImageSurface::contacts`]).
 /// The value is thus negative inside, positive outside, and positive on and outside the
 /// bounding sphere (the grid box enlarged by 2 voxels, where the image is background).
 pub struct ImageSurface {
@@ -59,6 +68,9 @@ pub struct ImageSurface {
     pub(super) blocks: OnceLock<Blocks>,
     /// Budget of [`Surface::seed_points`] (see [`ImageSurface::with_seed_budget`]).
     pub(super) seed_budget: Option<usize>,
+    /// Two-valued images (binary, or a label's indicator): the grid faces where the midpoint
+    /// pinches the level set, and whether the level was moved off it ([`ImageSurface::contacts`]).
+    pub(super) contacts: Option<(usize, bool)>,
 }
 
 impl std::fmt::Debug for ImageSurface {
@@ -149,6 +161,7 @@ impl ImageSurface {
                 label: label as f64,
                 slope,
                 inter,
+                level: 0.5,
             };
             (mode, 0.0, 0.5)
         } else {
@@ -213,7 +226,7 @@ impl ImageSurface {
             );
             radius = radius.max((aff.transform_point3(v) - center).length());
         }
-        Ok(ImageSurface {
+        let mut s = ImageSurface {
             inv,
             inv_t: inv.matrix3.transpose(),
             n: [d[0] as isize, d[1] as isize, d[2] as isize],
@@ -231,9 +244,14 @@ impl ImageSurface {
             dm: OnceLock::new(),
             blocks: OnceLock::new(),
             seed_budget: Some(Topology::SEED_BUDGET),
-        })
+            contacts: None,
+        };
+        s.leave_the_pinched_midpoint(opts);
+        Ok(s)
     }
+}
 
+impl ImageSurface {
     /// Load `path` with [`load_volume`](super::load_volume) (NIfTI, slice folder, multi-page
     /// TIFF, raw) and build the oracle: the one-call entry point for the CLI.
     ///
@@ -301,7 +319,8 @@ impl ImageSurface {
     pub fn volume(&self) -> &Volume {
         &self.vol
     }
-    /// The iso value in scaled units (0.5 for a label's indicator).
+    /// The iso value in scaled units (for a label, the indicator's level: 0.5, or
+    /// [`BINARY_LEVEL`](super::BINARY_LEVEL) when 0.5 pinches it).
     pub fn iso(&self) -> f64 {
         self.iso
     }
@@ -326,10 +345,11 @@ impl ImageSurface {
                 label,
                 slope,
                 inter,
+                level,
             } => {
                 let ind = |x: f64| ((slope * x + inter) == label) as u8 as f64;
                 let r = with_voxels!(self.vol.voxels(), d => self.interp(d, v, |x| ind(x.to_f64()), 0.0));
-                0.5 - r
+                level - r
             }
         }
     }
@@ -361,7 +381,8 @@ impl ImageSurface {
                 label,
                 slope,
                 inter,
-            } => 0.5 - ((slope * raw + inter) == label) as u8 as f64,
+                level,
+            } => level - ((slope * raw + inter) == label) as u8 as f64,
         }
     }
 
@@ -527,10 +548,11 @@ impl ImageSurface {
                 label,
                 slope,
                 inter,
+                level,
             } => {
                 let ind = |x: f64| ((slope * x + inter) == label) as u8 as f64;
                 let r = with_voxels!(self.vol.voxels(), d => self.corners(d, cell, |x| ind(x.to_f64()), 0.0));
-                r.map(|x| 0.5 - x)
+                r.map(|x| level - x)
             }
         }
     }

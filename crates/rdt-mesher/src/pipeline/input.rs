@@ -442,7 +442,8 @@ impl Input<'static> {
     /// ```
     pub fn image(img: ImageSurface, name: impl Into<String>) -> Input<'static> {
         let comps = img.component_count();
-        let img_notes = img.volume().notes().to_vec();
+        let mut img_notes = img.volume().notes().to_vec();
+        img_notes.extend(img.level_note());
         // Room among the control points for a seed tetrahedron on every small component.
         let img = img.with_seed_budget(None);
         let budget = img.seed_budget();
