@@ -118,8 +118,8 @@ pub trait Surface: Send + Sync {
     }
 
     /// Whether [`Surface::project`] is the exact closest point of what `verify` measures the
-    /// mesh against (the input triangles of a smoothed polyhedron), so that no search along
-    /// rays can find a nearer one. Default: false (a projection by gradient steps may stop at
+    /// mesh against (the input triangles of a polyhedron, smoothed or not), so that no search
+    /// along rays can find a nearer one. Default: false (a projection by gradient steps may stop at
     /// a point that is not the nearest, and `verify` checks it by rays).
     fn exact_projection(&self) -> bool {
         false
