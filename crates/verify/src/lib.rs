@@ -158,6 +158,29 @@ pub struct Options {
     /// surface) left out on purpose: a seed point of S within its tolerance of these
     /// triangles is on a dropped component, not on a missed one (`components-sampled`).
     pub dropped_triangles: Vec<[DVec3; 3]>,
+    /// Told the name of each stage as it starts (`topology`, `self-intersections`,
+    /// `quality`, `distances`, `certificate`, `components`): a front end's progress lines.
+    /// Default: none.
+    pub progress: Option<Progress>,
+}
+
+/// A stage callback of [`Options::progress`].
+#[derive(Clone)]
+pub struct Progress(pub std::sync::Arc<dyn Fn(&str) + Send + Sync>);
+
+impl std::fmt::Debug for Progress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Progress(..)")
+    }
+}
+
+impl Options {
+    /// Tell [`Options::progress`] that `stage` starts.
+    pub(crate) fn stage(&self, stage: &str) {
+        if let Some(p) = &self.progress {
+            (p.0)(stage);
+        }
+    }
 }
 
 impl Default for Options {
@@ -182,6 +205,7 @@ impl Default for Options {
             dropped_points: Vec::new(),
             sliver_points: Vec::new(),
             dropped_triangles: Vec::new(),
+            progress: None,
         }
     }
 }
@@ -427,11 +451,14 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
     }
     let ml = opts.max_listed;
 
+    opts.stage("topology");
     topology_checks(&mut r, mesh, ml);
 
+    opts.stage("self-intersections");
     let bvh = intersect::triangle_bvh(mesh);
     self_intersection_checks(&mut r, mesh, &bvh, opts);
 
+    opts.stage("quality");
     quality_checks(&mut r, mesh, opts);
 
     let Some(surface) = surface else {

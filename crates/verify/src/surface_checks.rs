@@ -23,6 +23,7 @@ pub(crate) fn against(
 ) {
     // The d_M source (a Delaunay triangulation of the sample: one thread for a while) beside
     // the distances (parallel).
+    opts.stage("distances");
     let ((normals, hausdorff), dm) = rayon::join(
         || hausdorff_check(r, mesh, bvh, surface, opts),
         || dm_source(mesh, surface, opts),
@@ -35,10 +36,12 @@ pub(crate) fn against(
         r.push("loose-epsilon", Status::Fail, e);
         None
     });
+    opts.stage("certificate");
     let balls = certificate_checks(r, mesh, surface, opts, &dm, measured.then_some(hausdorff));
 
     normals_check(r, mesh, &normals);
 
+    opts.stage("components");
     components_sampled_check(r, mesh, bvh, surface, opts, &balls);
 }
 

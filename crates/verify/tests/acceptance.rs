@@ -250,3 +250,34 @@ fn report_is_json_and_summary_has_one_line_per_check() {
     assert_eq!(s.lines().count(), r.checks.len() + 2);
     assert!(s.ends_with("verdict: PASS\n"), "{s}");
 }
+
+/// `Options::progress` hears every stage of a check against a surface, in order (the CLI's
+/// spinner names them: a large mesh against a surface takes minutes), and only those of a
+/// check without one.
+#[test]
+fn progress_names_each_stage_in_order() {
+    use std::sync::{Arc, Mutex};
+    let heard = Arc::new(Mutex::new(Vec::<String>::new()));
+    let h = heard.clone();
+    let o = Options {
+        progress: Some(verify::Progress(Arc::new(move |s: &str| {
+            h.lock().unwrap().push(s.to_string())
+        }))),
+        ..opts()
+    };
+    let sphere = oracle::catalog::surface("sphere").expect("the catalog sphere");
+    let m = uv_sphere(DVec3::ZERO, 1.0, 12, 24);
+    verify::check_against(&m, &sphere, &o);
+    let all = [
+        "topology",
+        "self-intersections",
+        "quality",
+        "distances",
+        "certificate",
+        "components",
+    ];
+    assert_eq!(*heard.lock().unwrap(), all);
+    heard.lock().unwrap().clear();
+    verify::check(&m, &o);
+    assert_eq!(*heard.lock().unwrap(), all[..3]);
+}

@@ -91,8 +91,20 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
         }
         super::output::check_outputs(Some(&a.mesh), &outs)?;
     }
+    // A spinner on a terminal (hidden otherwise) naming the stage: a large mesh against a
+    // surface takes minutes.
+    let bar =
+        indicatif::ProgressBar::new_spinner().with_finish(indicatif::ProgressFinish::AndClear);
+    bar.set_style(indicatif::ProgressStyle::with_template("{spinner} {elapsed} {msg}").unwrap());
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar.set_message(format!("reading {}", a.mesh.display()));
     let mesh = meshio::read(&a.mesh)?;
+    let stage = bar.clone();
+    let progress = verify::Progress(std::sync::Arc::new(move |s: &str| {
+        stage.set_message(format!("verify: {s}"))
+    }));
     let opts = verify::Options {
+        progress: Some(progress),
         epsilon: a.epsilon,
         max_hausdorff: a.max_hausdorff,
         min_angle_deg: a.min_angle,
@@ -104,6 +116,7 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
     let mut balls = None;
     let report = match &a.against {
         Some(spec) => {
+            bar.set_message(format!("opening {spec}"));
             let opened = input::open(spec, a.bounding_sphere.as_deref(), &a.surface)?;
             kind = Some(opened.kind);
             if a.pictures.picture.is_some() {
@@ -120,11 +133,13 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
             };
             let mut r = verify::check_against(&mesh, opened.surface(), &opts);
             // Point sets and meshes: the data-support check (the mesh's mean edge as sigma).
+            bar.set_message("verify: data-support");
             rdt_mesher::pipeline::data_support(&mut r, &opened, &mesh, mean_edge(&mesh), &[]);
             r
         }
         None => verify::check(&mesh, &opts),
     };
+    bar.finish_and_clear();
     out!("{}", report.summary());
     if let Some(p) = &a.report {
         // Per-component and per-item lists bounded as in `mesh --report`.
