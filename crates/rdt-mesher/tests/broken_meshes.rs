@@ -199,3 +199,27 @@ fn buried_faces_and_edges_of_overlapping_shells_are_not_measured() {
     assert!(g.hausdorff < 2.0 * size, "{} (size {size})", g.hausdorff);
     assert!(edges < 2.0 * size, "{edges} (size {size})");
 }
+
+/// An inside-out closed mesh (every face turned inward) is read with its faces reversed, and
+/// the input note says so: it said only "closed, consistently oriented" (the real-data sweep
+/// of 2026-12-07). The mesh is the same solid's, with outward normals.
+#[test]
+fn an_inside_out_mesh_is_named_so_and_meshed_outward() {
+    let dir = std::env::temp_dir().join("rdt-broken-inside-out");
+    std::fs::create_dir_all(&dir).unwrap();
+    let cube = fixture("../cube.off");
+    let mut m = meshio::read(&cube).unwrap();
+    m.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+    let path = dir.join("cube_inside_out.off");
+    meshio::write(&path, &m).unwrap();
+    let input = Input::open(path.to_str().unwrap(), &Default::default()).unwrap();
+    let note = &input.notes[0];
+    assert!(note.contains("consistently oriented, inside out"), "{note}");
+    assert!(input.stats.polyhedron.as_ref().unwrap().inside_out);
+    let plain = Input::open(&cube, &Default::default()).unwrap();
+    assert!(!plain.notes[0].contains("inside out"), "{}", plain.notes[0]);
+    let out = run(&input, &Request::default()).unwrap();
+    let rep = out.report.expect("verified");
+    assert!(rep.passed(), "{}", rep.summary());
+    assert!(rep.quality.as_ref().unwrap().volume > 0.0);
+}

@@ -89,6 +89,10 @@ pub struct PolyhedronStats {
     /// Pairs of input triangles that intersect other than at shared vertices and edges, when
     /// counted (by the caller: [`PolyhedronSurface::set_self_intersections`]).
     pub self_intersecting_pairs: Option<usize>,
+    /// The faces' signed volume is negative (an inside-out export): the surface is read with
+    /// every face reversed, so the output's normals point out.
+    #[serde(default)]
+    pub inside_out: bool,
 }
 
 impl PolyhedronStats {
@@ -219,6 +223,7 @@ impl PolyhedronSurface {
             duplicate_faces: cleaned.duplicate_faces,
             flipped_faces: cleaned.flipped_faces,
             self_intersecting_pairs: None,
+            inside_out: volume < 0.0,
         };
         Ok(PolyhedronSurface {
             bvh,
@@ -747,12 +752,9 @@ impl Surface for PolyhedronSurface {
         Some(self.closest_point(p).0)
     }
 
-    /// The closest point of the input triangles, which hold S: no point of S found along rays
-    /// (a crossing of a triangle) is nearer, so `verify` does not search them. (On a mesh with
-    /// buried faces the distance may be to one of those: a lower bound of the distance to S,
-    /// as it was with the rays, which could never correct it and cost a winding number per
-    /// crossing: `verify --against` on a 26k-vertex mesh of the self-intersecting cow ran past
-    /// 300 s.)
+    /// The closest point of the input triangles, which hold S: no crossing found along rays is
+    /// nearer, so `verify` does not search them (with buried faces: a lower bound; the rays
+    /// never corrected it and took 300 s on a self-intersecting cow, see the GUIDE).
     fn exact_projection(&self) -> bool {
         true
     }

@@ -716,6 +716,9 @@ fn polyhedron_summary(s: &oracle::polyhedron::PolyhedronStats) -> String {
     if s.misoriented_edges == 0 {
         parts.push("consistently oriented".into());
     }
+    if s.inside_out {
+        parts.push("inside out (negative signed volume: read with every face reversed)".into());
+    }
     if !s.is_clean() {
         parts.push("meshing the solid {winding number > 1/2}".into());
     }
