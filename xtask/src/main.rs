@@ -70,13 +70,18 @@ enum Cmd {
 
 /// The flags, or exit: a bad value of a numeric flag is one `error:` line (the parser's
 /// when it names the flag, as ours do with a valid example; else clap's first line) and
-/// status 2; other usage errors are clap's.
+/// status 2, as are two flags that cannot go together (clap's first line, which names
+/// both); other usage errors are clap's.
 fn parse() -> Cli {
     match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
+            use clap::error::ErrorKind;
             use std::error::Error as _;
-            if e.kind() == clap::error::ErrorKind::ValueValidation {
+            if matches!(
+                e.kind(),
+                ErrorKind::ValueValidation | ErrorKind::ArgumentConflict
+            ) {
                 match e.source().map(|s| s.to_string()) {
                     Some(src) if src.starts_with("--") => eprintln!("error: {src}"),
                     _ => eprintln!("{}", e.to_string().lines().next().unwrap_or("error")),

@@ -24,7 +24,7 @@ fn usage_error(out: &Output) -> String {
 
 #[test]
 fn numeric_flags_name_the_flag_and_an_example() {
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 10] = [
         (
             &["mesh", "x.nii", "--spacing", "-1,1,1"],
             "--spacing -1,1,1: spacing must be three positive finite numbers",
@@ -53,6 +53,15 @@ fn numeric_flags_name_the_flag_and_an_example() {
         (
             &["verify", "m.ply", "--epsilon", "-0.1"],
             "--epsilon -0.1: ",
+        ),
+        // A label's surface is its indicator's level set: an --iso beside it was ignored.
+        (
+            &["mesh", "x.nii", "--label", "2", "--iso", "0.5"],
+            "'--label <LABEL>' cannot be used with '--iso <ISO>'",
+        ),
+        (
+            &["mesh", "x.nii", "--labels", "all", "--iso", "0.5"],
+            "'--labels <LABELS>' cannot be used with '--iso <ISO>'",
         ),
     ];
     for (args, needle) in cases {

@@ -481,7 +481,7 @@ fn components_dropped_as_slivers_are_not_said_to_be_on_request() {
 }
 
 /// A binary mask of a real MRI (the T1 crop above 197, as a segmentation threshold would make
-/// it) has 371 faces where bright voxels touch only along an edge or at a corner. At the
+/// it) has 371 faces where bright voxels touch only along an edge. At the
 /// midpoint 0.5 the level set is pinched there (not a surface): the mesh needed 119
 /// topological decisions with needle triangles and verify FAILed its angles (the real-data
 /// sweep of 2026-12-07). At the default level, 19/36, each contact is a neck: no decision, every

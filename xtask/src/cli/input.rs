@@ -18,11 +18,12 @@ pub enum AsKind {
 /// Options for image, mesh and point-set inputs.
 #[derive(clap::Args, Debug, Default, Clone)]
 pub struct SurfaceOptions {
-    /// Image iso value (default: halfway for binary images; required otherwise).
+    /// Image iso value (default for binary images: halfway, or 19/36 of the way to the
+    /// foreground where halfway pinches the level set; required otherwise).
     #[arg(long, allow_negative_numbers = true)]
     pub iso: Option<f64>,
-    /// Image: mesh the boundary of this label.
-    #[arg(long, allow_hyphen_values = true)]
+    /// Image: mesh the boundary of this label (its indicator's level set: no --iso).
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "iso")]
     pub label: Option<i64>,
     /// Image: the inside is where the intensity is below the iso value (default: above).
     #[arg(long)]

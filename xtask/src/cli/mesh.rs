@@ -144,7 +144,7 @@ pub struct MeshArgs {
     pub html: Option<String>,
     /// Image: `all` meshes every label present except 0, one file per label
     /// (`NAME_label<L>.ply`, or -o's stem with `_label<L>`).
-    #[arg(long, conflicts_with = "label")]
+    #[arg(long, conflicts_with_all = ["label", "iso"])]
     pub labels: Option<String>,
 }
 

@@ -18,7 +18,7 @@
 //!    seed points (see [`curvature_radius`]) also bounds it, since the medial axis reaches the
 //!    centres of curvature: the estimate is the smaller of the two, clamped below by the
 //!    smallest voxel size;
-//! 6. a two-valued image with contacts (voxels touching only along an edge or at a corner,
+//! 6. a two-valued image with contacts (voxels touching only along an edge,
 //!    see [`ImageSurface::contacts`]): at most [`CONTACT_DM_VOXELS`](super::CONTACT_DM_VOXELS)
 //!    of the smallest voxel size, d_M at the necks the level leaves there.
 //!

@@ -2,8 +2,9 @@
 //! pinches the trilinear level set, and the level used instead.
 //!
 //! On a binary image (and a label's indicator) the values are 0 and 1 after scaling. A grid
-//! face whose four nodes alternate (1, 0 / 0, 1: two voxels touching only along an edge or at
-//! a corner) is bilinear with its saddle at the face centre, of value exactly 1/2. So the
+//! face whose four nodes alternate (1, 0 / 0, 1: two voxels touching only along an edge; two
+//! touching only at a corner make no such face, and the body saddle of their cell is at 1/4)
+//! is bilinear with its saddle at the face centre, of value exactly 1/2. So the
 //! level set at the midpoint 1/2 passes through that saddle: two sheets cross there, and S is
 //! not a surface (d_M = 0). No sampling is an eps-sample of it: the refinement stalls at the
 //! point (the manifold patch makes topological decisions, with needle triangles) and on a
@@ -120,7 +121,7 @@ impl ImageSurface {
     }
 
     /// Two-valued images (binary, or a label's indicator) at their midpoint: the number of
-    /// grid faces whose nodes alternate (voxels touching only along an edge or at a corner),
+    /// grid faces whose nodes alternate (voxels touching only along an edge),
     /// where the level set at the midpoint is pinched (not a surface), and whether the level
     /// was moved to [`BINARY_LEVEL`](BINARY_LEVEL) for them (the default level) or not
     /// (an iso given at the midpoint). `None` for other images and levels.
@@ -164,7 +165,7 @@ impl ImageSurface {
     pub fn level_note(&self) -> Option<String> {
         let (count, moved) = self.contacts.filter(|c| c.0 > 0)?;
         let what = format!(
-            "{count} grid face(s) where voxels touch only along an edge or at a corner pinch the \
+            "{count} grid face(s) where voxels touch only along an edge pinch the \
              level set at the midpoint of the two values (two sheets cross at each: not a surface)"
         );
         let fmt = |x: f64| {

@@ -16,7 +16,7 @@ pub struct ImageOptions {
     /// Iso value (in scaled intensity units). Default for a binary image: halfway between its
     /// two values, or [`BINARY_LEVEL`](super::BINARY_LEVEL) of the way from the background
     /// value to the foreground value when the midpoint pinches the level set (voxels touching
-    /// only along an edge or at a corner; see [`ImageSurface::contacts`]); required otherwise.
+    /// only along an edge; see [`ImageSurface::contacts`]); required otherwise.
     pub iso: Option<f64>,
     /// Mesh the boundary of the voxels equal to this label (indicator function, trilinear, at
     /// the level 0.5, or [`BINARY_LEVEL`](super::BINARY_LEVEL) when 0.5 pinches it, as for a
@@ -212,20 +212,7 @@ impl ImageSurface {
                 max: u32::MAX as usize - 1,
             });
         }
-        let aff = vol.affine();
-        let inv = aff.inverse();
-        let lo = DVec3::splat(-2.0);
-        let hi = DVec3::new(d[0] as f64 + 1.0, d[1] as f64 + 1.0, d[2] as f64 + 1.0);
-        let center = aff.transform_point3(0.5 * (lo + hi));
-        let mut radius: f64 = 0.0;
-        for c in 0..8 {
-            let v = DVec3::new(
-                if c & 1 == 0 { lo.x } else { hi.x },
-                if c & 2 == 0 { lo.y } else { hi.y },
-                if c & 4 == 0 { lo.z } else { hi.z },
-            );
-            radius = radius.max((aff.transform_point3(v) - center).length());
-        }
+        let inv = vol.affine().inverse();
         let mut s = ImageSurface {
             inv,
             inv_t: inv.matrix3.transpose(),
@@ -235,10 +222,7 @@ impl ImageSurface {
             bg_raw,
             iso,
             stats,
-            sphere: BoundingSphere {
-                center,
-                radius: radius * (1.0 + 1e-9),
-            },
+            sphere: grid_sphere(vol.affine(), d),
             vol,
             topo: OnceLock::new(),
             dm: OnceLock::new(),
@@ -248,6 +232,27 @@ impl ImageSurface {
         };
         s.leave_the_pinched_midpoint(opts);
         Ok(s)
+    }
+}
+
+/// The bounding sphere of a grid of `d` nodes under `aff`, enlarged by 2 voxels (where the
+/// image is background) on every side.
+fn grid_sphere(aff: DAffine3, d: [usize; 3]) -> BoundingSphere {
+    let lo = DVec3::splat(-2.0);
+    let hi = DVec3::new(d[0] as f64 + 1.0, d[1] as f64 + 1.0, d[2] as f64 + 1.0);
+    let center = aff.transform_point3(0.5 * (lo + hi));
+    let mut radius: f64 = 0.0;
+    for c in 0..8 {
+        let v = DVec3::new(
+            if c & 1 == 0 { lo.x } else { hi.x },
+            if c & 2 == 0 { lo.y } else { hi.y },
+            if c & 4 == 0 { lo.z } else { hi.z },
+        );
+        radius = radius.max((aff.transform_point3(v) - center).length());
+    }
+    BoundingSphere {
+        center,
+        radius: radius * (1.0 + 1e-9),
     }
 }
 
