@@ -86,7 +86,7 @@ pub(crate) fn alternating_faces(bits: &[u64], [nx, ny, nz]: [usize; 3]) -> usize
 impl ImageSurface {
     /// On a two-valued image at its midpoint: count the faces where the level set is pinched
     /// and, when there are some and the level is the default, move it to
-    /// [`BINARY_LEVEL`](BINARY_LEVEL) (see `pinch`'s docs). Before any cache is filled.
+    /// [`BINARY_LEVEL`] (see `pinch`'s docs). Before any cache is filled.
     pub(super) fn leave_the_pinched_midpoint(&mut self, opts: &ImageOptions) {
         let midpoint = match (self.mode, self.stats.binary) {
             (Mode::Label { .. }, _) => true,
@@ -123,7 +123,7 @@ impl ImageSurface {
     /// Two-valued images (binary, or a label's indicator) at their midpoint: the number of
     /// grid faces whose nodes alternate (voxels touching only along an edge),
     /// where the level set at the midpoint is pinched (not a surface), and whether the level
-    /// was moved to [`BINARY_LEVEL`](BINARY_LEVEL) for them (the default level) or not
+    /// was moved to [`BINARY_LEVEL`] for them (the default level) or not
     /// (an iso given at the midpoint). `None` for other images and levels.
     ///
     /// ```
@@ -145,7 +145,7 @@ impl ImageSurface {
         self.contacts
     }
 
-    /// The levels of a binary image off its midpoint: [`BINARY_LEVEL`](BINARY_LEVEL)
+    /// The levels of a binary image off its midpoint: [`BINARY_LEVEL`]
     /// of the way from the background value to the foreground value (the pinched voxels
     /// apart), and its mirror image about the midpoint (joined). `None` for other images.
     fn off_midpoint_levels(&self) -> Option<(f64, f64)> {
