@@ -257,7 +257,8 @@ pub struct Check {
     /// Stable name: `input`, `closed`, `edge-manifold`, `vertex-manifold`, `oriented`,
     /// `components`, `duplicate-vertices`, `degenerate-triangles`, `unreferenced-vertices`,
     /// `self-intersections`, `angles`, `radius-edge`, `area-volume`, `hausdorff`, `normals`,
-    /// `loose-epsilon`, `components-sampled`, `theorem-4.7`, `data-support`, `input-topology`
+    /// `loose-epsilon`, `components-sampled`, `scan-topology`, `scan-genus`, `theorem-4.7`,
+    /// `data-support`, `input-topology`
     /// (the mesher's, for a closed input mesh).
     pub name: String,
     pub status: Status,

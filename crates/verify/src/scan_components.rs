@@ -92,6 +92,12 @@ pub struct ScanComponents {
     /// Every missed, joined, dropped, split and vanishing component (in that order; the
     /// largest first within each).
     pub components: Vec<ScanComponent>,
+    /// The sum of the genera of the level set's components, from the voxel grid
+    /// ([`ImageSurface::scan_genus`]; `None` with zero-volume components).
+    pub scan_genus: Option<usize>,
+    /// The sum of the genera of the mesh's pieces (`None` unless every piece is a closed
+    /// manifold).
+    pub mesh_genus: Option<usize>,
 }
 
 impl ScanComponents {
@@ -252,5 +258,11 @@ pub fn account(
         vanishing: count(Fate::Vanishing),
         unassigned_pieces: unassigned,
         components,
+        scan_genus: image.scan_genus(),
+        mesh_genus: crate::topology::analyze(mesh, 0)
+            .genera()
+            .into_iter()
+            .map(|g| g.and_then(|g| usize::try_from(g).ok()))
+            .sum(),
     }
 }

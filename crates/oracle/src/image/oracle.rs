@@ -31,6 +31,26 @@ impl ImageSurface {
         self.topology().component_at(self.inv.transform_point3(p))
     }
 
+    /// The sum of the genera of the level set's components, from the voxel grid (computed
+    /// once, then cached): the number of surface components (the vanishing ones included)
+    /// less the Euler characteristic of the inside, which the grid gives exactly (see
+    /// `topology::euler`). `None` when the scan found zero-volume components
+    /// ([`Topology::vanishing_components`]): the sum would count cavities that are not
+    /// surfaces. A mesh with the topology of S has this total genus.
+    pub fn scan_genus(&self) -> Option<usize> {
+        *self.genus.get_or_init(|| {
+            let t = self.topology();
+            if t.vanishing_components > 0 {
+                return None;
+            }
+            let surfaces = (t.inside_components + t.outside_components) as i64 - 1;
+            let genus = surfaces - topology::inside_euler(self);
+            // The genus of each closed surface is >= 0; a negative sum would be a bug.
+            debug_assert!(genus >= 0, "{surfaces} surfaces, genus {genus}");
+            usize::try_from(genus).ok()
+        })
+    }
+
     /// Number of connected components of the surface found by the voxel scan
     /// ([`Topology::surface_components`]). The mesh should have exactly this many.
     pub fn component_count(&self) -> usize {

@@ -66,6 +66,8 @@ pub struct ImageSurface {
     pub(super) dm: OnceLock<Option<f64>>,
     /// Sign summary by blocks for [`Surface::crossing`] (built on the first crossing).
     pub(super) blocks: OnceLock<Blocks>,
+    /// The level set's total genus from the grid ([`ImageSurface::scan_genus`]).
+    pub(super) genus: OnceLock<Option<usize>>,
     /// Budget of [`Surface::seed_points`] (see [`ImageSurface::with_seed_budget`]).
     pub(super) seed_budget: Option<usize>,
     /// Two-valued images (binary, or a label's indicator): the grid faces where the midpoint
@@ -227,6 +229,7 @@ impl ImageSurface {
             topo: OnceLock::new(),
             dm: OnceLock::new(),
             blocks: OnceLock::new(),
+            genus: OnceLock::new(),
             seed_budget: Some(Topology::SEED_BUDGET),
             contacts: None,
         };

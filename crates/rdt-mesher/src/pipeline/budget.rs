@@ -199,8 +199,9 @@ pub(crate) fn auto_size(
     let chosen = floor.map_or(by_count, |h| by_count.max(h));
     let why = match floor {
         Some(h) if h >= by_count => format!(
-            "half the voxel spacing: finer sizes resolve nothing more of the image; {} \
-             vertices would take sigma = {}",
+            "half the voxel spacing: finer sizes add little of the image, but a handle of S \
+             thinner than that needs one (verify's scan-genus counts them); {} vertices would \
+             take sigma = {}",
             count(target),
             sig(by_count)
         ),

@@ -41,6 +41,7 @@
 //! sequential in index order, so the result does not depend on the thread count.
 
 mod dsu;
+mod euler;
 mod interior;
 mod labels;
 mod necks;
@@ -52,6 +53,7 @@ mod seeds;
 mod tets;
 mod vanishing;
 
+pub(crate) use euler::inside_euler;
 pub use necks::{Join, Node};
 #[cfg(test)]
 pub(crate) use reference::compute_reference;
