@@ -178,6 +178,13 @@ impl Mesher<'_> {
             if reseeded {
                 continue;
             }
+            // Images: handles thinner than the sample (ours, `crate::levels::handles`).
+            let t = std::time::Instant::now();
+            let reseeded = self.reseed_handles()?;
+            self.stats.time_necks_s += t.elapsed().as_secs_f64();
+            if reseeded {
+                continue;
+            }
             // Section 6.6.1: the manifold patch.
             if self.opts.manifold && self.push_nonmanifold()? > 0 {
                 continue;

@@ -235,6 +235,11 @@ pub struct Stats {
     pub neck_rounds: usize,
     /// Points inserted by the neck reseeding.
     pub neck_insertions: usize,
+    /// Rounds of handle reseeding (images: Del_S(E) with fewer handles than the scan's level
+    /// set, see `crate::levels::handles`).
+    pub handle_rounds: usize,
+    /// Points inserted by the handle reseeding.
+    pub handle_insertions: usize,
     /// Rounds of coverage of the scan's crossings (images, `crate::levels::coverage`).
     pub cover_rounds: usize,
     /// Crossings inserted by the coverage rounds.

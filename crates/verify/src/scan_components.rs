@@ -96,11 +96,23 @@ pub struct ScanComponents {
     /// ([`ImageSurface::scan_genus`]; `None` with zero-volume components).
     pub scan_genus: Option<usize>,
     /// The sum of the genera of the mesh's pieces (`None` unless every piece is a closed
-    /// manifold).
+    /// manifold), from `verify`'s topology checks ([`ScanComponents::with_mesh_genus`];
+    /// `None` from [`account`] alone).
     pub mesh_genus: Option<usize>,
 }
 
 impl ScanComponents {
+    /// The accounting with the mesh's total genus from its topology (`None` unless every
+    /// component is a closed manifold).
+    pub fn with_mesh_genus(mut self, topology: &crate::Topology) -> Self {
+        self.mesh_genus = topology
+            .genera()
+            .into_iter()
+            .map(|g| g.and_then(|g| usize::try_from(g).ok()))
+            .sum();
+        self
+    }
+
     /// Whether scan component `i` has a mesh piece.
     pub fn has_piece(&self, i: usize) -> bool {
         !self.components.iter().any(|c| {
@@ -259,10 +271,6 @@ pub fn account(
         unassigned_pieces: unassigned,
         components,
         scan_genus: image.scan_genus(),
-        mesh_genus: crate::topology::analyze(mesh, 0)
-            .genera()
-            .into_iter()
-            .map(|g| g.and_then(|g| usize::try_from(g).ok()))
-            .sum(),
+        mesh_genus: None,
     }
 }

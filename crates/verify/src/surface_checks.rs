@@ -491,8 +491,11 @@ fn components_sampled_check(
     let (status, detail) = if let Some(img) = surface.as_image() {
         // Images: the voxel scan names each seed's component, so a far seed is a missed
         // component only when no mesh vertex lies on its component.
-        let acc =
+        let mut acc =
             crate::scan_components::account(mesh, img, &opts.dropped_points, &opts.sliver_points);
+        if let Some(t) = &r.topology {
+            acc = acc.with_mesh_genus(t);
+        }
         let far_seeds = cov.uncovered;
         for s in cov.seeds.iter_mut().filter(|s| !s.covered) {
             let c = img.component_of(DVec3::from_array(s.seed));

@@ -1,7 +1,7 @@
 //! What runs after the queue of section 6.1 empties, level by level (as CGAL's surface mesher
 //! layers its refinement): on images, the coverage of the scan's crossings (`coverage`,
-//! ours), the reseeding of missed scan components (`missed`, ours) and the neck reseeding
-//! (`necks`, ours), the manifold patch
+//! ours), the reseeding of missed scan components (`missed`, ours), the neck reseeding
+//! (`necks`, ours) and the handle reseeding (`handles`, ours), the manifold patch
 //! of section 6.6.1 (`manifold`), and the final
 //! check of the scaffold (`scaffold`, ours), which may rebuild Del(E) without it; on sampled
 //! surfaces (images), the topological repair of what the patch leaves (`repair`, ours, with
@@ -12,6 +12,7 @@
 pub(crate) mod bridges;
 pub(crate) mod components;
 mod coverage;
+mod handles;
 mod holes;
 mod links;
 pub(crate) mod manifold;
@@ -48,6 +49,8 @@ pub(crate) struct ScanCache {
     /// Per scan component, the margin level and the pieces (points, largest first) of the
     /// last neck round that looked for its rings (`necks`).
     pub rings_seen: std::collections::BTreeMap<usize, (u32, Vec<Vec<DVec3>>)>,
+    /// The scan's joins through saddles and their sides (`handles`), listed once.
+    pub saddles: Option<Vec<(oracle::image::Join, bool)>>,
 }
 
 impl ScanCache {

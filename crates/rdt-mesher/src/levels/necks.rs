@@ -277,7 +277,7 @@ fn margin_level(round: usize) -> u32 {
 /// The first crossings of S of [`RING_RAYS`] rays perpendicular to the join, from points of
 /// the inside region on it (a grid edge's quarter points, or a face's saddle), as long as the
 /// join.
-fn ring(img: &ImageSurface, j: &Join, out: &mut Vec<DVec3>) {
+pub(super) fn ring(img: &ImageSurface, j: &Join, out: &mut Vec<DVec3>) {
     let axis = j.b - j.a;
     let len = axis.length();
     let Some(u) = axis.try_normalize() else {

@@ -120,10 +120,22 @@ pub(super) fn owned(g: &[f64; 8]) -> i64 {
 }
 
 /// `χ` of the inside region of `s`'s level set, summed over the grid's cells (the padding
-/// included: the background layer is outside). The node signs first (one pass, 64 nodes a
-/// word); only the cells with both signs read their values. Parallel over z-slices; integer
-/// sums, so the result does not depend on the thread count.
+/// included: the background layer is outside), over [`mixed_cells`]; integer sums, so the
+/// result does not depend on the thread count.
 pub(crate) fn inside_euler(s: &ImageSurface) -> i64 {
+    mixed_cells(s, |_, g, out: &mut Vec<i64>| out.push(owned(g)))
+        .into_iter()
+        .sum()
+}
+
+/// `f(lowest corner, corner values, out)` on every cell of the grid and its padding (lowest
+/// corners in `[-1, n - 1]`) with both signs among its corners, the others skipped from the
+/// node signs (one pass, 64 nodes a word): what `f` pushes, in cell order (z-slices in
+/// parallel, concatenated in order: the same for any thread count).
+pub(crate) fn mixed_cells<T: Send>(
+    s: &ImageSurface,
+    f: impl Fn([i64; 3], &[f64; 8], &mut Vec<T>) + Sync,
+) -> Vec<T> {
     use rayon::prelude::*;
     let bits = s.inside_bits_rows();
     let [nx, ny, nz] = s.dims_isize().map(|n| n as i64);
@@ -136,17 +148,17 @@ pub(crate) fn inside_euler(s: &ImageSurface) -> i64 {
             &bits[r..r + w]
         }
     };
-    let cell = |i: i64, j: i64, k: i64| {
+    let cell = |i: i64, j: i64, k: i64, out: &mut Vec<T>| {
         let g: [f64; 8] = std::array::from_fn(|c| {
             let c = c as i64;
             s.grid_value([i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)])
         });
-        owned(&g)
+        f([i, j, k], &g, out);
     };
-    (-1..nz)
+    let slices: Vec<Vec<T>> = (-1..nz)
         .into_par_iter()
         .map(|k| {
-            let mut sum = 0;
+            let mut out = Vec::new();
             let (mut any, mut all) = (vec![0u64; w], vec![0u64; w]);
             for j in -1..ny {
                 // The four node rows of this row of cells: `any` / `all` of their bits.
@@ -159,7 +171,7 @@ pub(crate) fn inside_euler(s: &ImageSurface) -> i64 {
                 // The cell below the grid's first node (x = -1): its x = -1 corners are
                 // background, so it has both signs when a node at x = 0 is inside.
                 if any.first().is_some_and(|&a| a & 1 == 1) {
-                    sum += cell(-1, j, k);
+                    cell(-1, j, k, &mut out);
                 }
                 for wi in 0..w {
                     // Cell x has corners x and x + 1 (bit x + 1 from the next word; nodes past
@@ -171,13 +183,14 @@ pub(crate) fn inside_euler(s: &ImageSurface) -> i64 {
                     while mixed != 0 {
                         let b = mixed.trailing_zeros() as i64;
                         mixed &= mixed - 1;
-                        sum += cell(wi as i64 * 64 + b, j, k);
+                        cell(wi as i64 * 64 + b, j, k, &mut out);
                     }
                 }
             }
-            sum
+            out
         })
-        .sum()
+        .collect();
+    slices.into_iter().flatten().collect()
 }
 
 #[cfg(test)]

@@ -48,6 +48,7 @@ mod necks;
 mod pairs;
 #[cfg(test)]
 mod reference;
+mod saddles;
 mod scan;
 mod seeds;
 mod tets;
