@@ -35,18 +35,8 @@
 //! `1 - 3 + 3 - 1 = 0` through the node, edges and faces it owns), so the cost is one read of
 //! the signs plus work on the cells the surface crosses.
 
-use super::interior::{face_groups, face_saddle, interior_joins};
+use super::interior::{FACES, face_groups, face_saddle, interior_joins};
 use crate::image::ImageSurface;
-
-/// A face of a cell: its corners `p00, p00 + u, p00 + v, p00 + u + v` (corner `x + 2y + 4z`).
-const FACES: [(usize, usize, usize); 6] = [
-    (0, 1, 2),
-    (4, 1, 2),
-    (0, 1, 4),
-    (2, 1, 4),
-    (0, 2, 4),
-    (1, 2, 4),
-];
 
 /// The 12 edges of a cell as corner pairs.
 const EDGES: [(usize, usize); 12] = [
@@ -95,7 +85,10 @@ fn closed_cell(g: &[f64; 8]) -> (i64, i64) {
         .iter()
         .filter(|&&(a, b)| g[a] < 0.0 && g[b] < 0.0)
         .count() as i64;
-    let faces: i64 = FACES.iter().map(|&f| open_face(g, f)).sum();
+    let faces: i64 = FACES
+        .iter()
+        .map(|&(p, u, v)| open_face(g, (p as usize, u as usize, v as usize)))
+        .sum();
     let boundary = corners - edges + faces;
     let groups = face_groups(g);
     let inside_groups = (0..8)
@@ -114,7 +107,10 @@ pub(super) fn owned(g: &[f64; 8]) -> i64 {
     }
     let node = ins(0) as i64;
     let edges = [1, 2, 4].iter().filter(|&&k| ins(0) && ins(k)).count() as i64;
-    let faces = open_face(g, (0, 1, 2)) + open_face(g, (0, 1, 4)) + open_face(g, (0, 2, 4));
+    let faces: i64 = FACES[..3]
+        .iter()
+        .map(|&(p, u, v)| open_face(g, (p as usize, u as usize, v as usize)))
+        .sum();
     let (closed, boundary) = closed_cell(g);
     node - edges + faces + (closed - boundary)
 }

@@ -30,6 +30,17 @@
 /// A cell's corner `x + 2 y + 4 z` (`x, y, z` in {0, 1}).
 pub(super) type Corner = u8;
 
+/// The six faces of a cell as `(p00, u, v)`: corners `p00, p00 + u, p00 + v, p00 + u + v`
+/// (the first three are the faces at corner 0).
+pub(super) const FACES: [(Corner, Corner, Corner); 6] = [
+    (0, 1, 2),
+    (0, 1, 4),
+    (0, 2, 4),
+    (4, 1, 2),
+    (2, 1, 4),
+    (1, 2, 4),
+];
+
 /// The open interval of `t` in (0, 1) where `a + (b - a) t` is `< 0` (`neg`) or `> 0`.
 fn sign_interval(a: f64, b: f64, neg: bool) -> (f64, f64) {
     let (a, b) = if neg { (a, b) } else { (-a, -b) };
@@ -79,15 +90,7 @@ pub(super) fn face_groups(g: &[f64; 8]) -> [Corner; 8] {
             }
         }
     }
-    // Faces (p00, u, v): corners p00, p00 + u, p00 + v, p00 + u + v.
-    for (p00, u, v) in [
-        (0, 1, 2),
-        (4, 1, 2),
-        (0, 1, 4),
-        (2, 1, 4),
-        (0, 2, 4),
-        (1, 2, 4),
-    ] {
+    for (p00, u, v) in FACES {
         let (p10, p01, p11) = (p00 + u, p00 + v, p00 + u + v);
         let (a, b) = (ins(p00), ins(p10));
         if a == ins(p11) && b == ins(p01) && a != b {

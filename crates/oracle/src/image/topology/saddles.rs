@@ -6,7 +6,7 @@
 //! puts on the wrong side (`rdt_mesher`'s handle reseeding).
 
 use super::euler::mixed_cells;
-use super::interior::{face_saddle, interior_joins};
+use super::interior::{FACES, face_saddle, interior_joins};
 use super::necks::Join;
 use crate::image::ImageSurface;
 use glam::DVec3;
@@ -49,7 +49,8 @@ impl ImageSurface {
                 nodes: [node_index(self, corner(a)), node_index(self, corner(b))],
             };
             // The faces at the lowest corner (each face of the grid once).
-            for (p00, u, v) in [(0, 1, 2), (0, 1, 4), (0, 2, 4)] {
+            for &(p00, u, v) in &FACES[..3] {
+                let (p00, u, v) = (p00 as usize, u as usize, v as usize);
                 let c = [p00, p00 + u, p00 + v, p00 + u + v];
                 let ins = c.map(|k| g[k] < 0.0);
                 if !(ins[0] == ins[3] && ins[1] == ins[2] && ins[0] != ins[1]) {
