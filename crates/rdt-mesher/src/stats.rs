@@ -299,7 +299,7 @@ pub struct Stats {
     /// Of the total (across the three above), on images with a resolution (`crate::levels`;
     /// 0 elsewhere): the coverage rounds of the scan's crossings, insertions included.
     pub time_coverage_s: f64,
-    /// The neck and bridge rounds, insertions included.
+    /// The neck, bridge and handle rounds, insertions included.
     pub time_necks_s: f64,
     /// The separation of components that touch, then the topological repair.
     pub time_repair_s: f64,
