@@ -35,7 +35,7 @@
 //! `1 - 3 + 3 - 1 = 0` through the node, edges and faces it owns), so the cost is one read of
 //! the signs plus work on the cells the surface crosses.
 
-use super::interior::{FACES, face_groups, face_saddle, interior_joins};
+use super::interior::{Corner, FACES, face_diagonal, face_groups, interior_joins};
 use crate::image::ImageSurface;
 
 /// The 12 edges of a cell as corner pairs.
@@ -55,25 +55,18 @@ const EDGES: [(usize, usize); 12] = [
 ];
 
 /// `χ_c` of the inside of the open face `(p00, u, v)` of a cell with corner values `g`.
-fn open_face(g: &[f64; 8], (p00, u, v): (usize, usize, usize)) -> i64 {
+fn open_face(g: &[f64; 8], (p00, u, v): (Corner, Corner, Corner)) -> i64 {
     let c = [p00, p00 + u, p00 + v, p00 + u + v];
-    let ins = c.map(|k| g[k] < 0.0);
+    let ins = c.map(|k| g[k as usize] < 0.0);
     let corners = ins.iter().filter(|&&b| b).count() as i64;
     // The sides in cyclic order 00-10-11-01.
     let sides = [(0, 1), (1, 3), (3, 2), (2, 0)];
     let both = sides.iter().filter(|&&(a, b)| ins[a] && ins[b]).count() as i64;
-    let pieces = if corners == 0 {
-        0
-    } else if ins[0] == ins[3] && ins[1] == ins[2] && ins[0] != ins[1] {
-        // Ambiguous: the inside diagonal is one piece when the saddle is inside.
-        let [f00, f10, f01, f11] = c.map(|k| g[k]);
-        if face_saddle(f00, f10, f01, f11) < 0.0 {
-            1
-        } else {
-            2
-        }
-    } else {
-        1
+    let pieces = match face_diagonal(g, (p00, u, v)) {
+        _ if corners == 0 => 0,
+        // Ambiguous: the inside diagonal is one piece when the saddle joins it.
+        Some([a, _]) => 1 + i64::from(g[a as usize] >= 0.0),
+        None => 1,
     };
     pieces - (corners - both)
 }
@@ -85,10 +78,7 @@ fn closed_cell(g: &[f64; 8]) -> (i64, i64) {
         .iter()
         .filter(|&&(a, b)| g[a] < 0.0 && g[b] < 0.0)
         .count() as i64;
-    let faces: i64 = FACES
-        .iter()
-        .map(|&(p, u, v)| open_face(g, (p as usize, u as usize, v as usize)))
-        .sum();
+    let faces: i64 = FACES.iter().map(|&f| open_face(g, f)).sum();
     let boundary = corners - edges + faces;
     let groups = face_groups(g);
     let inside_groups = (0..8)
@@ -107,10 +97,7 @@ pub(super) fn owned(g: &[f64; 8]) -> i64 {
     }
     let node = ins(0) as i64;
     let edges = [1, 2, 4].iter().filter(|&&k| ins(0) && ins(k)).count() as i64;
-    let faces: i64 = FACES[..3]
-        .iter()
-        .map(|&(p, u, v)| open_face(g, (p as usize, u as usize, v as usize)))
-        .sum();
+    let faces: i64 = FACES[..3].iter().map(|&f| open_face(g, f)).sum();
     let (closed, boundary) = closed_cell(g);
     node - edges + faces + (closed - boundary)
 }

@@ -65,6 +65,29 @@ pub(super) fn face_saddle(f00: f64, f10: f64, f01: f64, f11: f64) -> f64 {
     }
 }
 
+/// On an ambiguous face `(p00, u, v)` of a cell with corner values `g` (one sign on each
+/// diagonal, the two differ), the diagonal its saddle joins (the asymptotic decider:
+/// the inside pair when [`face_saddle`] is `< 0`, else the outside pair); `None` on any
+/// other face. The scan's face joins, [`face_groups`], the Euler sum and the saddle joins
+/// all decide a face with it.
+pub(super) fn face_diagonal(
+    g: &[f64; 8],
+    (p00, u, v): (Corner, Corner, Corner),
+) -> Option<[Corner; 2]> {
+    let (p10, p01, p11) = (p00 + u, p00 + v, p00 + u + v);
+    let ins = |c: Corner| g[c as usize] < 0.0;
+    let (a, b) = (ins(p00), ins(p10));
+    if a != ins(p11) || b != ins(p01) || a == b {
+        return None;
+    }
+    let [f00, f10, f01, f11] = [p00, p10, p01, p11].map(|c| g[c as usize]);
+    Some(if (face_saddle(f00, f10, f01, f11) < 0.0) == a {
+        [p00, p11]
+    } else {
+        [p10, p01]
+    })
+}
+
 /// The groups of a cell's corners joined along its edges and faces as the scan joins them:
 /// corners of one sign (inside: `g < 0`, as the scan's bits) that are 6-neighbours, and the
 /// diagonal of an ambiguous face that the asymptotic decider picks (the saddle value `< 0`
@@ -90,16 +113,9 @@ pub(super) fn face_groups(g: &[f64; 8]) -> [Corner; 8] {
             }
         }
     }
-    for (p00, u, v) in FACES {
-        let (p10, p01, p11) = (p00 + u, p00 + v, p00 + u + v);
-        let (a, b) = (ins(p00), ins(p10));
-        if a == ins(p11) && b == ins(p01) && a != b {
-            let [f00, f10, f01, f11] = [p00, p10, p01, p11].map(|c| g[c as usize]);
-            if (face_saddle(f00, f10, f01, f11) < 0.0) == a {
-                union(&mut parent, p00, p11);
-            } else {
-                union(&mut parent, p10, p01);
-            }
+    for face in FACES {
+        if let Some([a, b]) = face_diagonal(g, face) {
+            union(&mut parent, a, b);
         }
     }
     std::array::from_fn(|c| find(&parent, c as Corner))

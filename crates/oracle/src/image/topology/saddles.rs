@@ -6,7 +6,7 @@
 //! puts on the wrong side (`rdt_mesher`'s handle reseeding).
 
 use super::euler::mixed_cells;
-use super::interior::{FACES, face_saddle, interior_joins};
+use super::interior::{FACES, face_diagonal, interior_joins};
 use super::necks::Join;
 use crate::image::ImageSurface;
 use glam::DVec3;
@@ -49,24 +49,17 @@ impl ImageSurface {
                 nodes: [node_index(self, corner(a)), node_index(self, corner(b))],
             };
             // The faces at the lowest corner (each face of the grid once).
-            for &(p00, u, v) in &FACES[..3] {
-                let (p00, u, v) = (p00 as usize, u as usize, v as usize);
-                let c = [p00, p00 + u, p00 + v, p00 + u + v];
-                let ins = c.map(|k| g[k] < 0.0);
-                if !(ins[0] == ins[3] && ins[1] == ins[2] && ins[0] != ins[1]) {
+            for &face in &FACES[..3] {
+                let Some([a, b]) = face_diagonal(g, face) else {
                     continue;
-                }
-                let [f00, f10, f01, f11] = c.map(|k| g[k]);
+                };
+                let (p00, u, v) = (face.0 as usize, face.1 as usize, face.2 as usize);
+                let [f00, f10, f01, f11] = [p00, p00 + u, p00 + v, p00 + u + v].map(|k| g[k]);
                 let den = f00 + f11 - f10 - f01;
                 let (x, y) = ((f00 - f01) / den, (f00 - f10) / den);
-                let inside = face_saddle(f00, f10, f01, f11) < 0.0;
-                let (a, b) = if ins[0] == inside {
-                    (c[0], c[3])
-                } else {
-                    (c[1], c[2])
-                };
                 let via = local(p00) + local(u) * x + local(v) * y;
-                out.push((join(a, b, via), inside));
+                let (a, b) = (a as usize, b as usize);
+                out.push((join(a, b, via), g[a] < 0.0));
             }
             for j in interior_joins(g) {
                 let (a, b) = (j.a as usize, j.b as usize);
