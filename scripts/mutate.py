@@ -214,6 +214,10 @@ def bases():
             ("phantom", read("fixtures/images/phantom_i16_32.nii.gz"), ["--iso", "100"], "8"),
             ("ball_i16", gzip.compress(nifti1_bytes(12, "i16"), mtime=0), ["--iso", "50"], "3"),
         ]),
+        "nii2": (".nii", [
+            ("example_nifti2", gzip.decompress(read("fixtures/images/nibabel_example_nifti2.nii.gz")),
+             ["--iso", "500", "--frame", "1"], "3"),
+        ]),
         "raw": (".raw", [
             ("ball_u8", ball_voxels(12, "u8"),
              ["--dims", "12,12,12", "--dtype", "u8", "--iso", "50"], "2"),
@@ -335,6 +339,28 @@ NIFTI_FIELDS = [(0, "i"), (40, "h"), (42, "h"), (44, "h"), (46, "h"), (48, "h"),
                 (300, "f"), (316, "f"), (256, "f"), (268, "f")]
 
 
+# NIfTI-2 header fields (offset, struct format): sizeof_hdr, datatype, bitpix, dim[0..4],
+# pixdim[1..4], vox_offset, scl_slope, scl_inter, qform_code, sform_code, quatern_b, srow_x[0].
+NIFTI2_FIELDS = [(0, "i"), (12, "h"), (14, "h"), (16, "q"), (24, "q"), (40, "q"), (48, "q"),
+                 (112, "d"), (120, "d"), (128, "d"), (168, "q"), (176, "d"), (184, "d"),
+                 (344, "i"), (348, "i"), (352, "d"), (400, "d")]
+
+
+def m_nifti2_field(d, r):
+    if len(d) < 540:
+        return m_flip(d, r)
+    off, fmt = r.choice(NIFTI2_FIELDS)
+    if fmt == "d":
+        v = r.choice([0.0, -1.0, 1e300, 1e-300, float("nan"), float("inf"), 0.5, 2.0])
+    elif fmt == "q":
+        v = r.choice([0, -1, 1, 2, 3, 4, 7, 8, 544, 545, 2 ** 40, 2 ** 63 - 1, -2 ** 63])
+    elif fmt == "i":
+        v = r.choice([0, 348, 540, -1, 1, 4, 5, 2 ** 31 - 1])
+    else:
+        v = r.choice([0, -1, 2, 4, 8, 16, 64, 512, 32767, -32768])
+    return d[:off] + struct.pack("<" + fmt, v) + d[off + struct.calcsize(fmt):]
+
+
 def m_nifti_field(d, r):
     if len(d) < 348:
         return m_flip(d, r)
@@ -393,6 +419,10 @@ def mutators(fmt):
         return [m_flip, m_truncate, m_nifti_field, m_nifti_field, m_nifti_field,
                 lambda d, r: d + b"\0" * r.choice([1, 100]),
                 lambda d, r: binary_values(d, r, 352, 4, "f")]
+    if fmt == "nii2":
+        return [m_flip, m_truncate, m_nifti2_field, m_nifti2_field, m_nifti2_field,
+                lambda d, r: d + b"\0" * r.choice([1, 100]),
+                lambda d, r: binary_values(d, r, 544, 4, "i")]
     if fmt == "nii_gz":
         return [m_gzip, m_gzip, m_gzip, m_flip, m_truncate]
     if fmt == "raw":

@@ -433,6 +433,63 @@ def check_nifti(data):
     return "image"
 
 
+def check_nifti2(data, frame=1):
+    """A NIfTI-2 file read at --frame `frame` (the fixture's args)."""
+    if len(data) < 540:
+        raise Reject("short header")
+    for e in "<>":
+        if struct.unpack_from(e + "i", data, 0)[0] == 540:
+            break
+    else:
+        raise Reject("sizeof_hdr != 540")
+    if data[4:8] not in (b"n+2\0", b"ni2\0") or data[8:12] != b"\r\n\x1a\n":
+        raise Reject("bad magic")
+    dim = struct.unpack_from(e + "8q", data, 16)
+    if not 1 <= dim[0] <= 7 or any(d < 1 for d in dim[1:1 + dim[0]]):
+        raise Reject("bad dim")
+    if dim[0] < 3 or dim[3] == 1:
+        raise Reject("not a 3D volume")
+    if any(d != 1 for d in dim[5:1 + dim[0]]):
+        raise Reject("vector voxels")
+    frames = dim[4] if dim[0] >= 4 else 1
+    if frame >= frames:
+        raise Reject("no such frame")
+    code, bits = struct.unpack_from(e + "hh", data, 12)
+    if code not in NIFTI_SIZES or bits != 8 * NIFTI_SIZES[code]:
+        raise Reject("bad datatype/bitpix")
+    pix = struct.unpack_from(e + "8d", data, 104)
+    qcode, scode = struct.unpack_from(e + "ii", data, 344)
+    if not 1 <= scode <= 4 and not all(math.isfinite(p) and p != 0 for p in pix[1:4]):
+        raise Reject("bad pixdim (and no sform)")
+    (off,) = struct.unpack_from(e + "q", data, 168)
+    if off < 544 or off > 1e15:
+        raise Reject("bad vox_offset")
+    slope, inter = struct.unpack_from(e + "dd", data, 176)
+    if math.isinf(slope) or (slope != 0 and not math.isnan(slope) and not math.isfinite(inter)):
+        raise Reject("non-finite scaling")
+    if dim[1] * dim[2] * dim[3] * frames > 2 ** 40:
+        raise Reject("too large")
+    need = off + dim[1] * dim[2] * dim[3] * frames * NIFTI_SIZES[code]
+    if len(data) < need:
+        raise Reject("truncated voxels")
+    try:  # nibabel as the reference for everything it checks
+        import nibabel
+        import numpy as np
+        img = nibabel.Nifti2Image.from_bytes(data)
+        vox = np.asanyarray(img.dataobj)[..., frame]
+        if not np.all(np.isfinite(img.affine)) or abs(np.linalg.det(img.affine[:3, :3])) == 0:
+            raise Reject("nibabel: singular or non-finite affine")
+        if vox.dtype.kind == "f" and not np.all(np.isfinite(vox)):
+            raise Reject("non-finite voxels")
+    except Reject:
+        raise
+    except ImportError:
+        pass
+    except Exception as ex:  # nibabel rejects it
+        raise Reject("nibabel: %s" % str(ex).splitlines()[0][:80] if str(ex) else type(ex))
+    return "image"
+
+
 def check_nii_gz(data):
     try:
         raw = gzip.decompress(data)  # checks every member's CRC-32 and length
@@ -510,4 +567,4 @@ def trimesh_rejects(path, kind):
 
 CHECKS = {"ply_ascii": check_ply, "ply_binary": check_ply, "off": check_off, "obj": check_obj,
           "stl_ascii": check_stl, "stl_binary": check_stl, "xyz": check_xyz, "nii": check_nifti,
-          "nii_gz": check_nii_gz}
+          "nii_gz": check_nii_gz, "nii2": check_nifti2}

@@ -311,12 +311,15 @@ def mesh_file(
     smooth_polyhedron: bool = False,
     bounding_sphere=None,
     progress: Optional[Callable[[dict], Any]] = None,
+    frame: Optional[int] = None,
+    nan_as: Optional[float] = None,
     **criteria,
 ) -> Union[Mesh, Dict[int, Mesh]]:
     """Mesh what ``cargo xtask mesh`` reads: an image (.nii, .nii.gz, .tif, .tiff, .raw, a
     folder of slices), a mesh (.ply .off .obj .stl), a point set (.xyz, a .ply without faces),
     or ``implicit:NAME`` / ``implicit:EXPR`` (with ``bounding_sphere=(center, radius)``).
-    The same defaults as the CLI, hence the same mesh."""
+    The same defaults as the CLI, hence the same mesh. ``frame`` picks one 3D volume of a
+    NIfTI series (``--frame``); ``nan_as`` gives NaN voxels a value (``--nan-as``)."""
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"mesh_file: a path is needed, got {type(path).__name__}")
     spec = os.fspath(path)
@@ -328,19 +331,25 @@ def mesh_file(
     sp = None
     if spacing is not None:
         sp = [float(x) for x in np.broadcast_to(np.asarray(spacing, dtype=np.float64), (3,))]
+    nan_as = _check_number("nan_as", nan_as)
+    if frame is not None:
+        if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)) or frame < 0:
+            raise ValueError(f"frame {frame!r}: the frame of a series is a whole number from 0")
+        frame = int(frame)
     p = _params(**criteria)
     which = _labels_arg(labels, label)
     if which is not None:
-        todo = _core.file_labels(spec) if which == "all" else which
+        todo = _core.file_labels(spec, frame) if which == "all" else which
         if not todo:
             raise ValueError(f"labels: {spec} has no label other than the background 0: nothing to mesh")
         return {
-            l: Mesh(_core.mesh_spec(spec, bs, None, l, False, None, sp, read_as, smooth_polyhedron, p, progress))
+            l: Mesh(_core.mesh_spec(spec, bs, None, l, False, None, sp, read_as, smooth_polyhedron, p, progress,
+                                    frame=frame, nan_as=nan_as))
             for l in todo
         }
     lab = None if label is None else int(label)
     return Mesh(_core.mesh_spec(spec, bs, iso, lab, bool(dark_foreground), background, sp, read_as,
-                                bool(smooth_polyhedron), p, progress))
+                                bool(smooth_polyhedron), p, progress, frame=frame, nan_as=nan_as))
 
 
 def _sphere(bs):

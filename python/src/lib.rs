@@ -527,7 +527,7 @@ fn volume_labels(volume: &Bound<'_, PyUntypedArray>) -> PyResult<Vec<i64>> {
 
 /// Mesh what the CLI reads: a file, a folder of slices or `implicit:NAME|EXPR`.
 #[pyfunction]
-#[pyo3(signature = (spec, bounding_sphere, iso, label, dark_foreground, background, spacing, read_as, smooth_polyhedron, params, progress=None))]
+#[pyo3(signature = (spec, bounding_sphere, iso, label, dark_foreground, background, spacing, read_as, smooth_polyhedron, params, progress=None, frame=None, nan_as=None))]
 #[allow(clippy::too_many_arguments)]
 fn mesh_spec<'py>(
     py: Python<'py>,
@@ -542,6 +542,8 @@ fn mesh_spec<'py>(
     smooth_polyhedron: bool,
     params: Params,
     progress: Option<Bound<'py, PyAny>>,
+    frame: Option<usize>,
+    nan_as: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut opts = InputOptions {
         bounding_sphere: bounding_sphere.map(|(c, r)| oracle::BoundingSphere {
@@ -560,6 +562,8 @@ fn mesh_spec<'py>(
     if let Some(h) = spacing {
         opts.load.spacing = Some(h);
     }
+    opts.load.frame = frame;
+    opts.load.nan_as = nan_as;
     opts.read_as = match read_as.as_deref() {
         None => None,
         Some("mesh") => Some(pipeline::ReadAs::Mesh),
@@ -577,13 +581,18 @@ fn mesh_spec<'py>(
 
 /// The labels of an image file, without 0.
 #[pyfunction]
-fn file_labels(spec: String) -> PyResult<Vec<i64>> {
+#[pyo3(signature = (spec, frame=None))]
+fn file_labels(spec: String, frame: Option<usize>) -> PyResult<Vec<i64>> {
     if !Path::new(&spec).exists() {
         return Err(PyFileNotFoundError::new_err(format!(
             "{spec}: no such file or folder"
         )));
     }
-    pipeline::image_labels(&spec, &Default::default()).map_err(pipeline_err)
+    let load = oracle::image::LoadOptions {
+        frame,
+        ..Default::default()
+    };
+    pipeline::image_labels(&spec, &load).map_err(pipeline_err)
 }
 
 fn points_of(a: &PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<Vec<DVec3>> {

@@ -62,3 +62,55 @@ def test_save_writes_what_the_cli_writes(xtask, tmp_path):
     m.save(out)
     assert out.read_bytes() == (tmp_path / "cli.ply").read_bytes()
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+FUNCTIONAL = PHANTOM.replace("phantom_i16_32.nii.gz", "nibabel_functional.nii.gz")
+RESAMPLED = PHANTOM.replace("phantom_i16_32.nii.gz", "nibabel_resampled_anat_moved.nii")
+
+
+def test_a_frame_of_a_series_is_the_mesh_of_that_volume():
+    # nibabel's functional.nii (17 x 21 x 3 x 20): frame k read by the library is nibabel's
+    # volume k, bit for bit; a series without a frame is refused with the flag's name.
+    img = nib.load(FUNCTIONAL)
+    assert img.shape == (17, 21, 3, 20)
+    for k in (0, 7, 19):
+        m = rdt_mesher.mesh_file(FUNCTIONAL, frame=k, iso=3752, size=4.0, verify=False)
+        ref = rdt_mesher.mesh_image(img.get_fdata()[..., k], affine=img.affine, iso=3752, size=4.0, verify=False)
+        assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces), k
+    try:
+        rdt_mesher.mesh_file(FUNCTIONAL, iso=3752)
+    except ValueError as e:
+        assert "--frame K (0 to 19)" in str(e), e
+    else:
+        raise AssertionError("a series without a frame was meshed")
+
+
+def test_nan_voxels_take_nan_as_like_numpy_nan_to_num():
+    # nibabel's resampled_anat_moved.nii: 153 NaN voxels outside the original field of view.
+    img = nib.load(RESAMPLED)
+    data = img.get_fdata()
+    assert int(np.isnan(data).sum()) == 153
+    m = rdt_mesher.mesh_file(RESAMPLED, iso=5000, nan_as=0, size=1.0, verify=False)
+    ref = rdt_mesher.mesh_image(np.nan_to_num(data, nan=0.0), affine=img.affine, iso=5000, size=1.0, verify=False)
+    assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces)
+    try:
+        rdt_mesher.mesh_file(RESAMPLED, iso=5000)
+    except ValueError as e:
+        assert "--nan-as VALUE" in str(e), e
+    else:
+        raise AssertionError("NaN voxels were meshed without nan_as")
+
+
+NIFTI2 = PHANTOM.replace("phantom_i16_32.nii.gz", "nibabel_example_nifti2.nii.gz")
+
+
+def test_a_nifti2_file_meshes_as_nibabel_reads_it():
+    # nibabel's example_nifti2.nii.gz (NIfTI-2, 32 x 20 x 12 x 2 int16): each frame's mesh is
+    # the mesh of nibabel's volume with nibabel's affine, bit for bit.
+    img = nib.load(NIFTI2)
+    assert isinstance(img, nib.Nifti2Image)
+    for k in (0, 1):
+        m = rdt_mesher.mesh_file(NIFTI2, frame=k, iso=500, size=2.0, verify=False)
+        ref = rdt_mesher.mesh_image(img.get_fdata()[..., k], affine=img.affine, iso=500, size=2.0, verify=False)
+        assert len(m.vertices) > 100
+        assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces), k

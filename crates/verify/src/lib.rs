@@ -44,6 +44,7 @@ pub mod bvh;
 pub mod certificate;
 pub mod data_support;
 pub mod distance;
+mod hypothesis;
 pub mod intersect;
 pub mod level_set;
 pub mod medial;
@@ -281,6 +282,10 @@ pub struct Report {
     /// Images: the mesh's pieces against the voxel scan's components.
     pub scan_components: Option<scan_components::ScanComponents>,
     pub hausdorff_bound: Option<HausdorffBound>,
+    /// d_M was an estimate and the theorems' measured consequences failed: S is thinner
+    /// than the estimate somewhere, and the theorem checks say "no guarantee" (or
+    /// `loose-epsilon` FAILs when eps was asked for); see the `hypothesis` module.
+    pub dm_estimate_contradicted: bool,
     /// Point-set and mesh inputs: the mesh against the input data ([`data_support`]).
     pub data_support: Option<DataSupport>,
     pub checks: Vec<Check>,
@@ -444,6 +449,7 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
         components_sampled: None,
         scan_components: None,
         hausdorff_bound: None,
+        dm_estimate_contradicted: false,
         data_support: None,
         checks: Vec::new(),
     };

@@ -40,6 +40,7 @@ pub(crate) fn against(
     let balls = certificate_checks(r, mesh, surface, opts, &dm, measured.then_some(hausdorff));
 
     normals_check(r, mesh, &normals);
+    crate::hypothesis::reconcile(r, opts);
 
     opts.stage("components");
     components_sampled_check(r, mesh, bvh, surface, opts, &balls);

@@ -31,6 +31,13 @@ pub struct SurfaceOptions {
     /// Image stacks and raw volumes: voxel spacing `sx,sy,sz` in world units.
     #[arg(long, allow_hyphen_values = true, value_parser = parse_spacing)]
     pub spacing: Option<[f64; 3]>,
+    /// Image: the 3D volume of a NIfTI series (dim[4] > 1: fMRI, diffusion) to mesh, from 0.
+    #[arg(long)]
+    pub frame: Option<usize>,
+    /// Image: mesh NaN voxels (no value: resampled or masked float images) as this value,
+    /// e.g. 0 (default: a NaN voxel is an error).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_nan_as)]
+    pub nan_as: Option<f64>,
     /// Raw volume: dimensions `nx,ny,nz`.
     #[arg(long, allow_hyphen_values = true, value_parser = parse_dims)]
     pub dims: Option<[usize; 3]>,
@@ -81,6 +88,19 @@ pub fn parse_spacing(s: &str) -> Result<[f64; 3], String> {
     })
 }
 
+/// `--nan-as VALUE`: a finite number.
+pub fn parse_nan_as(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| {
+            format!(
+                "--nan-as {s}: the value for NaN voxels must be a finite number, e.g. --nan-as 0"
+            )
+        })
+}
+
 /// `--dims nx,ny,nz`: three positive whole numbers.
 pub fn parse_dims(s: &str) -> Result<[usize; 3], String> {
     triple::<usize>(s, |v| *v > 0).ok_or_else(|| {
@@ -103,7 +123,12 @@ pub fn image_load_options(o: &SurfaceOptions) -> Result<LoadOptions> {
         (None, None) => None,
         _ => bail!("a raw volume needs both --dims nx,ny,nz and --dtype TYPE"),
     };
-    Ok(LoadOptions { spacing, raw })
+    Ok(LoadOptions {
+        spacing,
+        raw,
+        frame: o.frame,
+        nan_as: o.nan_as,
+    })
 }
 
 fn bounding_sphere(s: Option<&str>) -> Result<Option<BoundingSphere>> {

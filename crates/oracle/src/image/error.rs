@@ -33,14 +33,8 @@ pub enum ImageError {
         path.display()
     )]
     Truncated { path: PathBuf, detail: String },
-    #[error("{}: not a valid NIfTI-1 file ({detail})", path.display())]
+    #[error("{}: not a valid NIfTI file ({detail})", path.display())]
     Nifti { path: PathBuf, detail: String },
-    #[error(
-        "{}: a NIfTI-2 file (sizeof_hdr = 540); only NIfTI-1 is supported: convert it, e.g. with \
-         nibabel: `nib.save(nib.Nifti1Image.from_image(nib.load(IN)), OUT)`",
-        path.display()
-    )]
-    Nifti2 { path: PathBuf },
     #[error("{}: {format} header field {field} {detail}", path.display())]
     Field {
         path: PathBuf,
@@ -48,7 +42,7 @@ pub enum ImageError {
         field: String,
         detail: String,
     },
-    #[error("{}: NIfTI-1 header field {field} {detail}", path.display())]
+    #[error("{}: NIfTI header field {field} {detail}", path.display())]
     BadHeader {
         path: PathBuf,
         field: String,
@@ -88,13 +82,20 @@ pub enum ImageError {
         nz: u64,
     },
     #[error(
-        "{}: dim = {dims:?} has {frames} frames (dim[4] > 1); extract one 3D volume first (e.g. `fslroi` or nibabel)",
-        path.display()
+        "{}: dim = {dims:?} is a series of {frames} 3D volumes (dim[4] = {frames}); pass --frame K (0 to {}) to mesh one of them",
+        path.display(),
+        frames - 1
     )]
     FourD {
         path: PathBuf,
         dims: Vec<u64>,
         frames: u64,
+    },
+    #[error("{}: dim = {dims:?}: {detail}", path.display())]
+    Frame {
+        path: PathBuf,
+        dims: Vec<u64>,
+        detail: String,
     },
     #[error(
         "{}the image is empty (dims {dims:?}); every dimension must be at least 1",
@@ -127,13 +128,22 @@ pub enum ImageError {
     )]
     Constant { path: Option<PathBuf>, value: f64 },
     #[error(
-        "{}voxel {index:?} is NaN or infinite; fix the data (or replace NaN by the background) before meshing",
-        show(path)
+        "{}voxel {index:?} is {}",
+        show(path),
+        if *nan {
+            "NaN (no value): pass --nan-as VALUE to mesh NaN voxels as VALUE (e.g. --nan-as 0 where NaN marks the background), or replace them before meshing"
+        } else {
+            "infinite: fix the data before meshing (--nan-as replaces NaN only)"
+        }
     )]
     NaN {
         path: Option<PathBuf>,
         index: [usize; 3],
+        /// NaN (else infinite).
+        nan: bool,
     },
+    #[error("--nan-as {value}: the value for NaN voxels must be a finite number")]
+    NanValue { value: f64 },
     #[error(
         "iso value required for a non-binary image; the data range is [{min}, {max}] (pass --iso VALUE, or --label L for a segmentation)"
     )]

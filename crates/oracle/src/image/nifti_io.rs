@@ -1,5 +1,6 @@
-//! NIfTI-1 reading (ours: file format support; the header is parsed by the `nifti` crate, the
-//! rest here) and a small writer for tests.
+//! NIfTI-1 and NIfTI-2 reading (ours: file format support; a NIfTI-1 header is parsed by the
+//! `nifti` crate, a NIfTI-2 one by [`super::nifti_header`], the rest here), one frame of a
+//! series, and a small NIfTI-1 writer for tests.
 //!
 //! The voxel-to-world transform is computed here, not by `nifti` (whose `nalgebra_affine`
 //! helpers panic on a negative `pixdim`), by nibabel's rules (`get_best_affine`, after the
@@ -15,43 +16,48 @@
 //! silently repair into something else: a `pixdim[1..4]` that is 0, NaN or infinite when the
 //! transform uses it (methods 2 and 3), and a quaternion with `b² + c² + d² > 1`.
 
+use super::nifti_header::{Header, NIFTI2_SIZE, is_nifti2, parse_nifti2};
 use super::volume::check_affine;
 use super::{Dtype, ImageError, Volume, Voxel, Voxels};
 use glam::{DAffine3, DMat3, DVec3};
-use nifti::{NiftiHeader, NiftiType};
+use nifti::NiftiHeader;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Whether a `qform_code` / `sform_code` selects its transform (valid codes are 1 to 4).
-fn code_set(code: i16) -> bool {
+fn code_set(code: i64) -> bool {
     (1..=4).contains(&code)
 }
 
 /// Voxel-to-world affine of a NIfTI-1 header (see the module documentation for the rule).
 /// Returns the affine and the name of the header field it came from.
 pub fn nifti_affine(h: &NiftiHeader) -> (DAffine3, &'static str) {
-    let f = |x: f32| x as f64;
+    header_affine(&Header::from_nifti1(h))
+}
+
+/// [`nifti_affine`] of NIfTI-1 and NIfTI-2 headers.
+fn header_affine(h: &Header) -> (DAffine3, &'static str) {
     if code_set(h.sform_code) {
-        let r = [h.srow_x, h.srow_y, h.srow_z];
+        let r = h.srow;
         let m = DMat3::from_cols(
-            DVec3::new(f(r[0][0]), f(r[1][0]), f(r[2][0])),
-            DVec3::new(f(r[0][1]), f(r[1][1]), f(r[2][1])),
-            DVec3::new(f(r[0][2]), f(r[1][2]), f(r[2][2])),
+            DVec3::new(r[0][0], r[1][0], r[2][0]),
+            DVec3::new(r[0][1], r[1][1], r[2][1]),
+            DVec3::new(r[0][2], r[1][2], r[2][2]),
         );
-        let t = DVec3::new(f(r[0][3]), f(r[1][3]), f(r[2][3]));
+        let t = DVec3::new(r[0][3], r[1][3], r[2][3]);
         return (DAffine3::from_mat3_translation(m, t), "sform (srow_x/y/z)");
     }
     // nibabel's header fixes: 0 becomes 1, a negative value its absolute value.
     let px = |i: usize| {
-        let d = f(h.pixdim[i]).abs();
+        let d = h.pixdim[i].abs();
         if d == 0.0 || !d.is_finite() { 1.0 } else { d }
     };
     if code_set(h.qform_code) {
         let q = Qform {
-            b: f(h.quatern_b),
-            c: f(h.quatern_c),
-            d: f(h.quatern_d),
-            offset: DVec3::new(f(h.quatern_x), f(h.quatern_y), f(h.quatern_z)),
+            b: h.quatern_b,
+            c: h.quatern_c,
+            d: h.quatern_d,
+            offset: DVec3::from_array(h.qoffset),
             qfac: if h.pixdim[0] == -1.0 { -1.0 } else { 1.0 },
             pixdim: DVec3::new(px(1), px(2), px(3)),
         };
@@ -64,7 +70,7 @@ pub fn nifti_affine(h: &NiftiHeader) -> (DAffine3, &'static str) {
 /// [`nifti_affine`] after checking the fields it uses: `pixdim[1..4]` finite and non-zero
 /// (qform and pixdim methods), the quaternion's `b² + c² + d² <= 1` (qform, with nibabel's
 /// tolerance of 3 f32 epsilons).
-fn checked_affine(path: &Path, h: &NiftiHeader) -> Result<(DAffine3, &'static str), ImageError> {
+fn checked_affine(path: &Path, h: &Header) -> Result<(DAffine3, &'static str), ImageError> {
     if !code_set(h.sform_code) {
         for i in 1..=3 {
             let d = h.pixdim[i];
@@ -81,9 +87,9 @@ fn checked_affine(path: &Path, h: &NiftiHeader) -> Result<(DAffine3, &'static st
         }
     }
     if !code_set(h.sform_code) && code_set(h.qform_code) {
-        let (b, c, d) = (h.quatern_b as f64, h.quatern_c as f64, h.quatern_d as f64);
+        let (b, c, d) = (h.quatern_b, h.quatern_c, h.quatern_d);
         let n2 = b * b + c * c + d * d;
-        if !(n2 <= 1.0 + 3.0 * f32::EPSILON as f64) {
+        if !(n2 <= 1.0 + h.quaternion_tolerance()) {
             return Err(bad_header(
                 path,
                 "quatern_b/c/d",
@@ -94,7 +100,7 @@ fn checked_affine(path: &Path, h: &NiftiHeader) -> Result<(DAffine3, &'static st
             ));
         }
     }
-    Ok(nifti_affine(h))
+    Ok(header_affine(h))
 }
 
 /// A NIfTI-1 quaternion transform (the `qform_code > 0` method).
@@ -205,15 +211,22 @@ pub(crate) fn gunzip(path: &Path, raw: &[u8]) -> Result<Vec<u8>, ImageError> {
     }
 }
 
-/// Parse the 348-byte NIfTI-1 header at the start of `b` (NIfTI-2 and other files are errors).
-fn parse_header(path: &Path, b: &[u8]) -> Result<NiftiHeader, ImageError> {
-    if b.len() >= 4 {
-        let w: [u8; 4] = b[..4].try_into().expect("4 bytes");
-        if i32::from_le_bytes(w) == 540 || i32::from_be_bytes(w) == 540 {
-            return Err(ImageError::Nifti2 {
+/// Parse the NIfTI-1 (348 bytes) or NIfTI-2 (540 bytes) header at the start of `b`.
+fn parse_header(path: &Path, b: &[u8]) -> Result<Header, ImageError> {
+    if is_nifti2(b) {
+        if b.len() < NIFTI2_SIZE {
+            return Err(ImageError::Truncated {
                 path: path.to_path_buf(),
+                detail: format!(
+                    "a NIfTI-2 header has {NIFTI2_SIZE} bytes, the file has {}",
+                    b.len()
+                ),
             });
         }
+        return parse_nifti2(b).map_err(|detail| ImageError::Nifti {
+            path: path.to_path_buf(),
+            detail,
+        });
     }
     if b.len() < HEADER_SIZE {
         return Err(ImageError::Truncated {
@@ -250,12 +263,12 @@ fn parse_header(path: &Path, b: &[u8]) -> Result<NiftiHeader, ImageError> {
             ),
         ));
     }
-    Ok(h)
+    Ok(Header::from_nifti1(&h))
 }
 
-/// Size of a NIfTI-1 header; a single file's voxels start at `vox_offset >= 352`.
+/// Size of a NIfTI-1 header; a single file's voxels start at `vox_offset >= 352` (NIfTI-2:
+/// 540 and 544).
 const HEADER_SIZE: usize = 348;
-const MIN_SINGLE_OFFSET: f64 = 352.0;
 
 fn bad_header(path: &Path, field: &str, detail: String) -> ImageError {
     ImageError::BadHeader {
@@ -271,11 +284,21 @@ struct Layout {
     dtype: Dtype,
     /// Byte offset of the voxels in the data file (`vox_offset`).
     offset: usize,
+    /// The 3D volumes stored one after the other (`dim[4]`, 1 for a 3D file).
+    frames: usize,
+    /// The one to read (`--frame`; 0 for a 3D file).
+    frame: usize,
 }
 
-/// Check `dim`, `datatype` and `vox_offset` (`single`: data in the header's file).
-fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageError> {
-    let dim: Vec<i64> = h.dim.iter().map(|&d| d as i16 as i64).collect();
+/// Check `dim`, `datatype` and `vox_offset` (`single`: data in the header's file) and the
+/// requested `frame` of a series.
+fn layout(
+    path: &Path,
+    h: &Header,
+    single: bool,
+    frame: Option<usize>,
+) -> Result<Layout, ImageError> {
+    let dim: Vec<i64> = h.dim.to_vec();
     if !(1..=7).contains(&dim[0]) {
         return Err(bad_header(
             path,
@@ -301,14 +324,7 @@ fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageErr
             nz: dims[2] as u64,
         });
     }
-    let frames: u64 = (4..=nd).map(|i| dim[i] as u64).product();
-    if frames > 1 {
-        return Err(ImageError::FourD {
-            path: path.to_path_buf(),
-            dims: dims_all,
-            frames,
-        });
-    }
+    let frames = series_frames(path, &dims_all, frame)?;
     let dtype = dtype_of(path, h)?;
     if h.bitpix as i64 != 8 * dtype.size() as i64 {
         return Err(bad_header(
@@ -324,8 +340,13 @@ fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageErr
             ),
         ));
     }
-    let off = h.vox_offset as f64;
-    let min = if single { MIN_SINGLE_OFFSET } else { 0.0 };
+    let off = h.vox_offset;
+    let header = if h.version == 2 {
+        NIFTI2_SIZE
+    } else {
+        HEADER_SIZE
+    };
+    let min = if single { (header + 4) as f64 } else { 0.0 };
     if !(off.is_finite() && off.fract() == 0.0 && off >= min && off <= 1e15) {
         return Err(bad_header(
             path,
@@ -334,7 +355,7 @@ fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageErr
                 "= {off}: the voxel data offset must be a whole number of bytes, at least {min} \
                  {}",
                 if single {
-                    "in a .nii file (348 header bytes and 4 extension bytes come first)"
+                    "in a .nii file (the header and 4 extension bytes come first)"
                 } else {
                     "in the .img file"
                 }
@@ -345,26 +366,67 @@ fn layout(path: &Path, h: &NiftiHeader, single: bool) -> Result<Layout, ImageErr
         dims,
         dtype,
         offset: off as usize,
+        frames: frames as usize,
+        frame: frame.unwrap_or(0),
     })
 }
 
-fn dtype_of(path: &Path, h: &NiftiHeader) -> Result<Dtype, ImageError> {
-    Ok(match h.data_type() {
-        Ok(NiftiType::Uint8) => Dtype::U8,
-        Ok(NiftiType::Int8) => Dtype::I8,
-        Ok(NiftiType::Uint16) => Dtype::U16,
-        Ok(NiftiType::Int16) => Dtype::I16,
-        Ok(NiftiType::Uint32) => Dtype::U32,
-        Ok(NiftiType::Int32) => Dtype::I32,
-        Ok(NiftiType::Float32) => Dtype::F32,
-        Ok(NiftiType::Float64) => Dtype::F64,
-        Ok(t) => {
-            return Err(ImageError::UnsupportedType {
-                path: path.to_path_buf(),
-                field: format!("datatype {} ({t:?})", h.datatype),
-            });
-        }
-        Err(_) => {
+/// The number of 3D volumes of a file of dimensions `dims_all` (`dim[1..=dim[0]]`), checked
+/// against the requested `frame`: a series (`dim[4] > 1`) needs one, a 3D file takes only 0,
+/// and dimensions past the fourth (vector or tensor voxels) are not frames.
+fn series_frames(path: &Path, dims_all: &[u64], frame: Option<usize>) -> Result<u64, ImageError> {
+    let frames = dims_all.get(3).copied().unwrap_or(1);
+    let beyond: u64 = dims_all.iter().skip(4).product();
+    let err = |detail: String| ImageError::Frame {
+        path: path.to_path_buf(),
+        dims: dims_all.to_vec(),
+        detail,
+    };
+    if beyond > 1 {
+        return Err(err(format!(
+            "dim[5..] = {:?}: each voxel holds {beyond} values (a vector or tensor image), not one intensity; extract one component first (e.g. with nibabel)",
+            &dims_all[4..]
+        )));
+    }
+    match frame {
+        None if frames > 1 => Err(ImageError::FourD {
+            path: path.to_path_buf(),
+            dims: dims_all.to_vec(),
+            frames,
+        }),
+        Some(k) if k as u64 >= frames => Err(err(format!(
+            "--frame {k}: the file has {frames} frame(s) (dim[4] = {frames}), numbered 0 to {}",
+            frames - 1
+        ))),
+        _ => Ok(frames),
+    }
+}
+
+fn dtype_of(path: &Path, h: &Header) -> Result<Dtype, ImageError> {
+    let other = |name: &str| ImageError::UnsupportedType {
+        path: path.to_path_buf(),
+        field: format!("datatype {} ({name})", h.datatype),
+    };
+    Ok(match h.datatype {
+        2 => Dtype::U8,
+        256 => Dtype::I8,
+        512 => Dtype::U16,
+        4 => Dtype::I16,
+        768 => Dtype::U32,
+        8 => Dtype::I32,
+        16 => Dtype::F32,
+        64 => Dtype::F64,
+        // The other codes of the standard (nifti1.h), named as the `nifti` crate names them.
+        1 => return Err(other("Binary")),
+        32 => return Err(other("Complex64")),
+        128 => return Err(other("Rgb24")),
+        1024 => return Err(other("Int64")),
+        1280 => return Err(other("Uint64")),
+        1536 => return Err(other("Float128")),
+        1792 => return Err(other("Complex128")),
+        2048 => return Err(other("Complex256")),
+        2304 => return Err(other("Rgba32")),
+        _ => {
             return Err(ImageError::UnsupportedType {
                 path: path.to_path_buf(),
                 field: format!("datatype code {}", h.datatype),
@@ -376,8 +438,8 @@ fn dtype_of(path: &Path, h: &NiftiHeader) -> Result<Dtype, ImageError> {
 /// `scl_slope`/`scl_inter` as nibabel reads them: a slope of 0 or NaN means no scaling (the
 /// intercept is then ignored); an infinite slope, or a non-finite intercept with a valid slope,
 /// is an error.
-fn scaling(path: &Path, h: &NiftiHeader) -> Result<(f64, f64), ImageError> {
-    let (slope, inter) = (h.scl_slope as f64, h.scl_inter as f64);
+fn scaling(path: &Path, h: &Header) -> Result<(f64, f64), ImageError> {
+    let (slope, inter) = (h.scl_slope, h.scl_inter);
     if slope == 0.0 || slope.is_nan() {
         return Ok((1.0, 0.0));
     }
@@ -432,18 +494,38 @@ fn pair_paths(path: &Path) -> (PathBuf, PathBuf) {
     }
 }
 
-/// Read a NIfTI-1 volume (`.nii`, `.nii.gz`, or a `.hdr`/`.img` pair, each possibly gzipped).
-/// The voxels keep their on-disk type and are read from `vox_offset`; `scl_slope`/`scl_inter`
-/// are stored as the volume's scaling (applied at sampling time, see [`scaling`]); the affine
-/// follows [`nifti_affine`] and must pass the volume's transform checks.
+/// Read a NIfTI-1 or NIfTI-2 volume (`.nii`, `.nii.gz`, or a `.hdr`/`.img` pair, each possibly
+/// gzipped). The voxels keep their on-disk type and are read from `vox_offset`;
+/// `scl_slope`/`scl_inter` are stored as the volume's scaling (applied at sampling time, see
+/// [`scaling`]); the affine follows [`nifti_affine`] and must pass the volume's transform checks.
 ///
 /// Strict: a gzip stream is read to its end (checksums and lengths checked), `sizeof_hdr` must
-/// be 348, `vox_offset` a whole number (at least 352 in a `.nii`), and the data after it at least
-/// `dim` x datatype bytes (bytes after those are ignored, as nibabel does, with a
-/// [`Volume::notes`] entry). Errors name the field: truncated or corrupt data, NIfTI-2 or
-/// garbage, 2D images (`dim[3] = 1`), 4D series (`dim[4] > 1`), unsupported types (complex,
-/// RGB, 64-bit integers), bad `pixdim` or scaling, unusable transforms.
+/// be 348 (NIfTI-2: 540, with its magic), `vox_offset` a whole number (at least 352 in a `.nii`,
+/// NIfTI-2 544), and the data after it at least `dim` x datatype bytes (bytes after those are
+/// ignored, as nibabel does, with a [`Volume::notes`] entry). Errors name the field: truncated
+/// or corrupt data, garbage, 2D images (`dim[3] = 1`), 4D series (`dim[4] > 1`: see
+/// [`read_nifti_frame`]), unsupported types (complex, RGB, 64-bit integers), bad `pixdim` or
+/// scaling, unusable transforms.
 pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
+    read_nifti_frame(path, None)
+}
+
+/// [`read_nifti`] of frame `frame` of a series (`dim[4] > 1`, the volumes stored one after the
+/// other: frame `k` starts `k` volumes after `vox_offset`). `None` reads a 3D file and refuses a
+/// series; `Some(0)` also reads a 3D file. The whole series must be in the file (a shorter
+/// file is truncated, as for a 3D one). A volume read from a series has a [`Volume::notes`]
+/// entry naming the frame.
+///
+/// ```no_run
+/// // The second volume of nibabel's `example4d.nii.gz` (128 x 96 x 24 x 2).
+/// let vol = oracle::image::read_nifti_frame("example4d.nii.gz", Some(1))?;
+/// assert_eq!(vol.dims(), [128, 96, 24]);
+/// # Ok::<(), oracle::image::ImageError>(())
+/// ```
+pub fn read_nifti_frame(
+    path: impl AsRef<Path>,
+    frame: Option<usize>,
+) -> Result<Volume, ImageError> {
     let path = path.as_ref();
     if !path.exists() {
         return Err(ImageError::Io {
@@ -454,7 +536,7 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
     let (hdr_path, img_path) = pair_paths(path);
     let hbytes = read_bytes(&hdr_path)?;
     let h = parse_header(&hdr_path, &hbytes)?;
-    let single = &h.magic == b"n+1\0";
+    let single = h.single;
     if single != (hdr_path == img_path) {
         return Err(ImageError::Nifti {
             path: hdr_path,
@@ -468,16 +550,17 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             },
         });
     }
-    let lay = layout(&hdr_path, &h, single)?;
+    let lay = layout(&hdr_path, &h, single, frame)?;
     let dbytes = if single {
         hbytes
     } else {
         read_bytes(&img_path)?
     };
     let n = lay.dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
-    let need = n.and_then(|n| n.checked_mul(lay.dtype.size()));
+    let one = n.and_then(|n| n.checked_mul(lay.dtype.size()));
+    let need = one.and_then(|b| b.checked_mul(lay.frames));
     let avail = dbytes.len().saturating_sub(lay.offset);
-    let (Some(n), Some(need)) = (n, need) else {
+    let (Some(n), Some(one), Some(need)) = (n, one, need) else {
         return Err(ImageError::TooLarge {
             n: usize::MAX,
             max: usize::MAX / 8,
@@ -487,9 +570,15 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
         return Err(ImageError::Truncated {
             path: img_path,
             detail: format!(
-                "the voxel data after vox_offset {} has {avail} bytes, {n} voxels of {} need \
+                "the voxel data after vox_offset {} has {avail} bytes, {n} voxels of {}{} need \
                  {need}",
-                lay.offset, lay.dtype
+                lay.offset,
+                lay.dtype,
+                if lay.frames > 1 {
+                    format!(" in each of {} frames", lay.frames)
+                } else {
+                    String::new()
+                }
             ),
         });
     }
@@ -505,14 +594,15 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
     });
     let (slope, inter) = scaling(&hdr_path, &h)?;
     let (affine, field) = checked_affine(&hdr_path, &h)?;
-    let big = h.endianness == nifti::Endianness::Big;
+    let big = h.big_endian;
+    let start = lay.offset + lay.frame * one;
     let voxels = if lay.dtype == Dtype::U8 {
         let mut d = dbytes;
-        d.truncate(lay.offset + need);
-        d.drain(..lay.offset);
+        d.truncate(start + one);
+        d.drain(..start);
         Voxels::U8(d)
     } else {
-        Voxels::from_bytes(lay.dtype, &dbytes[lay.offset..lay.offset + need], big)
+        Voxels::from_bytes(lay.dtype, &dbytes[start..start + one], big)
     };
     check_affine(&affine, Some(&hdr_path), field)?;
     let mut vol = Volume::new(lay.dims, voxels, affine)?
@@ -520,6 +610,15 @@ pub fn read_nifti(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
         .with_source(path);
     if let Some(note) = extra {
         vol = vol.with_note(note);
+    }
+    if lay.frames > 1 {
+        vol = vol.with_note(format!(
+            "{}: frame {} of {} (dim[4] = {}; --frame)",
+            path.display(),
+            lay.frame,
+            lay.frames,
+            lay.frames
+        ));
     }
     Ok(vol)
 }

@@ -1,6 +1,6 @@
 //! Image stacks (ours: a folder of 2D slices, a multi-page TIFF) and raw volumes.
 
-use super::{Dtype, ImageError, Volume, Voxels, read_metaimage, read_nifti, read_nrrd};
+use super::{Dtype, ImageError, Volume, Voxels, read_metaimage, read_nifti_frame, read_nrrd};
 use glam::{DAffine3, DMat3, DVec3};
 use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
@@ -26,6 +26,12 @@ pub struct LoadOptions {
     pub spacing: Option<[f64; 3]>,
     /// Read the file as raw voxels with this layout (whatever its extension).
     pub raw: Option<RawOptions>,
+    /// The 3D volume of a NIfTI series (`dim[4] > 1`) to read, from 0 (`--frame`); a series
+    /// without it is refused. Other files hold one volume: only 0 is accepted.
+    pub frame: Option<usize>,
+    /// Give NaN voxels this value (`--nan-as`; see [`Volume::replace_nan`]); without it a NaN
+    /// voxel is an error when the surface is built.
+    pub nan_as: Option<f64>,
 }
 
 fn spacing_affine(spacing: Option<[f64; 3]>) -> Result<DAffine3, ImageError> {
@@ -120,6 +126,37 @@ pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static s
 /// # Ok::<(), oracle::image::ImageError>(())
 /// ```
 pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
+    let vol = read_volume(path, opts)?;
+    let is_nifti = nifti_name(path);
+    if let Some(k) = opts.frame.filter(|&k| k > 0 && !is_nifti) {
+        return Err(ImageError::Frame {
+            path: path.to_path_buf(),
+            dims: vol.dims().iter().map(|&d| d as u64).collect(),
+            detail: format!(
+                "--frame {k}: this file holds one 3D volume (frame 0); series are read from \
+                 NIfTI files"
+            ),
+        });
+    }
+    match opts.nan_as {
+        Some(value) => vol.replace_nan(value),
+        None => Ok(vol),
+    }
+}
+
+/// Whether the file name is a NIfTI file's (`.nii`, `.hdr`, `.img`, gzipped or not).
+fn nifti_name(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    [".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz"]
+        .iter()
+        .any(|e| name.ends_with(e))
+}
+
+/// [`load_volume`] before the frame check and the NaN replacement.
+fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
     if let Some(raw) = opts.raw {
         return read_raw(path, &raw, opts.spacing);
     }
@@ -134,14 +171,8 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let ends = |s: &str| name.ends_with(s);
-    if ends(".nii")
-        || ends(".nii.gz")
-        || ends(".hdr")
-        || ends(".hdr.gz")
-        || ends(".img")
-        || ends(".img.gz")
-    {
-        read_nifti(path)
+    if nifti_name(path) {
+        read_nifti_frame(path, opts.frame)
     } else if ends(".nrrd") || ends(".nhdr") {
         read_nrrd(path)
     } else if ends(".mha") || ends(".mhd") {

@@ -283,6 +283,66 @@ impl Volume {
     }
 
     /// Notes of the reader (the CLI prints each as `note: ...`).
+    /// Give every NaN voxel the value `value` (in scaled units; its raw value is
+    /// `(value - inter) / slope`, rounded to the voxel type), with a [`Volume::notes`] entry
+    /// saying how many and the value they got. For data where NaN marks "no measurement"
+    /// (resampled or masked float images: nibabel's `resampled_anat_moved.nii`, SPM's
+    /// statistical maps), which [`Volume::stats`] otherwise refuses. Integer voxels are never
+    /// NaN: the volume is returned unchanged. Errors: `value` not finite.
+    ///
+    /// ```
+    /// use oracle::image::{Volume, Voxels};
+    /// use glam::DAffine3;
+    /// let v = Volume::new([2, 2, 2], Voxels::F32(vec![f32::NAN, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]),
+    ///     DAffine3::IDENTITY)?;
+    /// let v = v.replace_nan(0.0)?;
+    /// assert_eq!(v.get(0, 0, 0), 0.0);
+    /// assert!(v.notes()[0].starts_with("1 NaN voxel(s) set to 0"));
+    /// # Ok::<(), oracle::image::ImageError>(())
+    /// ```
+    pub fn replace_nan(mut self, value: f64) -> Result<Volume, ImageError> {
+        if !value.is_finite() {
+            return Err(ImageError::NanValue { value });
+        }
+        let raw = (value - self.inter) / self.slope;
+        let n = self.voxels.len();
+        let get = |i: usize| self.voxels.get_f64(i);
+        let (voxels, count) = match self.voxels.dtype() {
+            Dtype::F32 => {
+                let r = raw as f32;
+                let d: Vec<f32> = (0..n).map(|i| get(i) as f32).collect();
+                let count = d.iter().filter(|v| v.is_nan()).count();
+                let d = d.into_iter().map(|v| if v.is_nan() { r } else { v });
+                (Voxels::F32(d.collect()), count)
+            }
+            Dtype::F64 => {
+                let d: Vec<f64> = (0..n).map(get).collect();
+                let count = d.iter().filter(|v| v.is_nan()).count();
+                let d = d.into_iter().map(|v| if v.is_nan() { raw } else { v });
+                (Voxels::F64(d.collect()), count)
+            }
+            _ => return Ok(self),
+        };
+        if count == 0 {
+            return Ok(self);
+        }
+        let stored = match voxels {
+            Voxels::F32(_) => raw as f32 as f64,
+            _ => raw,
+        };
+        self.voxels = voxels;
+        let got = self.slope * stored + self.inter;
+        self.notes.push(format!(
+            "{count} NaN voxel(s) set to {got} (--nan-as {value}{})",
+            if got == value {
+                ""
+            } else {
+                ", rounded to the voxel type"
+            }
+        ));
+        Ok(self)
+    }
+
     pub fn notes(&self) -> &[String] {
         &self.notes
     }
@@ -410,6 +470,7 @@ impl Volume {
             ImageError::NaN {
                 path: self.source.clone(),
                 index: [i % nx, (i / nx) % ny, i / (nx * ny)],
+                nan: self.voxels.get_f64(i).is_nan(),
             }
         })?;
         let s = |x: f64| self.slope * x + self.inter;
@@ -463,6 +524,7 @@ impl Volume {
                         return Err(ImageError::NaN {
                             path: self.source.clone(),
                             index: self.unindex(i),
+                            nan: x.is_nan(),
                         });
                     }
                     raw.entry(x.to_bits()).or_insert((x, 0)).1 += 1;

@@ -357,11 +357,17 @@ impl Outcome {
         } else {
             "; where: the report's stats.unmet_facets"
         };
+        let caveat = if r.dm_estimate_contradicted {
+            "; the theorems: no guarantee, S is thinner than the d_M^inf estimate somewhere \
+             (see loose-epsilon)"
+        } else {
+            ""
+        };
         Some(if unmet.is_empty() {
-            format!("verify: PASS ({} checks)", r.checks.len())
+            format!("verify: PASS ({} checks{caveat})", r.checks.len())
         } else {
             format!(
-                "verify: PASS with unmet criteria ({}) ({} checks{where_})",
+                "verify: PASS with unmet criteria ({}) ({} checks{where_}{caveat})",
                 unmet.join("; "),
                 r.checks.len()
             )
