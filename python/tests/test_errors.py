@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import rdt_mesher
-from conftest import PHANTOM, ball_volume
+from conftest import FIXTURES, PHANTOM, ball_volume
 
 VOL = ball_volume(20, 6.0)
 SPHERE = ((0, 0, 0), 2.0)
@@ -101,3 +101,25 @@ def test_ctrl_c_raises_keyboard_interrupt():
     assert r.returncode == 0, r.stdout + r.stderr
     secs = float(r.stdout.split()[2])
     assert secs < 30, r.stdout
+
+
+def test_the_missing_iso_error_suggests_otsus_threshold_as_scikit_image_computes_it():
+    # Real volumes of the fixtures: the suggested value is scikit-image's threshold_otsu of
+    # nibabel's float64 data (256 bins) to the four digits printed.
+    import re
+
+    import nibabel as nib
+    from skimage.filters import threshold_otsu
+
+    images = os.path.join(FIXTURES, "images")
+    for name in ("phantom_i16_32.nii.gz", "nibabel_anatomical.nii.gz", "nilearn_motor_10426.nii.gz",
+                 "mni_t1_half.nii.gz", "nibabel_resampled_anat_moved.nii"):
+        path = os.path.join(images, name)
+        kw = {"nan_as": 0} if "resampled" in name else {}
+        with pytest.raises(ValueError) as e:
+            rdt_mesher.mesh_file(path, **kw)
+        m = re.search(r"e\.g\. --iso (\S+) \(Otsu's threshold of the histogram\)", str(e.value))
+        assert m, str(e.value)
+        data = np.nan_to_num(nib.load(path).get_fdata(), nan=0.0)
+        ref = threshold_otsu(data.ravel())  # a flat array: no RGB guess on a 3-slice volume
+        assert abs(float(m.group(1)) - ref) <= 5e-4 * abs(ref), (name, m.group(1), ref)

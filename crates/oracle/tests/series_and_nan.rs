@@ -229,3 +229,40 @@ fn a_real_resampled_volume_with_nan_meshes_with_nan_as() {
     let s = ImageSurface::open(&p, &opts, &iso).unwrap();
     assert_eq!(s.topology().surface_components, 3);
 }
+
+#[test]
+fn otsu_threshold_splits_two_populations_and_is_suggested_when_iso_is_missing() {
+    use oracle::image::otsu_threshold;
+    // 3/4 of the voxels at 0..3, 1/4 at 100..103: the threshold lies between the two, at a
+    // bin centre (256 bins over [0, 103]).
+    let v: Vec<f32> = (0..512)
+        .map(|i| {
+            if i % 4 == 0 {
+                100.0 + (i % 3) as f32
+            } else {
+                (i % 3) as f32
+            }
+        })
+        .collect();
+    let vol = Volume::new([8, 8, 8], Voxels::F32(v), DAffine3::IDENTITY).unwrap();
+    let t = otsu_threshold(&vol).unwrap();
+    let w = 102.0 / 256.0;
+    assert!(t > 2.0 && t < 100.0, "{t}");
+    assert!(
+        (((t / w) - 0.5).round() - ((t / w) - 0.5)).abs() < 1e-9,
+        "a bin centre: {t}"
+    );
+    // Scaled values: the threshold is in scaled units.
+    let s = vol.clone().with_scaling(2.0, -50.0);
+    assert!((otsu_threshold(&s).unwrap() - (2.0 * t - 50.0)).abs() < 1e-9);
+    // Constant: none.
+    let c = Volume::new([2, 2, 2], Voxels::U8(vec![3; 8]), DAffine3::IDENTITY).unwrap();
+    assert_eq!(otsu_threshold(&c), None);
+    // The error that asks for an iso value suggests it.
+    let e = ImageSurface::new(vol, &ImageOptions::default()).unwrap_err();
+    let shown = e.to_string();
+    assert!(
+        shown.contains("e.g. --iso ") && shown.contains("Otsu's threshold"),
+        "{shown}"
+    );
+}

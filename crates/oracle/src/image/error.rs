@@ -145,9 +145,15 @@ pub enum ImageError {
     #[error("--nan-as {value}: the value for NaN voxels must be a finite number")]
     NanValue { value: f64 },
     #[error(
-        "iso value required for a non-binary image; the data range is [{min}, {max}] (pass --iso VALUE, or --label L for a segmentation)"
+        "iso value required for a non-binary image; the data range is [{min}, {max}] (pass --iso VALUE{}, or --label L for a segmentation)",
+        otsu.map_or(String::new(), |t| format!(", e.g. --iso {} (Otsu's threshold of the histogram)", four_digits(t)))
     )]
-    IsoRequired { min: f64, max: f64 },
+    IsoRequired {
+        min: f64,
+        max: f64,
+        /// Otsu's threshold of the values ([`super::otsu_threshold`]), a value to try.
+        otsu: Option<f64>,
+    },
     #[error(
         "iso value {iso} is outside the data range [{min}, {max}] (or equal to an end): there is no surface; pick a value strictly inside the range"
     )]
@@ -209,4 +215,20 @@ pub enum ImageError {
         "the volume has {n} voxels, more than this backend indexes ({max}); crop or downsample it"
     )]
     TooLarge { n: usize, max: usize },
+}
+
+/// `x` to four significant digits, printed without trailing zeros (412.3, 0.1235, 1235).
+fn four_digits(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let e = x.abs().log10().floor() as i32;
+    let p = 10f64.powi(3 - e);
+    let r = (x * p).round() / p;
+    let s = format!("{:.*}", (3 - e).max(0) as usize, r);
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }

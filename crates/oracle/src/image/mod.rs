@@ -65,6 +65,7 @@ mod nifti_io;
 mod nrrd;
 mod oracle;
 mod orient;
+mod otsu;
 mod pinch;
 mod shared;
 mod stack;
@@ -81,6 +82,7 @@ pub use nifti_io::{
     NiftiWriteOptions, Qform, nifti_affine, read_nifti, read_nifti_frame, write_nifti,
 };
 pub use nrrd::read_nrrd;
+pub use otsu::{BINS as OTSU_BINS, otsu_threshold};
 pub use pinch::{BINARY_LEVEL, CONTACT_DM_VOXELS};
 pub(crate) use shared::with_view;
 pub use shared::{SharedVoxels, VoxelSource, VoxelView};

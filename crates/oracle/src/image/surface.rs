@@ -174,6 +174,7 @@ impl ImageSurface {
                     return Err(ImageError::IsoRequired {
                         min: stats.min,
                         max: stats.max,
+                        otsu: super::otsu_threshold(&vol),
                     });
                 }
             };
