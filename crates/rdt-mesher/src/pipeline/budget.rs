@@ -217,6 +217,18 @@ pub(crate) fn auto_size(
         sig(chosen),
         count(cf.vertices)
     );
+    // Said when it matters: 20% above (not a slightly anisotropic voxel's geometric mean).
+    if let Some(fine) = input.voxel_spacing_min.map(|h| round_up_3(0.5 * h))
+        && chosen > 1.2 * fine
+    {
+        note.push_str(&format!(
+            "; sigma is above half the smallest voxel spacing ({}): parts of S thinner than \
+             that can be split, missed or lose handles (--size {} forecasts {} vertices)",
+            sig(fine),
+            sig(fine),
+            count(Forecast::at(area, fine).vertices)
+        ));
+    }
     if theorem {
         note.push_str(
             "; the theorems' sampling condition (sigma <= 0.09 d_M^inf) is not claimed at this \

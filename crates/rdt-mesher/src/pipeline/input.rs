@@ -193,6 +193,8 @@ pub struct Input<'s> {
     pub area: Option<AreaEstimate>,
     /// Images: the voxel spacing (geometric mean over the axes), in world units.
     pub voxel_spacing: Option<f64>,
+    /// Images: the smallest voxel spacing (of the three axes), in world units.
+    pub voxel_spacing_min: Option<f64>,
     /// Point sets and meshes: the data the output must be supported by (the points; samples
     /// of the input triangles), for `verify`'s `data-support` check.
     pub support_data: Option<Vec<DVec3>>,
@@ -250,6 +252,7 @@ impl<'s> Input<'s> {
             },
             area: None,
             voxel_spacing: None,
+            voxel_spacing_min: None,
             support_data: None,
             support_normals: None,
             source_topology: None,
@@ -490,6 +493,7 @@ impl Input<'static> {
         input.stats.image = Some(image_stats);
         input.area = Some(area);
         input.voxel_spacing = Some((h.x * h.y * h.z).cbrt());
+        input.voxel_spacing_min = Some(h.x.min(h.y).min(h.z));
         input
     }
 }
