@@ -415,11 +415,19 @@ def check_nifti(data):
     sform = struct.unpack_from(e + "12f", data, 280)
     if scode > 0 and not all(math.isfinite(x) for x in sform):
         raise Reject("non-finite sform")
-    try:  # nibabel as the reference for everything it checks
+    return nibabel_check(data, "Nifti1Image", None)
+
+
+def nibabel_check(data, kind, frame):
+    """nibabel as the reference for everything it checks: the image class `kind` reads the
+    bytes, its affine is finite and invertible, the voxels (of `frame`) are finite."""
+    try:
         import nibabel
         import numpy as np
-        img = nibabel.Nifti1Image.from_bytes(data)
+        img = getattr(nibabel, kind).from_bytes(data)
         vox = np.asanyarray(img.dataobj)
+        if frame is not None:
+            vox = vox[..., frame]
         if not np.all(np.isfinite(img.affine)) or abs(np.linalg.det(img.affine[:3, :3])) == 0:
             raise Reject("nibabel: singular or non-finite affine")
         if vox.dtype.kind == "f" and not np.all(np.isfinite(vox)):
@@ -472,22 +480,7 @@ def check_nifti2(data, frame=1):
     need = off + dim[1] * dim[2] * dim[3] * frames * NIFTI_SIZES[code]
     if len(data) < need:
         raise Reject("truncated voxels")
-    try:  # nibabel as the reference for everything it checks
-        import nibabel
-        import numpy as np
-        img = nibabel.Nifti2Image.from_bytes(data)
-        vox = np.asanyarray(img.dataobj)[..., frame]
-        if not np.all(np.isfinite(img.affine)) or abs(np.linalg.det(img.affine[:3, :3])) == 0:
-            raise Reject("nibabel: singular or non-finite affine")
-        if vox.dtype.kind == "f" and not np.all(np.isfinite(vox)):
-            raise Reject("non-finite voxels")
-    except Reject:
-        raise
-    except ImportError:
-        pass
-    except Exception as ex:  # nibabel rejects it
-        raise Reject("nibabel: %s" % str(ex).splitlines()[0][:80] if str(ex) else type(ex))
-    return "image"
+    return nibabel_check(data, "Nifti2Image", frame)
 
 
 def check_nii_gz(data):
