@@ -42,7 +42,11 @@ pub fn otsu_threshold(vol: &Volume) -> Option<f64> {
     with_voxels!(vol.voxels(), d => fill(d, scale, lo, width, &mut hist));
     let centre = |i: usize| lo + (i as f64 + 0.5) * width;
     let total: u64 = hist.iter().sum();
-    let sum: f64 = hist.iter().enumerate().map(|(i, &h)| h as f64 * centre(i)).sum();
+    let sum: f64 = hist
+        .iter()
+        .enumerate()
+        .map(|(i, &h)| h as f64 * centre(i))
+        .sum();
     let (mut w1, mut s1) = (0u64, 0.0f64);
     let mut best = (f64::NEG_INFINITY, centre(0));
     for (i, &h) in hist.iter().enumerate().take(BINS - 1) {
