@@ -218,6 +218,10 @@ def bases():
             ("example_nifti2", gzip.decompress(read("fixtures/images/nibabel_example_nifti2.nii.gz")),
              ["--iso", "500", "--frame", "1"], "3"),
         ]),
+        "mgh": (".mgh", [
+            ("test_mgz", gzip.decompress(read("fixtures/images/nibabel_test.mgz")),
+             ["--iso", "0", "--frame", "1"], "1"),
+        ]),
         "raw": (".raw", [
             ("ball_u8", ball_voxels(12, "u8"),
              ["--dims", "12,12,12", "--dtype", "u8", "--iso", "50"], "2"),
@@ -361,6 +365,25 @@ def m_nifti2_field(d, r):
     return d[:off] + struct.pack("<" + fmt, v) + d[off + struct.calcsize(fmt):]
 
 
+# MGH header fields (offset, big-endian struct format): version, width, height, depth, nframes,
+# type, goodRASFlag, delta, Mdc[0], Mdc[4], Pxyz_c[0].
+MGH_FIELDS = [(0, "i"), (4, "i"), (8, "i"), (12, "i"), (16, "i"), (20, "i"), (28, "h"),
+              (30, "f"), (34, "f"), (38, "f"), (42, "f"), (58, "f"), (78, "f")]
+
+
+def m_mgh_field(d, r):
+    if len(d) < 284:
+        return m_flip(d, r)
+    off, fmt = r.choice(MGH_FIELDS)
+    if fmt == "f":
+        v = r.choice([0.0, -1.0, 1e30, 1e-30, float("nan"), float("inf"), 0.5, 2.0])
+    elif fmt == "h":
+        v = r.choice([0, 1, -1, 2])
+    else:
+        v = r.choice([0, -1, 1, 2, 3, 4, 5, 7, 1000, 2 ** 31 - 1])
+    return d[:off] + struct.pack(">" + fmt, v) + d[off + struct.calcsize(fmt):]
+
+
 def m_nifti_field(d, r):
     if len(d) < 348:
         return m_flip(d, r)
@@ -423,6 +446,10 @@ def mutators(fmt):
         return [m_flip, m_truncate, m_nifti2_field, m_nifti2_field, m_nifti2_field,
                 lambda d, r: d + b"\0" * r.choice([1, 100]),
                 lambda d, r: binary_values(d, r, 544, 4, "i")]
+    if fmt == "mgh":
+        return [m_flip, m_truncate, m_mgh_field, m_mgh_field, m_mgh_field,
+                lambda d, r: d + b"\0" * r.choice([1, 100]),
+                lambda d, r: binary_values(d, r, 284, 4, "i")]
     if fmt == "nii_gz":
         return [m_gzip, m_gzip, m_gzip, m_flip, m_truncate]
     if fmt == "raw":

@@ -426,8 +426,8 @@ def nibabel_check(data, kind, frame):
         import numpy as np
         img = getattr(nibabel, kind).from_bytes(data)
         vox = np.asanyarray(img.dataobj)
-        if frame is not None:
-            vox = vox[..., frame]
+        if frame is not None:  # the fourth axis (dimensions past it are 1 here)
+            vox = vox[:, :, :, frame]
         if not np.all(np.isfinite(img.affine)) or abs(np.linalg.det(img.affine[:3, :3])) == 0:
             raise Reject("nibabel: singular or non-finite affine")
         if vox.dtype.kind == "f" and not np.all(np.isfinite(vox)):
@@ -481,6 +481,30 @@ def check_nifti2(data, frame=1):
     if len(data) < need:
         raise Reject("truncated voxels")
     return nibabel_check(data, "Nifti2Image", frame)
+
+
+MGH_SIZES = {0: 1, 1: 4, 3: 4, 4: 2}
+
+
+def check_mgh(data, frame=1):
+    """A FreeSurfer .mgh read at --frame `frame` (the fixture's args)."""
+    if len(data) < 284:
+        raise Reject("short header")
+    version, w, h, dpt, frames, ty = struct.unpack_from(">6i", data, 0)
+    if version != 1:
+        raise Reject("bad version")
+    if min(w, h, dpt, frames) < 1:
+        raise Reject("bad dims")
+    if frame >= frames:
+        raise Reject("no such frame")
+    if ty not in MGH_SIZES:
+        raise Reject("bad type")
+    if len(data) - 284 < w * h * dpt * frames * MGH_SIZES[ty]:
+        raise Reject("truncated voxels")
+    (good,) = struct.unpack_from(">h", data, 28)
+    if good and not all(math.isfinite(x) and x != 0 for x in struct.unpack_from(">3f", data, 30)):
+        raise Reject("bad delta")
+    return nibabel_check(data, "MGHImage", frame)
 
 
 def check_nii_gz(data):
@@ -560,4 +584,4 @@ def trimesh_rejects(path, kind):
 
 CHECKS = {"ply_ascii": check_ply, "ply_binary": check_ply, "off": check_off, "obj": check_obj,
           "stl_ascii": check_stl, "stl_binary": check_stl, "xyz": check_xyz, "nii": check_nifti,
-          "nii_gz": check_nii_gz, "nii2": check_nifti2}
+          "nii_gz": check_nii_gz, "nii2": check_nifti2, "mgh": check_mgh}

@@ -126,3 +126,33 @@ def test_a_nifti2_file_meshes_as_nibabel_reads_it():
         ref = rdt_mesher.mesh_image(img.get_fdata()[..., k], affine=img.affine, iso=500, size=2.0, verify=False)
         assert len(m.vertices) > 100
         assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces), k
+
+
+MGZ = PHANTOM.replace("phantom_i16_32.nii.gz", "nibabel_test.mgz")
+CROP = PHANTOM.replace("phantom_i16_32.nii.gz", "mni_t1_crop56.nii.gz")
+
+
+def test_freesurfer_volumes_mesh_as_nibabel_reads_them(tmp_path):
+    # nibabel's test.mgz (3 x 4 x 5 x 2 float32, an oblique affine): each frame meshes as
+    # mesh_image of nibabel's data and affine, bit for bit.
+    img = nib.load(MGZ)
+    for k in (0, 1):
+        m = rdt_mesher.mesh_file(MGZ, frame=k, iso=0.0, verify=False)
+        ref = rdt_mesher.mesh_image(img.get_fdata()[..., k], affine=img.affine, iso=0.0, verify=False)
+        assert len(m.vertices) > 100
+        assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces), k
+    # The T1 crop written by nibabel as .mgz and .mgh with an oblique, anisotropic affine:
+    # nibabel's affine of the file (float32 directions and sizes), nibabel's voxels.
+    crop = nib.load(CROP)
+    a = crop.affine.copy()
+    c, s = np.cos(0.3), np.sin(0.3)
+    a[:3, :3] = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ np.diag([1.0, 1.2, 0.9])
+    data = np.asanyarray(crop.dataobj)
+    for ext in ("mgz", "mgh"):
+        path = tmp_path / f"crop.{ext}"
+        nib.save(nib.MGHImage(data, a), path)
+        back = nib.load(path)
+        m = rdt_mesher.mesh_file(path, iso=171.2, size=2.0, verify=False)
+        ref = rdt_mesher.mesh_image(np.asanyarray(back.dataobj), affine=back.affine, iso=171.2, size=2.0, verify=False)
+        assert len(m.vertices) > 1000
+        assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces), ext

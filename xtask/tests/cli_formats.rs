@@ -243,10 +243,6 @@ fn bad_nrrd_files_give_one_error_line() {
 fn unsupported_volume_formats_name_the_conversion() {
     let d = scratch("unsupported_volumes");
     for (name, words) in [
-        (
-            "T1.mgz",
-            &["T1.mgz", "FreeSurfer", "mri_convert", ".nii.gz"][..],
-        ),
         ("scan.PAR", &["Philips", "dcm2niix"][..]),
         ("brain.mnc", &["MINC", "mnc2nii"][..]),
         ("slice.dcm", &["DICOM", "dcm2niix"][..]),
@@ -261,6 +257,31 @@ fn unsupported_volume_formats_name_the_conversion() {
         );
         assert!(!line.contains("mesh file extension"), "{line}");
     }
+}
+
+/// FreeSurfer volumes are read since 2026-12-07 (they were named and refused, with
+/// `mri_convert` as the fix): nibabel's `test.mgz` (a series of two) meshes frame by frame,
+/// and a damaged one is one error line naming the file.
+#[test]
+fn freesurfer_volumes_are_read() {
+    let d = scratch("mgz");
+    let p = fixture("images/nibabel_test.mgz");
+    let err = one_error_line(&xtask(&d, &["mesh", "-q", &p, "--iso", "0"]), &[]);
+    assert!(
+        err.contains("nframes = 2") && err.contains("--frame K (0 to 1)"),
+        "{err}"
+    );
+    let out = xtask(
+        &d,
+        &[
+            "mesh", "-q", &p, "--iso", "0", "--frame", "1", "-o", "m.ply",
+        ],
+    );
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    assert!(std::fs::metadata(d.join("m.ply")).unwrap().len() > 1000);
+    let bad = d.join("T1.mgz");
+    std::fs::write(&bad, b"not read").unwrap();
+    refused(&d, &bad, &["T1.mgz", "gzip"]);
 }
 
 /// A colour TIFF stored plane by plane decoded as its red plane alone and was meshed

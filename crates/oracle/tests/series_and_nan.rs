@@ -108,7 +108,10 @@ fn frames_are_refused_where_there_is_no_series() {
         ..Default::default()
     };
     let msg = load_volume(&raw, &opts).unwrap_err().to_string();
-    assert!(msg.contains("series are read from NIfTI files"), "{msg}");
+    assert!(
+        msg.contains("series are read from NIfTI and MGH files"),
+        "{msg}"
+    );
 }
 
 #[test]

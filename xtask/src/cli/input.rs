@@ -31,7 +31,7 @@ pub struct SurfaceOptions {
     /// Image stacks and raw volumes: voxel spacing `sx,sy,sz` in world units.
     #[arg(long, allow_hyphen_values = true, value_parser = parse_spacing)]
     pub spacing: Option<[f64; 3]>,
-    /// Image: the 3D volume of a NIfTI series (dim[4] > 1: fMRI, diffusion) to mesh, from 0.
+    /// Image: the 3D volume of a NIfTI or MGH series (fMRI, diffusion) to mesh, from 0.
     #[arg(long)]
     pub frame: Option<usize>,
     /// Image: mesh NaN voxels (no value: resampled or masked float images) as this value,

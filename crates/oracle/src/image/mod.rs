@@ -2,7 +2,7 @@
 //!
 //! - [`Volume`]: voxels in their native type ([`Voxels`]), dims, a voxel-to-world affine
 //!   (`glam::DAffine3`, voxel centres at integer coordinates) and the intensity scaling.
-//! - Loaders: [`read_nifti`] (NIfTI-1 and NIfTI-2 `.nii`, `.nii.gz`, `.hdr`/`.img`; one frame of a series: [`read_nifti_frame`]), [`read_nrrd`]
+//! - Loaders: [`read_nifti`] (NIfTI-1 and NIfTI-2 `.nii`, `.nii.gz`, `.hdr`/`.img`; one frame of a series: [`read_nifti_frame`]), [`read_mgh`] (FreeSurfer `.mgh`, `.mgz`), [`read_nrrd`]
 //!   (`.nrrd`, `.nhdr`), [`read_metaimage`] (`.mha`, `.mhd`), [`read_ome_zarr`] (OME-Zarr
 //!   multiscale level 0, Zarr v2 or v3), [`read_slice_folder`]
 //!   (PNG/TIFF slices, 8/16 bit, natural name order), [`read_tiff_stack`] (multi-page TIFF),
@@ -59,6 +59,7 @@ mod distance;
 #[allow(missing_docs)]
 mod error;
 mod metaimage;
+mod mgh;
 mod nifti_header;
 #[allow(missing_docs)]
 mod nifti_io;
@@ -78,6 +79,7 @@ mod zarr;
 
 pub use error::ImageError;
 pub use metaimage::read_metaimage;
+pub use mgh::read_mgh;
 pub use nifti_io::{
     NiftiWriteOptions, Qform, nifti_affine, read_nifti, read_nifti_frame, write_nifti,
 };

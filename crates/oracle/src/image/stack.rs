@@ -43,10 +43,10 @@ fn spacing_affine(spacing: Option<[f64; 3]>) -> Result<DAffine3, ImageError> {
 }
 
 /// The file name endings [`load_volume`] reads as images (lower case; `.gz` variants of the
-/// NIfTI ones included).
-pub const IMAGE_EXTENSIONS: [&str; 13] = [
+/// NIfTI and MGH ones included).
+pub const IMAGE_EXTENSIONS: [&str; 16] = [
     ".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz", ".nrrd", ".nhdr", ".mha", ".mhd",
-    ".tif", ".tiff", ".raw",
+    ".tif", ".tiff", ".raw", ".mgh", ".mgz", ".mgh.gz",
 ];
 
 /// Whether the file name (any case) ends with one of [`IMAGE_EXTENSIONS`].
@@ -61,23 +61,18 @@ pub fn is_image_file_name(name: &str) -> bool {
     IMAGE_EXTENSIONS.iter().any(|e| lower.ends_with(e))
 }
 
-/// For a volume format this crate does not read (FreeSurfer, Philips, MINC, AFNI, ECAT,
-/// DICOM, numpy), its name and how to convert it to one it reads; `None` for any other
-/// name.
+/// For a volume format this crate does not read (Philips, MINC, AFNI, ECAT, DICOM, numpy),
+/// its name and how to convert it to one it reads; `None` for any other name.
 ///
 /// ```
 /// use oracle::image::unsupported_volume_format;
-/// assert!(unsupported_volume_format("T1.mgz").unwrap().0.contains("FreeSurfer"));
+/// assert!(unsupported_volume_format("T1.mnc").unwrap().0.contains("MINC"));
+/// assert!(unsupported_volume_format("T1.mgz").is_none(), "FreeSurfer volumes are read");
 /// assert!(unsupported_volume_format("bunny.ply").is_none());
 /// ```
 pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static str)> {
     let lower = name.to_ascii_lowercase();
-    const FORMATS: [(&[&str], &str, &str); 7] = [
-        (
-            &[".mgz", ".mgh", ".mgh.gz"],
-            "a FreeSurfer MGH/MGZ volume",
-            "convert it with `mri_convert IN OUT.nii.gz` or nibabel (`nibabel.save(nibabel.load(IN), 'OUT.nii.gz')`)",
-        ),
+    const FORMATS: [(&[&str], &str, &str); 6] = [
         (
             &[".par", ".rec"],
             "a Philips PAR/REC volume",
@@ -127,14 +122,14 @@ pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static s
 /// ```
 pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
     let vol = read_volume(path, opts)?;
-    let is_nifti = nifti_name(path);
-    if let Some(k) = opts.frame.filter(|&k| k > 0 && !is_nifti) {
+    let series = nifti_name(path) || mgh_name(path);
+    if let Some(k) = opts.frame.filter(|&k| k > 0 && !series) {
         return Err(ImageError::Frame {
             path: path.to_path_buf(),
             dims: vol.dims().iter().map(|&d| d as u64).collect(),
             detail: format!(
                 "--frame {k}: this file holds one 3D volume (frame 0); series are read from \
-                 NIfTI files"
+                 NIfTI and MGH files"
             ),
         });
     }
@@ -151,6 +146,17 @@ fn nifti_name(path: &Path) -> bool {
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     [".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz"]
+        .iter()
+        .any(|e| name.ends_with(e))
+}
+
+/// Whether the file name is a FreeSurfer volume's (`.mgh`, `.mgz`, `.mgh.gz`).
+fn mgh_name(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    [".mgh", ".mgz", ".mgh.gz"]
         .iter()
         .any(|e| name.ends_with(e))
 }
@@ -173,6 +179,8 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
     let ends = |s: &str| name.ends_with(s);
     if nifti_name(path) {
         read_nifti_frame(path, opts.frame)
+    } else if mgh_name(path) {
+        super::read_mgh(path, opts.frame)
     } else if ends(".nrrd") || ends(".nhdr") {
         read_nrrd(path)
     } else if ends(".mha") || ends(".mhd") {

@@ -382,7 +382,7 @@ impl Input<'static> {
 
 /// Whether [`Input::open`] reads the (existing) file or folder `spec` as an image: a folder,
 /// an image extension ([`oracle::image::IMAGE_EXTENSIONS`]: `.nii`, `.nii.gz`, a `.hdr`/`.img`
-/// pair, `.nrrd`, `.nhdr`, `.mha`, `.mhd`, `.tif`, `.tiff`, `.raw`), or `raw` (a raw-volume
+/// pair, `.mgh`, `.mgz`, `.nrrd`, `.nhdr`, `.mha`, `.mhd`, `.tif`, `.tiff`, `.raw`), or `raw` (a raw-volume
 /// layout is given). A folder is a slice stack or an
 /// OME-Zarr store.
 ///
