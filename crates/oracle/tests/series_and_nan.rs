@@ -112,6 +112,11 @@ fn frames_are_refused_where_there_is_no_series() {
         msg.contains("series are read from NIfTI and MGH files"),
         "{msg}"
     );
+    // A raw layout given for a file named like a NIfTI one: raw, one volume.
+    let named = dir.join("v.nii");
+    std::fs::write(&named, [0u8; 8]).unwrap();
+    let msg = load_volume(&named, &opts).unwrap_err().to_string();
+    assert!(msg.contains("holds one 3D volume"), "{msg}");
 }
 
 #[test]

@@ -26,8 +26,9 @@ pub struct LoadOptions {
     pub spacing: Option<[f64; 3]>,
     /// Read the file as raw voxels with this layout (whatever its extension).
     pub raw: Option<RawOptions>,
-    /// The 3D volume of a NIfTI series (`dim[4] > 1`) to read, from 0 (`--frame`); a series
-    /// without it is refused. Other files hold one volume: only 0 is accepted.
+    /// The 3D volume of a NIfTI or MGH series (`dim[4] > 1`, `nframes > 1`) to read, from 0
+    /// (`--frame`); a series without it is refused. Other files (and raw volumes) hold one
+    /// volume: only 0 is accepted.
     pub frame: Option<usize>,
     /// Give NaN voxels this value (`--nan-as`; see [`Volume::replace_nan`]); without it a NaN
     /// voxel is an error when the surface is built.
@@ -122,7 +123,7 @@ pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static s
 /// ```
 pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
     let vol = read_volume(path, opts)?;
-    let series = nifti_name(path) || mgh_name(path);
+    let series = opts.raw.is_none() && (nifti_name(path) || mgh_name(path));
     if let Some(k) = opts.frame.filter(|&k| k > 0 && !series) {
         return Err(ImageError::Frame {
             path: path.to_path_buf(),
