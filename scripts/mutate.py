@@ -350,19 +350,25 @@ NIFTI2_FIELDS = [(0, "i"), (12, "h"), (14, "h"), (16, "q"), (24, "q"), (40, "q")
                  (344, "i"), (348, "i"), (352, "d"), (400, "d")]
 
 
-def m_nifti2_field(d, r):
-    if len(d) < 540:
+def header_field(d, r, size, fields, endian, values):
+    """Overwrite one header field (offset, struct format) with one of `values[format]`."""
+    if len(d) < size:
         return m_flip(d, r)
-    off, fmt = r.choice(NIFTI2_FIELDS)
-    if fmt == "d":
-        v = r.choice([0.0, -1.0, 1e300, 1e-300, float("nan"), float("inf"), 0.5, 2.0])
-    elif fmt == "q":
-        v = r.choice([0, -1, 1, 2, 3, 4, 7, 8, 544, 545, 2 ** 40, 2 ** 63 - 1, -2 ** 63])
-    elif fmt == "i":
-        v = r.choice([0, 348, 540, -1, 1, 4, 5, 2 ** 31 - 1])
-    else:
-        v = r.choice([0, -1, 2, 4, 8, 16, 64, 512, 32767, -32768])
-    return d[:off] + struct.pack("<" + fmt, v) + d[off + struct.calcsize(fmt):]
+    off, fmt = r.choice(fields)
+    v = r.choice(values[fmt])
+    return d[:off] + struct.pack(endian + fmt, v) + d[off + struct.calcsize(fmt):]
+
+
+NIFTI2_VALUES = {
+    "d": [0.0, -1.0, 1e300, 1e-300, float("nan"), float("inf"), 0.5, 2.0],
+    "q": [0, -1, 1, 2, 3, 4, 7, 8, 544, 545, 2 ** 40, 2 ** 63 - 1, -2 ** 63],
+    "i": [0, 348, 540, -1, 1, 4, 5, 2 ** 31 - 1],
+    "h": [0, -1, 2, 4, 8, 16, 64, 512, 32767, -32768],
+}
+
+
+def m_nifti2_field(d, r):
+    return header_field(d, r, 540, NIFTI2_FIELDS, "<", NIFTI2_VALUES)
 
 
 # MGH header fields (offset, big-endian struct format): version, width, height, depth, nframes,
@@ -371,17 +377,15 @@ MGH_FIELDS = [(0, "i"), (4, "i"), (8, "i"), (12, "i"), (16, "i"), (20, "i"), (28
               (30, "f"), (34, "f"), (38, "f"), (42, "f"), (58, "f"), (78, "f")]
 
 
+MGH_VALUES = {
+    "f": [0.0, -1.0, 1e30, 1e-30, float("nan"), float("inf"), 0.5, 2.0],
+    "h": [0, 1, -1, 2],
+    "i": [0, -1, 1, 2, 3, 4, 5, 7, 1000, 2 ** 31 - 1],
+}
+
+
 def m_mgh_field(d, r):
-    if len(d) < 284:
-        return m_flip(d, r)
-    off, fmt = r.choice(MGH_FIELDS)
-    if fmt == "f":
-        v = r.choice([0.0, -1.0, 1e30, 1e-30, float("nan"), float("inf"), 0.5, 2.0])
-    elif fmt == "h":
-        v = r.choice([0, 1, -1, 2])
-    else:
-        v = r.choice([0, -1, 1, 2, 3, 4, 5, 7, 1000, 2 ** 31 - 1])
-    return d[:off] + struct.pack(">" + fmt, v) + d[off + struct.calcsize(fmt):]
+    return header_field(d, r, 284, MGH_FIELDS, ">", MGH_VALUES)
 
 
 def m_nifti_field(d, r):
