@@ -123,7 +123,7 @@ pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static s
 /// ```
 pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
     let vol = read_volume(path, opts)?;
-    let series = opts.raw.is_none() && (nifti_name(path) || mgh_name(path));
+    let series = opts.raw.is_none() && (named(path, &NIFTI) || named(path, &MGH));
     if let Some(k) = opts.frame.filter(|&k| k > 0 && !series) {
         return Err(ImageError::Frame {
             path: path.to_path_buf(),
@@ -140,27 +140,19 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
     }
 }
 
-/// Whether the file name is a NIfTI file's (`.nii`, `.hdr`, `.img`, gzipped or not).
-fn nifti_name(path: &Path) -> bool {
+/// Whether the file name (any case) ends with one of `ends` (lower case).
+fn named(path: &Path, ends: &[&str]) -> bool {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    [".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz"]
-        .iter()
-        .any(|e| name.ends_with(e))
+    ends.iter().any(|e| name.ends_with(e))
 }
 
-/// Whether the file name is a FreeSurfer volume's (`.mgh`, `.mgz`, `.mgh.gz`).
-fn mgh_name(path: &Path) -> bool {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    [".mgh", ".mgz", ".mgh.gz"]
-        .iter()
-        .any(|e| name.ends_with(e))
-}
+/// A NIfTI file's endings (`.nii`, `.hdr`, `.img`, gzipped or not).
+const NIFTI: [&str; 6] = [".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz"];
+/// A FreeSurfer volume's endings.
+const MGH: [&str; 3] = [".mgh", ".mgz", ".mgh.gz"];
 
 /// [`load_volume`] before the frame check and the NaN replacement.
 fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
@@ -178,9 +170,9 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let ends = |s: &str| name.ends_with(s);
-    if nifti_name(path) {
+    if named(path, &NIFTI) {
         read_nifti_frame(path, opts.frame)
-    } else if mgh_name(path) {
+    } else if named(path, &MGH) {
         super::read_mgh(path, opts.frame)
     } else if ends(".nrrd") || ends(".nhdr") {
         read_nrrd(path)
