@@ -408,7 +408,10 @@ fn normals_check(r: &mut Report, mesh: &TriMesh, normals: &NormalDeviation) {
         _ if facets > 0 && 2 * normals.inverted_facets > facets => r.push(
             "normals",
             Status::Fail,
-            format!("{measured}: the mesh is inside out (most facets face against the gradient)"),
+            format!(
+                "{measured}: {} (most facets face against the gradient)",
+                crate::hypothesis::INSIDE_OUT
+            ),
         ),
         Some(bound) => r.push(
             "normals",
