@@ -245,7 +245,7 @@ fn unsupported_volume_formats_name_the_conversion() {
     for (name, words) in [
         ("scan.PAR", &["Philips", "dcm2niix"][..]),
         ("brain.mnc", &["MINC", "mnc2nii"][..]),
-        ("slice.dcm", &["DICOM", "dcm2niix"][..]),
+        ("slice.dcm", &["not a DICOM file", "DICM"][..]),
         ("vol.npy", &["numpy", "mesh_image"][..]),
     ] {
         let p = d.join(name);

@@ -178,6 +178,8 @@ pub enum ImageError {
         show(path)
     )]
     NotLabels { path: Option<PathBuf>, value: f64 },
+    #[error("{}: {detail}", path.display())]
+    Dicom { path: PathBuf, detail: String },
     #[error("{}: no PNG or TIFF slices found in the folder; put the 2D slices (*.png, *.tif, *.tiff) there", dir.display())]
     NoSlices { dir: PathBuf },
     #[error("{}: slice is {found_w}x{found_h} but the first slice {} is {w}x{h}; all slices must have the same size", path.display(), first.display())]

@@ -45,9 +45,9 @@ fn spacing_affine(spacing: Option<[f64; 3]>) -> Result<DAffine3, ImageError> {
 
 /// The file name endings [`load_volume`] reads as images (lower case; `.gz` variants of the
 /// NIfTI and MGH ones included).
-pub const IMAGE_EXTENSIONS: [&str; 16] = [
+pub const IMAGE_EXTENSIONS: [&str; 18] = [
     ".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz", ".nrrd", ".nhdr", ".mha", ".mhd",
-    ".tif", ".tiff", ".raw", ".mgh", ".mgz", ".mgh.gz",
+    ".tif", ".tiff", ".raw", ".mgh", ".mgz", ".mgh.gz", ".dcm", ".ima",
 ];
 
 /// Whether the file name (any case) ends with one of [`IMAGE_EXTENSIONS`].
@@ -62,7 +62,7 @@ pub fn is_image_file_name(name: &str) -> bool {
     IMAGE_EXTENSIONS.iter().any(|e| lower.ends_with(e))
 }
 
-/// For a volume format this crate does not read (Philips, MINC, AFNI, ECAT, DICOM, numpy),
+/// For a volume format this crate does not read (Philips, MINC, AFNI, ECAT, numpy),
 /// its name and how to convert it to one it reads; `None` for any other name.
 ///
 /// ```
@@ -73,7 +73,7 @@ pub fn is_image_file_name(name: &str) -> bool {
 /// ```
 pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static str)> {
     let lower = name.to_ascii_lowercase();
-    const FORMATS: [(&[&str], &str, &str); 6] = [
+    const FORMATS: [(&[&str], &str, &str); 5] = [
         (
             &[".par", ".rec"],
             "a Philips PAR/REC volume",
@@ -93,11 +93,6 @@ pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static s
             &[".v"],
             "an ECAT volume",
             "convert it with nibabel (`nibabel.save(nibabel.load(IN), 'OUT.nii.gz')`)",
-        ),
-        (
-            &[".dcm", ".ima"],
-            "a DICOM file",
-            "convert the series with `dcm2niix` to a .nii.gz",
         ),
         (
             &[".npy", ".npz"],
@@ -163,6 +158,9 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
         if super::zarr::is_zarr(path) {
             return super::read_ome_zarr(path);
         }
+        if super::is_dicom_folder(path) {
+            return super::read_dicom(path);
+        }
         return read_slice_folder(path, opts.spacing);
     }
     let name = path
@@ -180,6 +178,8 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
         read_metaimage(path)
     } else if ends(".tif") || ends(".tiff") {
         read_tiff_stack(path, opts.spacing)
+    } else if ends(".dcm") || ends(".ima") || super::is_dicom_file(path) {
+        super::read_dicom(path)
     } else if ends(".raw") {
         Err(ImageError::RawNeedsDims {
             path: path.to_path_buf(),

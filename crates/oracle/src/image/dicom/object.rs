@@ -1,0 +1,526 @@
+//! One DICOM object's image planes: geometry and pixel values of each frame (ours: the voxel
+//! reader of section 6.6.2's images; DICOM PS3.3 C.7.6.2 Image Plane, C.7.6.3 Image Pixel,
+//! C.7.6.16 the enhanced multi-frame functional groups).
+//!
+//! Invariant kept: a [`Plane`]'s `pixels` hold exactly `rows * cols` values, row by row
+//! (column index fastest), masked to `BitsStored` and sign-extended as the header says.
+
+use super::super::orient::field;
+use super::super::{ImageError, Voxels};
+use dicom_core::Tag;
+use dicom_core::value::{PrimitiveValue, Value};
+use dicom_dictionary_std::tags;
+use dicom_object::file::ReadPreamble;
+use dicom_object::{InMemDicomObject, OpenFileOptions};
+use glam::DVec3;
+use std::path::{Path, PathBuf};
+
+const FORMAT: &str = "DICOM";
+
+/// One 2D frame: where it lies (patient LPS, millimetres) and its values.
+#[derive(Clone, Debug)]
+pub(crate) struct Plane {
+    /// The file it came from and its frame number there.
+    pub file: PathBuf,
+    pub frame: usize,
+    /// `SeriesInstanceUID`, and `SeriesNumber SeriesDescription (Modality)` for messages.
+    pub series: String,
+    pub series_label: String,
+    pub rows: usize,
+    pub cols: usize,
+    /// `ImagePositionPatient`: the centre of the first pixel.
+    pub position: DVec3,
+    /// `ImageOrientationPatient`: the direction of increasing column index (along a row), then
+    /// of increasing row index.
+    pub row_dir: DVec3,
+    pub col_dir: DVec3,
+    /// `PixelSpacing`: between rows, then between columns.
+    pub spacing: [f64; 2],
+    /// `RescaleSlope`, `RescaleIntercept` (RT Dose: `DoseGridScaling`, 0).
+    pub slope: f64,
+    pub inter: f64,
+    pub pixels: Voxels,
+}
+
+/// Whether the file starts with the DICOM preamble (`DICM` at byte 128).
+pub(crate) fn has_preamble(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 132];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && &head[128..] == b"DICM"
+}
+
+/// The planes of the DICOM file at `path`; `Ok(None)` when it holds no image (a structured
+/// report, a DICOMDIR, a presentation state).
+pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError> {
+    let bytes = super::super::orient::read(path)?;
+    if bytes.len() < 132 || &bytes[128..132] != b"DICM" {
+        return Err(ImageError::Dicom {
+            path: path.to_path_buf(),
+            detail: "not a DICOM file: no 'DICM' preamble at byte 128 (a file without the \
+                     DICOM file header is not read; re-export the series as DICOM files)"
+                .into(),
+        });
+    }
+    let obj = OpenFileOptions::new()
+        .read_preamble(ReadPreamble::Never)
+        .from_reader(&bytes[128..])
+        .map_err(|e| ImageError::Dicom {
+            path: path.to_path_buf(),
+            detail: format!(
+                "cannot parse the DICOM data set ({e}); the file is damaged or truncated: \
+                 re-export it"
+            ),
+        })?;
+    let ts = obj
+        .meta()
+        .transfer_syntax()
+        .trim_end_matches('\0')
+        .to_string();
+    let Some(pixel) = pixel_element(&obj) else {
+        return Ok(None);
+    };
+    let header = Header::of(path, &obj)?;
+    let frames = header.frames;
+    let values = decode_pixels(path, &ts, pixel, &header)?;
+    let per = header.rows * header.cols;
+    let mut planes = Vec::with_capacity(frames);
+    for f in 0..frames {
+        let geo = frame_geometry(path, &obj, f, frames)?;
+        planes.push(Plane {
+            file: path.to_path_buf(),
+            frame: f,
+            series: header.series.clone(),
+            series_label: header.series_label.clone(),
+            rows: header.rows,
+            cols: header.cols,
+            position: geo.position,
+            row_dir: geo.row_dir,
+            col_dir: geo.col_dir,
+            spacing: geo.spacing,
+            slope: geo.slope,
+            inter: geo.inter,
+            pixels: slice(&values, f * per, per),
+        });
+    }
+    Ok(Some(planes))
+}
+
+/// The pixel data element: integer (`PixelData`) or float (`FloatPixelData`,
+/// `DoubleFloatPixelData`).
+fn pixel_element(obj: &InMemDicomObject) -> Option<&Value<InMemDicomObject>> {
+    [
+        tags::PIXEL_DATA,
+        tags::FLOAT_PIXEL_DATA,
+        tags::DOUBLE_FLOAT_PIXEL_DATA,
+    ]
+    .iter()
+    .find_map(|&t| obj.element_opt(t).ok().flatten().map(|e| e.value()))
+}
+
+/// The image pixel module and the series, read once per file.
+struct Header {
+    rows: usize,
+    cols: usize,
+    frames: usize,
+    bits_allocated: u32,
+    bits_stored: u32,
+    signed: bool,
+    series: String,
+    series_label: String,
+}
+
+impl Header {
+    fn of(path: &Path, obj: &InMemDicomObject) -> Result<Header, ImageError> {
+        let int = |tag: Tag, name: &str| -> Result<u32, ImageError> {
+            uint(obj, tag).ok_or_else(|| {
+                field(
+                    path,
+                    FORMAT,
+                    name,
+                    "is missing or not a number; the file is not a complete image",
+                )
+            })
+        };
+        let samples = uint(obj, tags::SAMPLES_PER_PIXEL).unwrap_or(1);
+        if samples != 1 {
+            return Err(field(
+                path,
+                FORMAT,
+                "SamplesPerPixel (0028,0002)",
+                format!(
+                    "= {samples}: a colour image, not a greyscale volume; convert it to one \
+                     channel (e.g. its luminance) first"
+                ),
+            ));
+        }
+        let rows = int(tags::ROWS, "Rows (0028,0010)")? as usize;
+        let cols = int(tags::COLUMNS, "Columns (0028,0011)")? as usize;
+        let frames = match text(obj, tags::NUMBER_OF_FRAMES) {
+            None => 1,
+            Some(s) => s
+                .trim()
+                .parse::<usize>()
+                .ok()
+                .filter(|&n| n >= 1)
+                .ok_or_else(|| {
+                    field(
+                        path,
+                        FORMAT,
+                        "NumberOfFrames (0028,0008)",
+                        format!("= {s:?} is not a positive whole number; the header is damaged"),
+                    )
+                })?,
+        };
+        let float = obj.element_opt(tags::PIXEL_DATA).ok().flatten().is_none();
+        let bits_allocated = int(tags::BITS_ALLOCATED, "BitsAllocated (0028,0100)")?;
+        let ok_bits = if float {
+            [32, 64].contains(&bits_allocated)
+        } else {
+            [8, 16, 32].contains(&bits_allocated)
+        };
+        if !ok_bits {
+            return Err(field(
+                path,
+                FORMAT,
+                "BitsAllocated (0028,0100)",
+                format!(
+                    "= {bits_allocated} is not read (8, 16 or 32 bits; 32 or 64 for float pixel \
+                     data); convert the series with dcm2niix"
+                ),
+            ));
+        }
+        let bits_stored = uint(obj, tags::BITS_STORED).unwrap_or(bits_allocated);
+        if bits_stored == 0 || bits_stored > bits_allocated {
+            return Err(field(
+                path,
+                FORMAT,
+                "BitsStored (0028,0101)",
+                format!(
+                    "= {bits_stored} with BitsAllocated {bits_allocated}; the header is damaged"
+                ),
+            ));
+        }
+        if rows == 0 || cols == 0 {
+            return Err(field(
+                path,
+                FORMAT,
+                "Rows/Columns",
+                format!("= {rows} x {cols}: an empty image"),
+            ));
+        }
+        let series = text(obj, tags::SERIES_INSTANCE_UID).unwrap_or_default();
+        let label = [
+            text(obj, tags::SERIES_NUMBER).map(|s| format!("#{s}")),
+            text(obj, tags::SERIES_DESCRIPTION).map(|s| format!("'{s}'")),
+            text(obj, tags::MODALITY).map(|s| format!("({s})")),
+        ]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>()
+        .join(" ");
+        Ok(Header {
+            rows,
+            cols,
+            frames,
+            bits_allocated,
+            bits_stored,
+            signed: uint(obj, tags::PIXEL_REPRESENTATION) == Some(1),
+            series,
+            series_label: label,
+        })
+    }
+}
+
+/// Where frame `f` lies and how its values scale: the per-frame functional group, else the
+/// shared one, else the top-level attributes (classic images); RT Dose frames step along the
+/// normal by `GridFrameOffsetVector`.
+struct Geometry {
+    position: DVec3,
+    row_dir: DVec3,
+    col_dir: DVec3,
+    spacing: [f64; 2],
+    slope: f64,
+    inter: f64,
+}
+
+fn frame_geometry(
+    path: &Path,
+    obj: &InMemDicomObject,
+    f: usize,
+    frames: usize,
+) -> Result<Geometry, ImageError> {
+    let per_frame = item(obj, tags::PER_FRAME_FUNCTIONAL_GROUPS_SEQUENCE, f);
+    let shared = item(obj, tags::SHARED_FUNCTIONAL_GROUPS_SEQUENCE, 0);
+    // The first of: per-frame macro, shared macro, top level.
+    let look = |seq: Tag, tag: Tag, n: usize| -> Option<Vec<f64>> {
+        [per_frame, shared]
+            .into_iter()
+            .flatten()
+            .find_map(|g| item(g, seq, 0).and_then(|m| floats(m, tag, n)))
+            .or_else(|| floats(obj, tag, n))
+    };
+    let missing = |name: &str| {
+        field(
+            path,
+            FORMAT,
+            name,
+            "is missing: the frames' place in space is unknown, so this is not a volume \
+             (a secondary capture or a stripped file); convert the series with dcm2niix, or \
+             export the slices as PNG/TIFF and give --spacing",
+        )
+    };
+    let iop = look(
+        tags::PLANE_ORIENTATION_SEQUENCE,
+        tags::IMAGE_ORIENTATION_PATIENT,
+        6,
+    )
+    .ok_or_else(|| missing("ImageOrientationPatient (0020,0037)"))?;
+    let row_dir = DVec3::new(iop[0], iop[1], iop[2]);
+    let col_dir = DVec3::new(iop[3], iop[4], iop[5]);
+    let unit = |v: DVec3| (v.length() - 1.0).abs() < 1e-3;
+    if !(unit(row_dir) && unit(col_dir) && row_dir.dot(col_dir).abs() < 1e-3) {
+        return Err(field(
+            path,
+            FORMAT,
+            "ImageOrientationPatient (0020,0037)",
+            format!(
+                "= {iop:?}: the row and column directions must be orthogonal unit vectors; \
+                 the header is damaged"
+            ),
+        ));
+    }
+    let mut position = look(
+        tags::PLANE_POSITION_SEQUENCE,
+        tags::IMAGE_POSITION_PATIENT,
+        3,
+    )
+    .map(|p| DVec3::new(p[0], p[1], p[2]))
+    .ok_or_else(|| missing("ImagePositionPatient (0020,0032)"))?;
+    let mut scale = 1.0;
+    if frames > 1 && per_frame.is_none() {
+        // A classic multi-frame object: frames are placed by the RT Dose grid offsets.
+        let offsets = floats(obj, tags::GRID_FRAME_OFFSET_VECTOR, frames)
+            .ok_or_else(|| missing("GridFrameOffsetVector (3004,000C)"))?;
+        position += row_dir.cross(col_dir) * (offsets[f] - offsets[0]);
+        scale = floats(obj, tags::DOSE_GRID_SCALING, 1).map_or(1.0, |s| s[0]);
+    }
+    let ps = look(tags::PIXEL_MEASURES_SEQUENCE, tags::PIXEL_SPACING, 2)
+        .ok_or_else(|| missing("PixelSpacing (0028,0030)"))?;
+    if !(ps[0] > 0.0 && ps[1] > 0.0) {
+        return Err(field(
+            path,
+            FORMAT,
+            "PixelSpacing (0028,0030)",
+            format!("= {ps:?}: spacings must be positive; the header is damaged"),
+        ));
+    }
+    let rescale = |tag: Tag| look(tags::PIXEL_VALUE_TRANSFORMATION_SEQUENCE, tag, 1);
+    let slope = rescale(tags::RESCALE_SLOPE).map_or(1.0, |s| s[0]) * scale;
+    let inter = rescale(tags::RESCALE_INTERCEPT).map_or(0.0, |s| s[0]);
+    if slope == 0.0 || !slope.is_finite() || !inter.is_finite() {
+        return Err(field(
+            path,
+            FORMAT,
+            "RescaleSlope (0028,1053)",
+            format!(
+                "= {slope} (intercept {inter}): the values cannot be scaled; the header is damaged"
+            ),
+        ));
+    }
+    Ok(Geometry {
+        position,
+        row_dir,
+        col_dir,
+        spacing: [ps[0], ps[1]],
+        slope,
+        inter,
+    })
+}
+
+/// Item `i` of the sequence `tag`.
+fn item(obj: &InMemDicomObject, tag: Tag, i: usize) -> Option<&InMemDicomObject> {
+    obj.element_opt(tag).ok().flatten()?.items()?.get(i)
+}
+
+/// Exactly `n` finite numbers (decimal strings or binary floats).
+fn floats(obj: &InMemDicomObject, tag: Tag, n: usize) -> Option<Vec<f64>> {
+    let v = obj
+        .element_opt(tag)
+        .ok()
+        .flatten()?
+        .to_multi_float64()
+        .ok()?;
+    (v.len() == n && v.iter().all(|x| x.is_finite())).then_some(v)
+}
+
+fn uint(obj: &InMemDicomObject, tag: Tag) -> Option<u32> {
+    obj.element_opt(tag).ok().flatten()?.to_int::<u32>().ok()
+}
+
+fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
+    let s = obj.element_opt(tag).ok().flatten()?.to_str().ok()?;
+    let s = s.trim_matches(|c: char| c == '\0' || c.is_whitespace());
+    (!s.is_empty()).then(|| s.to_string())
+}
+
+/// The name of a compressed transfer syntax, for the error.
+fn syntax_name(uid: &str) -> &'static str {
+    match uid {
+        "1.2.840.10008.1.2.5" => "RLE Lossless",
+        "1.2.840.10008.1.2.4.50" => "JPEG Baseline",
+        "1.2.840.10008.1.2.4.51" => "JPEG Extended",
+        "1.2.840.10008.1.2.4.57" | "1.2.840.10008.1.2.4.70" => "JPEG Lossless",
+        "1.2.840.10008.1.2.4.80" | "1.2.840.10008.1.2.4.81" => "JPEG-LS",
+        "1.2.840.10008.1.2.4.90" | "1.2.840.10008.1.2.4.91" => "JPEG 2000",
+        "1.2.840.10008.1.2.4.201" | "1.2.840.10008.1.2.4.202" | "1.2.840.10008.1.2.4.203" => {
+            "High-Throughput JPEG 2000"
+        }
+        _ => "compressed",
+    }
+}
+
+/// All frames' values, masked to `BitsStored` and sign-extended, in the native type.
+fn decode_pixels(
+    path: &Path,
+    ts: &str,
+    value: &Value<InMemDicomObject>,
+    h: &Header,
+) -> Result<Voxels, ImageError> {
+    let prim = match value {
+        Value::Primitive(p) => p,
+        Value::PixelSequence(_) => {
+            return Err(ImageError::Dicom {
+                path: path.to_path_buf(),
+                detail: format!(
+                    "the pixel data is compressed ({}, transfer syntax {ts}), which is not \
+                     read; decompress the series first (`gdcmconv --raw IN OUT`, dcmtk's \
+                     `dcmdjpeg`) or convert it with dcm2niix",
+                    syntax_name(ts)
+                ),
+            });
+        }
+        Value::Sequence(_) => {
+            return Err(field(
+                path,
+                FORMAT,
+                "PixelData (7FE0,0010)",
+                "is a sequence, not pixel values; the file is damaged",
+            ));
+        }
+    };
+    let n = h
+        .rows
+        .checked_mul(h.cols)
+        .and_then(|v| v.checked_mul(h.frames))
+        .filter(|&v| v <= isize::MAX as usize / 8)
+        .ok_or_else(|| {
+            field(
+                path,
+                FORMAT,
+                "Rows/Columns/NumberOfFrames",
+                "hold more voxels than can be held in memory; the header is damaged",
+            )
+        })?;
+    let big_endian = ts == "1.2.840.10008.1.2.2";
+    // The values as little-endian bytes of `BitsAllocated` each.
+    let bytes: Vec<u8> = match prim {
+        PrimitiveValue::U8(v) if !big_endian || h.bits_allocated == 8 => v.to_vec(),
+        PrimitiveValue::U16(v) if !big_endian || h.bits_allocated == 16 => {
+            v.iter().flat_map(|w| w.to_le_bytes()).collect()
+        }
+        PrimitiveValue::F32(v) => v.iter().flat_map(|w| w.to_le_bytes()).collect(),
+        PrimitiveValue::F64(v) => v.iter().flat_map(|w| w.to_le_bytes()).collect(),
+        _ => {
+            return Err(field(
+                path,
+                FORMAT,
+                "PixelData (7FE0,0010)",
+                format!(
+                    "holds {}-bit values in a form this reader does not take (big-endian \
+                     transfer syntax {ts}); convert the series with dcm2niix",
+                    h.bits_allocated
+                ),
+            ));
+        }
+    };
+    let size = h.bits_allocated as usize / 8;
+    let need = n * size;
+    if bytes.len() < need {
+        return Err(ImageError::Truncated {
+            path: path.to_path_buf(),
+            detail: format!(
+                "PixelData has {} bytes, Rows x Columns x NumberOfFrames = {} x {} x {} at {} \
+                 bits needs {need}",
+                bytes.len(),
+                h.rows,
+                h.cols,
+                h.frames,
+                h.bits_allocated
+            ),
+        });
+    }
+    let bytes = &bytes[..need];
+    let float = matches!(prim, PrimitiveValue::F32(_) | PrimitiveValue::F64(_));
+    Ok(if float {
+        let t = if size == 4 {
+            super::super::Dtype::F32
+        } else {
+            super::super::Dtype::F64
+        };
+        Voxels::from_bytes(t, bytes, false)
+    } else {
+        integers(bytes, h)
+    })
+}
+
+/// Integer pixels: the low `BitsStored` bits of each value, sign-extended when signed.
+fn integers(bytes: &[u8], h: &Header) -> Voxels {
+    let bits = h.bits_stored;
+    let word = |c: &[u8]| -> u32 {
+        c.iter()
+            .rev()
+            .fold(0u32, |acc, &b| (acc << 8) | u32::from(b))
+    };
+    let mask = if bits >= 32 {
+        u32::MAX
+    } else {
+        (1u32 << bits) - 1
+    };
+    let signed = |v: u32| -> i32 {
+        let v = v & mask;
+        if bits < 32 && v >> (bits - 1) & 1 == 1 {
+            (v | !mask) as i32
+        } else {
+            v as i32
+        }
+    };
+    let size = h.bits_allocated as usize / 8;
+    let it = bytes.chunks_exact(size).map(word);
+    match (h.bits_allocated, h.signed) {
+        (8, false) => Voxels::U8(it.map(|v| (v & mask) as u8).collect()),
+        (8, true) => Voxels::I8(it.map(|v| signed(v) as i8).collect()),
+        (16, false) => Voxels::U16(it.map(|v| (v & mask) as u16).collect()),
+        (16, true) => Voxels::I16(it.map(|v| signed(v) as i16).collect()),
+        (_, false) => Voxels::U32(it.map(|v| v & mask).collect()),
+        (_, true) => Voxels::I32(it.map(signed).collect()),
+    }
+}
+
+/// `len` values of `v` from `start`, in the same type.
+fn slice(v: &Voxels, start: usize, len: usize) -> Voxels {
+    let r = start..start + len;
+    match v {
+        Voxels::U8(d) => Voxels::U8(d[r].to_vec()),
+        Voxels::I8(d) => Voxels::I8(d[r].to_vec()),
+        Voxels::U16(d) => Voxels::U16(d[r].to_vec()),
+        Voxels::I16(d) => Voxels::I16(d[r].to_vec()),
+        Voxels::U32(d) => Voxels::U32(d[r].to_vec()),
+        Voxels::I32(d) => Voxels::I32(d[r].to_vec()),
+        Voxels::F32(d) => Voxels::F32(d[r].to_vec()),
+        Voxels::F64(d) => Voxels::F64(d[r].to_vec()),
+        Voxels::Shared(_) => unreachable!("decoded pixels are owned"),
+    }
+}

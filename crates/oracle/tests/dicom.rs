@@ -1,0 +1,204 @@
+//! DICOM volumes on real files that packages ship (`fixtures/images/dicom`, see its README):
+//! pydicom's RT Dose grid (a multi-frame volume placed by `GridFrameOffsetVector`) against the
+//! values and positions pydicom gives, nibabel's Philips enhanced MR header against the affine
+//! of nibabel's `dicomwrappers`, and the refusals (one slice, compressed pixel data, no
+//! geometry, two series, several volumes at one position, a damaged file), each one error
+//! naming the file and the fix. Series written from real volumes are compared with SimpleITK
+//! and dcm2niix in `python/tests/test_dicom.py`.
+
+use glam::DVec3;
+use oracle::image::{LoadOptions, is_dicom_file, load_volume, read_dicom};
+use std::path::{Path, PathBuf};
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/images/dicom")
+        .join(name)
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("oracle-dicom-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn close(a: DVec3, b: DVec3, tol: f64) -> bool {
+    (a - b).abs().max_element() <= tol
+}
+
+/// The error of reading `p`, which must fail.
+fn refused(p: &Path) -> String {
+    let e = read_dicom(p).expect_err("must be refused").to_string();
+    assert!(!e.contains('\n'), "one line: {e}");
+    e
+}
+
+#[test]
+fn an_rt_dose_grid_reads_as_pydicom_reads_it() {
+    let p = fixture("rtdose.dcm");
+    assert!(is_dicom_file(&p));
+    let v = load_volume(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(v.dims(), [10, 10, 15]);
+    // pydicom: ImagePositionPatient (189.43125, 199.43125, -761.87) LPS, PixelSpacing 10 x 10,
+    // an axial orientation, GridFrameOffsetVector 0, 5, ..., 70; RAS negates x and y.
+    let a = v.affine();
+    assert_eq!(a.translation, DVec3::new(-189.43125, -199.43125, -761.87));
+    assert_eq!(a.matrix3.x_axis, DVec3::new(-10.0, 0.0, 0.0));
+    assert_eq!(a.matrix3.y_axis, DVec3::new(0.0, -10.0, 0.0));
+    assert!(close(a.matrix3.z_axis, DVec3::new(0.0, 0.0, 5.0), 1e-12));
+    // pydicom's pixel_array[3, 2, 5] (frame, row, column) = 1131000, max 1254000; scaled by
+    // DoseGridScaling 1e-6 (Gy).
+    assert!((v.get(5, 2, 3) - 1.131).abs() < 1e-12, "{}", v.get(5, 2, 3));
+    let max = (0..v.len())
+        .map(|i| v.voxels().get_f64(i))
+        .fold(0.0, f64::max);
+    assert_eq!(max, 1_254_000.0);
+    assert!(
+        v.notes()[0].contains("15 slices of 10 x 10 pixels"),
+        "{:?}",
+        v.notes()
+    );
+}
+
+#[test]
+#[allow(clippy::excessive_precision)] // nibabel's reprs, as printed
+fn an_enhanced_mr_is_placed_as_nibabel_places_it() {
+    use std::io::Read;
+    let d = tmpdir("philips");
+    let mut bytes = Vec::new();
+    flate2::read::GzDecoder::new(std::fs::File::open(fixture("philips_mprage.dcm.gz")).unwrap())
+        .read_to_end(&mut bytes)
+        .unwrap();
+    let p = d.join("philips_mprage.dcm");
+    std::fs::write(&p, bytes).unwrap();
+    let v = read_dicom(&p).unwrap();
+    assert_eq!(v.dims(), [256, 256, 176]);
+    // nibabel.nicom.dicomwrappers.wrapper_from_file(...).affine (LPS; its voxel axes are
+    // (row, column, slice), ours (column, row, slice)), x and y negated for RAS.
+    let ras = |x: f64, y: f64, z: f64| DVec3::new(-x, -y, z);
+    let row = ras(
+        -3.3793509006500001e-02,
+        -6.4996287226600002e-02,
+        -9.9731314182279995e-01,
+    );
+    let col = ras(
+        -2.2011068649000001e-03,
+        9.9788552522659002e-01,
+        -6.4959004521300004e-02,
+    );
+    let slice = ras(
+        9.9943546970631159e-01,
+        9.8578216815829951e-11,
+        -3.3865423142437616e-02,
+    );
+    let origin = ras(
+        -8.2190830214181005e+01,
+        -1.2512766968458000e+02,
+        1.4242164846509601e+02,
+    );
+    // nibabel runs the slices the other way (from frame 176; ours, as ITK's, go along the
+    // normal row x column): our voxel (i, j, k) is nibabel's (j, i, 175 - k). nibabel steps
+    // along the orientation's normal, we along the frames' positions (first to last over 175):
+    // the file's two differ by 8e-6 rad, 1.3e-3 mm at the far end, so 2e-3 mm here.
+    let nib = |i: f64, j: f64, k: f64| origin + row * i + col * j + slice * k;
+    let a = v.affine();
+    for (i, j, k) in [
+        (0, 0, 0),
+        (255, 0, 0),
+        (0, 255, 0),
+        (0, 0, 175),
+        (17, 200, 99),
+    ] {
+        let ours = a.transform_point3(DVec3::new(i as f64, j as f64, k as f64));
+        let theirs = nib(j as f64, i as f64, (175 - k) as f64);
+        assert!(
+            close(ours, theirs, 2e-3),
+            "voxel {:?}: {ours:?} vs {theirs:?}",
+            (i, j, k)
+        );
+    }
+    assert!(
+        close(a.matrix3.x_axis, col, 1e-12),
+        "{:?}",
+        a.matrix3.x_axis
+    );
+    assert!(
+        close(a.matrix3.y_axis, row, 1e-12),
+        "{:?}",
+        a.matrix3.y_axis
+    );
+    // The per-frame PixelValueTransformation's slope (2.1079...) is kept as the scaling.
+    assert!(
+        (v.scaling().0 - 2.107_936_507_936_5).abs() < 1e-12,
+        "{:?}",
+        v.scaling()
+    );
+}
+
+#[test]
+fn what_is_not_a_volume_is_refused_with_the_fix() {
+    let e = refused(&fixture("MR_small.dcm"));
+    assert!(
+        e.contains("one slice") && e.contains("pass the folder"),
+        "{e}"
+    );
+    let e = refused(&fixture("MR_small_RLE.dcm"));
+    assert!(
+        e.contains("compressed (RLE Lossless") && e.contains("dcm2niix"),
+        "{e}"
+    );
+    let e = refused(&fixture("emri_small.dcm"));
+    assert!(
+        e.contains("(0020,0037) is missing") && e.contains("not a volume"),
+        "{e}"
+    );
+
+    let d = tmpdir("refusals");
+    let not = d.join("notes.dcm");
+    std::fs::write(&not, b"not a DICOM file").unwrap();
+    assert!(refused(&not).contains("no 'DICM' preamble"));
+    // A damaged copy: the file cut in the middle of its pixel data.
+    let bytes = std::fs::read(fixture("MR_small.dcm")).unwrap();
+    let cut = d.join("cut.dcm");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let e = refused(&cut);
+    assert!(
+        e.contains("cut.dcm") && (e.contains("truncated") || e.contains("damaged")),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_folder_is_one_volume_of_one_series() {
+    // Two series: the MR slice and the dose grid.
+    let d = tmpdir("two_series");
+    std::fs::copy(fixture("MR_small.dcm"), d.join("a")).unwrap();
+    std::fs::copy(fixture("rtdose.dcm"), d.join("b")).unwrap();
+    let e = refused(&d);
+    assert!(
+        e.contains("2 series in one folder") && e.contains("(MR)"),
+        "{e}"
+    );
+    // The same slice twice: two volumes at one position.
+    let d = tmpdir("repeated");
+    std::fs::copy(fixture("MR_small.dcm"), d.join("1.dcm")).unwrap();
+    std::fs::copy(fixture("MR_small.dcm"), d.join("2.dcm")).unwrap();
+    let e = refused(&d);
+    assert!(e.contains("2 slices at 1 distinct positions"), "{e}");
+    // A multi-frame file in a folder, beside a text file: read, the other file noted.
+    let d = tmpdir("with_readme");
+    std::fs::copy(fixture("rtdose.dcm"), d.join("dose")).unwrap();
+    std::fs::write(d.join("README.txt"), "exported").unwrap();
+    let v = load_volume(&d, &LoadOptions::default()).unwrap();
+    assert_eq!(v.dims(), [10, 10, 15]);
+    assert!(v.notes()[0].contains("1 other file(s)"), "{:?}", v.notes());
+    // No DICOM image at all: the slice-folder reader's error, not a DICOM one.
+    let d = tmpdir("empty");
+    std::fs::write(d.join("README.txt"), "nothing").unwrap();
+    let e = load_volume(&d, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no PNG or TIFF slices"), "{e}");
+}
