@@ -313,13 +313,16 @@ def mesh_file(
     progress: Optional[Callable[[dict], Any]] = None,
     frame: Optional[int] = None,
     nan_as: Optional[float] = None,
+    series: Optional[Union[int, str]] = None,
     **criteria,
 ) -> Union[Mesh, Dict[int, Mesh]]:
-    """Mesh what ``cargo xtask mesh`` reads: an image (.nii, .nii.gz, .tif, .tiff, .raw, a
-    folder of slices), a mesh (.ply .off .obj .stl), a point set (.xyz, a .ply without faces),
+    """Mesh what ``cargo xtask mesh`` reads: an image (.nii, .nii.gz, .mgz, .nrrd, .mha,
+    .tif, .tiff, .raw, a DICOM folder or multi-frame file, a folder of slices), a mesh (.ply .off .obj .stl), a point set (.xyz, a .ply without faces),
     or ``implicit:NAME`` / ``implicit:EXPR`` (with ``bounding_sphere=(center, radius)``).
     The same defaults as the CLI, hence the same mesh. ``frame`` picks one 3D volume of a
-    NIfTI series (``--frame``); ``nan_as`` gives NaN voxels a value (``--nan-as``)."""
+    NIfTI series (``--frame``); ``nan_as`` gives NaN voxels a value (``--nan-as``);
+    ``series`` picks one series of a DICOM folder by its SeriesNumber or SeriesInstanceUID
+    (``--series``)."""
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"mesh_file: a path is needed, got {type(path).__name__}")
     spec = os.fspath(path)
@@ -336,6 +339,10 @@ def mesh_file(
         if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)) or frame < 0:
             raise ValueError(f"frame {frame!r}: the frame of a series is a whole number from 0")
         frame = int(frame)
+    if series is not None:
+        if isinstance(series, bool) or not isinstance(series, (int, np.integer, str)):
+            raise TypeError(f"series {series!r}: a SeriesNumber (int) or SeriesInstanceUID (str)")
+        series = str(series)
     p = _params(**criteria)
     which = _labels_arg(labels, label)
     if which is not None:
@@ -344,12 +351,13 @@ def mesh_file(
             raise ValueError(f"labels: {spec} has no label other than the background 0: nothing to mesh")
         return {
             l: Mesh(_core.mesh_spec(spec, bs, None, l, False, None, sp, read_as, smooth_polyhedron, p, progress,
-                                    frame=frame, nan_as=nan_as))
+                                    frame=frame, nan_as=nan_as, series=series))
             for l in todo
         }
     lab = None if label is None else int(label)
     return Mesh(_core.mesh_spec(spec, bs, iso, lab, bool(dark_foreground), background, sp, read_as,
-                                bool(smooth_polyhedron), p, progress, frame=frame, nan_as=nan_as))
+                                bool(smooth_polyhedron), p, progress, frame=frame, nan_as=nan_as,
+                                series=series))
 
 
 def _sphere(bs):

@@ -527,7 +527,7 @@ fn volume_labels(volume: &Bound<'_, PyUntypedArray>) -> PyResult<Vec<i64>> {
 
 /// Mesh what the CLI reads: a file, a folder of slices or `implicit:NAME|EXPR`.
 #[pyfunction]
-#[pyo3(signature = (spec, bounding_sphere, iso, label, dark_foreground, background, spacing, read_as, smooth_polyhedron, params, progress=None, frame=None, nan_as=None))]
+#[pyo3(signature = (spec, bounding_sphere, iso, label, dark_foreground, background, spacing, read_as, smooth_polyhedron, params, progress=None, frame=None, nan_as=None, series=None))]
 #[allow(clippy::too_many_arguments)]
 fn mesh_spec<'py>(
     py: Python<'py>,
@@ -544,6 +544,7 @@ fn mesh_spec<'py>(
     progress: Option<Bound<'py, PyAny>>,
     frame: Option<usize>,
     nan_as: Option<f64>,
+    series: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut opts = InputOptions {
         bounding_sphere: bounding_sphere.map(|(c, r)| oracle::BoundingSphere {
@@ -564,6 +565,7 @@ fn mesh_spec<'py>(
     }
     opts.load.frame = frame;
     opts.load.nan_as = nan_as;
+    opts.load.series = series;
     opts.read_as = match read_as.as_deref() {
         None => None,
         Some("mesh") => Some(pipeline::ReadAs::Mesh),

@@ -38,6 +38,10 @@ pub struct SurfaceOptions {
     /// e.g. 0 (default: a NaN voxel is an error).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_nan_as)]
     pub nan_as: Option<f64>,
+    /// DICOM folder holding several series: the one to mesh, by its SeriesNumber or
+    /// SeriesInstanceUID (the error of such a folder lists them).
+    #[arg(long)]
+    pub series: Option<String>,
     /// Raw volume: dimensions `nx,ny,nz`.
     #[arg(long, allow_hyphen_values = true, value_parser = parse_dims)]
     pub dims: Option<[usize; 3]>,
@@ -128,6 +132,7 @@ pub fn image_load_options(o: &SurfaceOptions) -> Result<LoadOptions> {
         raw,
         frame: o.frame,
         nan_as: o.nan_as,
+        series: o.series.clone(),
     })
 }
 

@@ -33,6 +33,9 @@ pub struct LoadOptions {
     /// Give NaN voxels this value (`--nan-as`; see [`Volume::replace_nan`]); without it a NaN
     /// voxel is an error when the surface is built.
     pub nan_as: Option<f64>,
+    /// The series of a DICOM folder that holds several: its `SeriesNumber` or
+    /// `SeriesInstanceUID` (`--series`); other inputs refuse it.
+    pub series: Option<String>,
 }
 
 fn spacing_affine(spacing: Option<[f64; 3]>) -> Result<DAffine3, ImageError> {
@@ -129,6 +132,17 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
             ),
         });
     }
+    let dicom = opts.raw.is_none()
+        && (named(path, &[".dcm", ".ima"])
+            || super::is_dicom_file(path)
+            || (path.is_dir() && super::is_dicom_folder(path)));
+    if let Some(s) = opts.series.as_deref().filter(|_| !dicom) {
+        return Err(ImageError::Frame {
+            path: path.to_path_buf(),
+            dims: vol.dims().iter().map(|&d| d as u64).collect(),
+            detail: format!("--series {s}: series are picked from DICOM folders; this is not one"),
+        });
+    }
     match opts.nan_as {
         Some(value) => vol.replace_nan(value),
         None => Ok(vol),
@@ -159,7 +173,7 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
             return super::read_ome_zarr(path);
         }
         if super::is_dicom_folder(path) {
-            return super::read_dicom(path);
+            return super::read_dicom(path, opts.series.as_deref());
         }
         return read_slice_folder(path, opts.spacing);
     }
@@ -179,7 +193,7 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
     } else if ends(".tif") || ends(".tiff") {
         read_tiff_stack(path, opts.spacing)
     } else if ends(".dcm") || ends(".ima") || super::is_dicom_file(path) {
-        super::read_dicom(path)
+        super::read_dicom(path, opts.series.as_deref())
     } else if ends(".raw") {
         Err(ImageError::RawNeedsDims {
             path: path.to_path_buf(),

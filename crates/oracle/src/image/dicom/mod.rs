@@ -32,14 +32,16 @@ pub fn is_dicom_folder(dir: &Path) -> bool {
 }
 
 /// Read a DICOM series (a folder of its files, in any order, other files ignored) or a
-/// multi-frame DICOM file as one volume. Errors name the file, the field and the fix.
+/// multi-frame DICOM file as one volume. `wanted` picks one series of a folder that holds
+/// several, by its `SeriesNumber` or `SeriesInstanceUID` (`--series`); without it such a
+/// folder is refused, the error listing them. Errors name the file, the field and the fix.
 ///
 /// ```no_run
-/// let vol = oracle::image::read_dicom("ct_series/".as_ref())?;
+/// let vol = oracle::image::read_dicom("ct_series/".as_ref(), None)?;
 /// println!("{:?} voxels", vol.dims());
 /// # Ok::<(), oracle::image::ImageError>(())
 /// ```
-pub fn read_dicom(path: &Path) -> Result<Volume, ImageError> {
+pub fn read_dicom(path: &Path, wanted: Option<&str>) -> Result<Volume, ImageError> {
     if path.is_dir() {
         let files = files_of(path)?;
         let mut planes = Vec::new();
@@ -62,6 +64,7 @@ pub fn read_dicom(path: &Path) -> Result<Volume, ImageError> {
                     .into(),
             });
         }
+        let planes = series::pick(path, planes, wanted)?;
         series::stack(path, planes, skipped)
     } else {
         let name = path
@@ -69,7 +72,7 @@ pub fn read_dicom(path: &Path) -> Result<Volume, ImageError> {
             .map(|n| n.to_string_lossy().to_ascii_uppercase())
             .unwrap_or_default();
         match object::read_planes(path)? {
-            Some(planes) => series::stack(path, planes, 0),
+            Some(planes) => series::stack(path, series::pick(path, planes, wanted)?, 0),
             None if name == "DICOMDIR" => Err(ImageError::Dicom {
                 path: path.to_path_buf(),
                 detail: "a DICOMDIR index, not an image; pass the folder that holds the files \

@@ -23,8 +23,10 @@ pub(crate) struct Plane {
     /// The file it came from and its frame number there.
     pub file: PathBuf,
     pub frame: usize,
-    /// `SeriesInstanceUID`, and `SeriesNumber SeriesDescription (Modality)` for messages.
+    /// `SeriesInstanceUID`, its `SeriesNumber`, and `#SeriesNumber 'SeriesDescription'
+    /// (Modality)` for messages.
     pub series: String,
+    pub series_number: Option<String>,
     pub series_label: String,
     pub rows: usize,
     pub cols: usize,
@@ -93,6 +95,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
             file: path.to_path_buf(),
             frame: f,
             series: header.series.clone(),
+            series_number: header.series_number.clone(),
             series_label: header.series_label.clone(),
             rows: header.rows,
             cols: header.cols,
@@ -129,6 +132,7 @@ struct Header {
     bits_stored: u32,
     signed: bool,
     series: String,
+    series_number: Option<String>,
     series_label: String,
 }
 
@@ -212,8 +216,9 @@ impl Header {
             ));
         }
         let series = text(obj, tags::SERIES_INSTANCE_UID).unwrap_or_default();
+        let series_number = text(obj, tags::SERIES_NUMBER);
         let label = [
-            text(obj, tags::SERIES_NUMBER).map(|s| format!("#{s}")),
+            series_number.as_ref().map(|s| format!("#{s}")),
             text(obj, tags::SERIES_DESCRIPTION).map(|s| format!("'{s}'")),
             text(obj, tags::MODALITY).map(|s| format!("({s})")),
         ]
@@ -229,6 +234,7 @@ impl Header {
             bits_stored,
             signed: uint(obj, tags::PIXEL_REPRESENTATION) == Some(1),
             series,
+            series_number,
             series_label: label,
         })
     }

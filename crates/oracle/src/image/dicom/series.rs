@@ -30,7 +30,6 @@ pub(crate) fn stack(
         path: source.to_path_buf(),
         detail,
     };
-    one_series(source, &planes)?;
     let first = planes[0].clone();
     if planes.len() == 1 {
         let folder = first.file.parent().unwrap_or(Path::new("."));
@@ -171,34 +170,70 @@ fn name(p: &Plane) -> String {
     }
 }
 
-/// Errors unless every plane is of the first plane's series.
-fn one_series(source: &Path, planes: &[Plane]) -> Result<(), ImageError> {
-    let mut series: Vec<(&str, &str, usize, &Plane)> = Vec::new();
-    for p in planes {
-        match series.iter_mut().find(|s| s.0 == p.series) {
-            Some(s) => s.2 += 1,
-            None => series.push((&p.series, &p.series_label, 1, p)),
+/// The planes of the series `wanted` (a `SeriesNumber` or a `SeriesInstanceUID`), or all of
+/// them when they are one series; otherwise an error listing the series with `--series`.
+pub(crate) fn pick(
+    source: &Path,
+    planes: Vec<Plane>,
+    wanted: Option<&str>,
+) -> Result<Vec<Plane>, ImageError> {
+    let mut series: Vec<(&Plane, usize)> = Vec::new();
+    for p in &planes {
+        match series.iter_mut().find(|s| s.0.series == p.series) {
+            Some(s) => s.1 += 1,
+            None => series.push((p, 1)),
         }
     }
-    if series.len() < 2 {
-        return Ok(());
-    }
-    let list = series
-        .iter()
-        .map(|(uid, label, count, p)| {
-            let label = if label.is_empty() { uid } else { label };
-            format!("{label}: {count} image(s), e.g. {}", name(p))
-        })
-        .collect::<Vec<_>>()
-        .join("; ");
-    Err(ImageError::Dicom {
+    let key = |p: &Plane| p.series_number.clone().unwrap_or_else(|| p.series.clone());
+    let list = || {
+        series
+            .iter()
+            .map(|(p, count)| {
+                let label = if p.series_label.is_empty() {
+                    &p.series
+                } else {
+                    &p.series_label
+                };
+                format!("--series {}: {label}, {count} image(s)", key(p))
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let err = |detail: String| ImageError::Dicom {
         path: source.to_path_buf(),
-        detail: format!(
-            "{} series in one folder ({list}); put the files of the series to mesh in a folder \
-             of their own (`dcm2niix` sorts them by series)",
-            series.len()
-        ),
-    })
+        detail,
+    };
+    match wanted {
+        None if series.len() < 2 => Ok(planes),
+        None => Err(err(format!(
+            "{} series in one folder ({}); pick one with --series",
+            series.len(),
+            list()
+        ))),
+        Some(w) => {
+            let w = w.trim();
+            let hits: Vec<&str> = series
+                .iter()
+                .filter(|(p, _)| p.series == w || p.series_number.as_deref() == Some(w))
+                .map(|(p, _)| p.series.as_str())
+                .collect();
+            match hits.as_slice() {
+                [uid] => {
+                    let uid = uid.to_string();
+                    Ok(planes.into_iter().filter(|p| p.series == uid).collect())
+                }
+                [] => Err(err(format!(
+                    "--series {w}: no series of that number or UID here ({})",
+                    list()
+                ))),
+                _ => Err(err(format!(
+                    "--series {w}: {} series have that number ({}); give the SeriesInstanceUID",
+                    hits.len(),
+                    list()
+                ))),
+            }
+        }
+    }
 }
 
 /// Errors unless `p` has the size, orientation and spacing of `first`.
