@@ -218,6 +218,22 @@ fn a_folder_is_one_volume_of_one_series() {
     let v = load_volume(&d, &LoadOptions::default()).unwrap();
     assert_eq!(v.dims(), [10, 10, 15]);
     assert!(v.notes()[0].contains("1 other file(s)"), "{:?}", v.notes());
+    // An export keeps its series in subfolders: the error names them.
+    let d = tmpdir("export");
+    for (sub, f) in [
+        ("DICOM/ST0/SE0", "MR_small.dcm"),
+        ("DICOM/ST0/SE1", "rtdose.dcm"),
+    ] {
+        std::fs::create_dir_all(d.join(sub)).unwrap();
+        std::fs::copy(fixture(f), d.join(sub).join("IM0")).unwrap();
+    }
+    let e = load_volume(&d, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("in 2 subfolder(s)") && e.contains("SE0 (1 files)") && e.contains("SE1"),
+        "{e}"
+    );
     // No DICOM image at all: the slice-folder reader's error, not a DICOM one.
     let d = tmpdir("empty");
     std::fs::write(d.join("README.txt"), "nothing").unwrap();

@@ -78,7 +78,7 @@ mod topology;
 mod volume;
 mod zarr;
 
-pub use dicom::{is_dicom_file, is_dicom_folder, read_dicom};
+pub use dicom::{dicom_subfolders, is_dicom_file, is_dicom_folder, read_dicom};
 pub use error::ImageError;
 pub use metaimage::read_metaimage;
 pub use mgh::read_mgh;

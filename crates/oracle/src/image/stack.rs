@@ -149,6 +149,25 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
     }
 }
 
+/// For a folder without slices whose subfolders hold DICOM series: the error naming them.
+fn dicom_below(path: &Path) -> Option<ImageError> {
+    let found = super::dicom_subfolders(path);
+    let list = found
+        .iter()
+        .take(8)
+        .map(|(d, n)| format!("{} ({n} files)", d.display()))
+        .collect::<Vec<_>>()
+        .join(", ");
+    (!found.is_empty()).then(|| ImageError::Dicom {
+        path: path.to_path_buf(),
+        detail: format!(
+            "the DICOM files are in {} subfolder(s): pass the folder of one series: {list}{}",
+            found.len(),
+            if found.len() > 8 { ", ..." } else { "" }
+        ),
+    })
+}
+
 /// Whether the file name (any case) ends with one of `ends` (lower case).
 fn named(path: &Path, ends: &[&str]) -> bool {
     let name = path
@@ -175,7 +194,10 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
         if super::is_dicom_folder(path) {
             return super::read_dicom(path, opts.series.as_deref());
         }
-        return read_slice_folder(path, opts.spacing);
+        return read_slice_folder(path, opts.spacing).map_err(|e| match e {
+            ImageError::NoSlices { .. } => dicom_below(path).unwrap_or(e),
+            e => e,
+        });
     }
     let name = path
         .file_name()

@@ -89,6 +89,37 @@ pub fn read_dicom(path: &Path, wanted: Option<&str>) -> Result<Volume, ImageErro
     }
 }
 
+/// The folders under `dir` (at most 5 levels down) that hold DICOM files, each with its
+/// count of them, by name: where an export (`DICOM/PA0/ST0/SE0/...`) keeps its series.
+pub fn dicom_subfolders(dir: &Path) -> Vec<(PathBuf, usize)> {
+    let mut found = Vec::new();
+    let mut todo = vec![(dir.to_path_buf(), 0)];
+    let mut seen = 0usize;
+    while let Some((d, depth)) = todo.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        let mut count = 0;
+        for e in entries.filter_map(|e| e.ok()) {
+            seen += 1;
+            if seen > 100_000 {
+                break;
+            }
+            let p = e.path();
+            if p.is_dir() && depth < 5 {
+                todo.push((p, depth + 1));
+            } else if depth > 0 && p.is_file() && object::has_preamble(&p) {
+                count += 1;
+            }
+        }
+        if count > 0 {
+            found.push((d, count));
+        }
+    }
+    found.sort();
+    found
+}
+
 /// The regular files of `dir`, sorted by name (the order of equal positions in errors).
 fn files_of(dir: &Path) -> Result<Vec<PathBuf>, ImageError> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)

@@ -8,6 +8,7 @@
 use super::super::orient::field;
 use super::super::{ImageError, Voxels};
 use dicom_core::Tag;
+use dicom_core::header::HasLength;
 use dicom_core::value::{PrimitiveValue, Value};
 use dicom_dictionary_std::tags;
 use dicom_object::file::ReadPreamble;
@@ -226,13 +227,24 @@ impl Header {
         .flatten()
         .collect::<Vec<_>>()
         .join(" ");
+        let representation = uint(obj, tags::PIXEL_REPRESENTATION).unwrap_or(0);
+        if representation > 1 {
+            return Err(field(
+                path,
+                FORMAT,
+                "PixelRepresentation (0028,0103)",
+                format!(
+                    "= {representation}: must be 0 (unsigned) or 1 (signed); the header is damaged"
+                ),
+            ));
+        }
         Ok(Header {
             rows,
             cols,
             frames,
             bits_allocated,
             bits_stored,
-            signed: uint(obj, tags::PIXEL_REPRESENTATION) == Some(1),
+            signed: representation == 1,
             series,
             series_number,
             series_label: label,
@@ -260,13 +272,18 @@ fn frame_geometry(
 ) -> Result<Geometry, ImageError> {
     let per_frame = item(obj, tags::PER_FRAME_FUNCTIONAL_GROUPS_SEQUENCE, f);
     let shared = item(obj, tags::SHARED_FUNCTIONAL_GROUPS_SEQUENCE, 0);
-    // The first of: per-frame macro, shared macro, top level.
-    let look = |seq: Tag, tag: Tag, n: usize| -> Option<Vec<f64>> {
-        [per_frame, shared]
-            .into_iter()
-            .flatten()
-            .find_map(|g| item(g, seq, 0).and_then(|m| floats(m, tag, n)))
-            .or_else(|| floats(obj, tag, n))
+    // The first of: per-frame macro, shared macro, top level; a present but malformed value
+    // is an error naming the field, never a default.
+    let look = |seq: Tag, tag: Tag, n: usize, name: &str| -> Result<Option<Vec<f64>>, ImageError> {
+        let bad = |detail: String| field(path, FORMAT, name, detail);
+        for g in [per_frame, shared].into_iter().flatten() {
+            if let Some(m) = item(g, seq, 0)
+                && let Some(v) = floats(m, tag, n).map_err(bad)?
+            {
+                return Ok(Some(v));
+            }
+        }
+        floats(obj, tag, n).map_err(bad)
     };
     let missing = |name: &str| {
         field(
@@ -278,12 +295,14 @@ fn frame_geometry(
              export the slices as PNG/TIFF and give --spacing",
         )
     };
+    const IOP: &str = "ImageOrientationPatient (0020,0037)";
     let iop = look(
         tags::PLANE_ORIENTATION_SEQUENCE,
         tags::IMAGE_ORIENTATION_PATIENT,
         6,
-    )
-    .ok_or_else(|| missing("ImageOrientationPatient (0020,0037)"))?;
+        IOP,
+    )?
+    .ok_or_else(|| missing(IOP))?;
     let row_dir = DVec3::new(iop[0], iop[1], iop[2]);
     let col_dir = DVec3::new(iop[3], iop[4], iop[5]);
     let unit = |v: DVec3| (v.length() - 1.0).abs() < 1e-3;
@@ -291,49 +310,60 @@ fn frame_geometry(
         return Err(field(
             path,
             FORMAT,
-            "ImageOrientationPatient (0020,0037)",
+            IOP,
             format!(
                 "= {iop:?}: the row and column directions must be orthogonal unit vectors; \
                  the header is damaged"
             ),
         ));
     }
+    const IPP: &str = "ImagePositionPatient (0020,0032)";
     let mut position = look(
         tags::PLANE_POSITION_SEQUENCE,
         tags::IMAGE_POSITION_PATIENT,
         3,
-    )
+        IPP,
+    )?
     .map(|p| DVec3::new(p[0], p[1], p[2]))
-    .ok_or_else(|| missing("ImagePositionPatient (0020,0032)"))?;
+    .ok_or_else(|| missing(IPP))?;
     let mut scale = 1.0;
     if frames > 1 && per_frame.is_none() {
         // A classic multi-frame object: frames are placed by the RT Dose grid offsets.
+        const OFFSETS: &str = "GridFrameOffsetVector (3004,000C)";
         let offsets = floats(obj, tags::GRID_FRAME_OFFSET_VECTOR, frames)
-            .ok_or_else(|| missing("GridFrameOffsetVector (3004,000C)"))?;
+            .map_err(|d| field(path, FORMAT, OFFSETS, d))?
+            .ok_or_else(|| missing(OFFSETS))?;
         position += row_dir.cross(col_dir) * (offsets[f] - offsets[0]);
-        scale = floats(obj, tags::DOSE_GRID_SCALING, 1).map_or(1.0, |s| s[0]);
+        const SCALING: &str = "DoseGridScaling (3004,000E)";
+        if let Some(s) =
+            floats(obj, tags::DOSE_GRID_SCALING, 1).map_err(|d| field(path, FORMAT, SCALING, d))?
+        {
+            scale = s[0];
+        }
     }
-    let ps = look(tags::PIXEL_MEASURES_SEQUENCE, tags::PIXEL_SPACING, 2)
-        .ok_or_else(|| missing("PixelSpacing (0028,0030)"))?;
+    const PS: &str = "PixelSpacing (0028,0030)";
+    let ps = look(tags::PIXEL_MEASURES_SEQUENCE, tags::PIXEL_SPACING, 2, PS)?
+        .ok_or_else(|| missing(PS))?;
     if !(ps[0] > 0.0 && ps[1] > 0.0) {
         return Err(field(
             path,
             FORMAT,
-            "PixelSpacing (0028,0030)",
+            PS,
             format!("= {ps:?}: spacings must be positive; the header is damaged"),
         ));
     }
-    let rescale = |tag: Tag| look(tags::PIXEL_VALUE_TRANSFORMATION_SEQUENCE, tag, 1);
-    let slope = rescale(tags::RESCALE_SLOPE).map_or(1.0, |s| s[0]) * scale;
-    let inter = rescale(tags::RESCALE_INTERCEPT).map_or(0.0, |s| s[0]);
-    if slope == 0.0 || !slope.is_finite() || !inter.is_finite() {
+    let rescale =
+        |tag: Tag, name: &str| look(tags::PIXEL_VALUE_TRANSFORMATION_SEQUENCE, tag, 1, name);
+    let slope =
+        rescale(tags::RESCALE_SLOPE, "RescaleSlope (0028,1053)")?.map_or(1.0, |s| s[0]) * scale;
+    let inter =
+        rescale(tags::RESCALE_INTERCEPT, "RescaleIntercept (0028,1052)")?.map_or(0.0, |s| s[0]);
+    if slope == 0.0 || !slope.is_finite() {
         return Err(field(
             path,
             FORMAT,
-            "RescaleSlope (0028,1053)",
-            format!(
-                "= {slope} (intercept {inter}): the values cannot be scaled; the header is damaged"
-            ),
+            "RescaleSlope (0028,1053) or DoseGridScaling (3004,000E)",
+            format!("= {slope}: the values cannot be scaled by it; the header is damaged"),
         ));
     }
     Ok(Geometry {
@@ -351,15 +381,23 @@ fn item(obj: &InMemDicomObject, tag: Tag, i: usize) -> Option<&InMemDicomObject>
     obj.element_opt(tag).ok().flatten()?.items()?.get(i)
 }
 
-/// Exactly `n` finite numbers (decimal strings or binary floats).
-fn floats(obj: &InMemDicomObject, tag: Tag, n: usize) -> Option<Vec<f64>> {
-    let v = obj
-        .element_opt(tag)
-        .ok()
-        .flatten()?
-        .to_multi_float64()
-        .ok()?;
-    (v.len() == n && v.iter().all(|x| x.is_finite())).then_some(v)
+/// Exactly `n` finite numbers (decimal strings or binary floats): `Ok(None)` when the element
+/// is absent or empty, an error (the detail) when it holds anything else.
+fn floats(obj: &InMemDicomObject, tag: Tag, n: usize) -> Result<Option<Vec<f64>>, String> {
+    let Some(e) = obj.element_opt(tag).ok().flatten() else {
+        return Ok(None);
+    };
+    if e.is_empty() {
+        return Ok(None);
+    }
+    let shown = || e.to_str().map(|s| s.into_owned()).unwrap_or_default();
+    match e.to_multi_float64() {
+        Ok(v) if v.len() == n && v.iter().all(|x| x.is_finite()) => Ok(Some(v)),
+        _ => Err(format!(
+            "= {:?}: expected {n} finite number(s); the header is damaged",
+            shown()
+        )),
+    }
 }
 
 fn uint(obj: &InMemDicomObject, tag: Tag) -> Option<u32> {
@@ -467,6 +505,23 @@ fn decode_pixels(
                 h.bits_allocated
             ),
         });
+    }
+    if bytes.len() > need + (need % 2) {
+        return Err(field(
+            path,
+            FORMAT,
+            "PixelData (7FE0,0010)",
+            format!(
+                "has {} bytes, but Rows x Columns x NumberOfFrames = {} x {} x {} at {} bits \
+                 needs exactly {need}: the header does not match the data (check Rows, \
+                 Columns, NumberOfFrames and BitsAllocated)",
+                bytes.len(),
+                h.rows,
+                h.cols,
+                h.frames,
+                h.bits_allocated
+            ),
+        ));
     }
     let bytes = &bytes[..need];
     let float = matches!(prim, PrimitiveValue::F32(_) | PrimitiveValue::F64(_));

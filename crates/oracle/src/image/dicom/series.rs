@@ -184,7 +184,19 @@ pub(crate) fn pick(
             None => series.push((p, 1)),
         }
     }
-    let key = |p: &Plane| p.series_number.clone().unwrap_or_else(|| p.series.clone());
+    // A series is named by its number when no other series here has that number.
+    let key = |p: &Plane| match &p.series_number {
+        Some(n)
+            if series
+                .iter()
+                .filter(|s| s.0.series_number.as_ref() == Some(n))
+                .count()
+                == 1 =>
+        {
+            n.clone()
+        }
+        _ => p.series.clone(),
+    };
     let list = || {
         series
             .iter()
