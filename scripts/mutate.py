@@ -12,14 +12,14 @@ with a wall-clock timeout. Each run is classified:
 - panic: exit 101 or "panicked" in stderr;
 - timeout: still running after the time limit plus a margin (killed);
 - accepted-bad: exit 0 on a file a strict reference reader rejects (the format's own
-  structural checks below, plus trimesh / nibabel / gzip where they are installed);
-- misread: exit 0, but the input note's vertex/triangle (or point) counts differ from the
-  reference reader's;
+  structural checks below, plus trimesh / nibabel / pydicom / gzip where they are installed);
+- misread: exit 0, but the input note's vertex/triangle (or point) counts, or a DICOM
+  volume's columns, rows and frames, differ from the reference reader's;
 - bad-message: a non-zero exit whose stderr is not one `error:` line naming the file;
 - refused-readable (not a failure, listed for review): a non-zero exit on a file the
   reference reads, e.g. a reader stricter than the reference or a mesh the mesher refuses.
 
-Python 3 standard library only; numpy, trimesh and nibabel add reference readers when present.
+Python 3 standard library only; numpy, trimesh, nibabel, pydicom add reference readers when present.
 Usage: scripts/mutate.py [--bin target/release/xtask] [--per-format 300] [--seed 0]
        [--formats ply_ascii,...] [--keep DIR] [--json FILE]. Exit status 1 if any panic,
 timeout, accepted-bad or misread run was found; the offending inputs are copied to --keep.
@@ -189,6 +189,7 @@ def bases():
     tet = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]
     tetf = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)]
     mesh_models = [("tetrahedron", read("fixtures/meshes/tetrahedron.ply"), [], "0.3")]
+    rtdose = read("fixtures/images/dicom/rtdose.dcm")
     b = {
         "ply_ascii": (".ply", mesh_models + [("ico", ply_bytes(v, f, "ascii"), [], "0.4"),
                                              ("rich", ply_rich_bytes(v, f, "ascii"), [], "0.4")]),
@@ -222,6 +223,9 @@ def bases():
             ("test_mgz", gzip.decompress(read("fixtures/images/nibabel_test.mgz")),
              ["--iso", "0", "--frame", "1"], "1"),
         ]),
+        # An RT Dose, and it with DoseGridScaling 1 at an iso that a damaged scaling read as 1 meshes.
+        "dicom": (".dcm", [("rtdose", rtdose, ["--iso", "1"], "20"), ("rtdose_scale1", dicom_value(
+            rtdose, None, 0x3004000E, b"1 "), ["--iso", "1000000"], "20")]),
         "raw": (".raw", [
             ("ball_u8", ball_voxels(12, "u8"),
              ["--dims", "12,12,12", "--dtype", "u8", "--iso", "50"], "2"),
@@ -405,6 +409,60 @@ def m_nifti_field(d, r):
         return d
 
 
+def dicom_elements(d):
+    """The top-level elements of an implicit-VR DICOM file after its meta group:
+    {tag: (offset of its 4-byte length, length)}."""
+    out, p = {}, 144 + struct.unpack_from("<I", d, 140)[0] if len(d) >= 144 else len(d)
+    while p + 8 <= len(d):
+        g, e, n = struct.unpack_from("<HHI", d, p)
+        out[g << 16 | e], p = (p + 4, n), p + 8 + n
+    return out
+
+
+def dicom_value(d, r, tag, v):
+    """Element `tag`'s value replaced by `v`, its length set to match (a flip if it is absent)."""
+    at, n = dicom_elements(d).get(tag, (None, 0))
+    return m_flip(d, r) if at is None else d[:at] + struct.pack("<I", len(v)) + v + d[at + 4 + n:]
+
+
+# Rows, Columns, BitsAllocated, BitsStored, PixelRepresentation, SamplesPerPixel (US);
+# NumberOfFrames (IS), ImagePositionPatient, ImageOrientationPatient, PixelSpacing,
+# GridFrameOffsetVector, DoseGridScaling (DS).
+DICOM_US = [0x00280010, 0x00280011, 0x00280100, 0x00280101, 0x00280103, 0x00280002]
+DICOM_DS = [0x00280008, 0x00200032, 0x00200037, 0x00280030, 0x3004000C, 0x3004000E]
+
+
+def m_dicom_field(d, r):
+    """One header value: a US to another number; in a decimal string, one value changed (to a
+    near or far number, nan, 1e400, nothing), dropped, or one added."""
+    if r.random() < 0.4:
+        v = r.choice([0, 1, 2, 3, 8, 9, 11, 16, 31, 32, 33, 64, 65535])
+        return dicom_value(d, r, r.choice(DICOM_US), struct.pack("<H", v))
+    tag = r.choice(DICOM_DS)
+    at, n = dicom_elements(d).get(tag, (0, 0))
+    vals = d[at + 4:at + 4 + n].strip().split(b"\\")
+    i = r.randrange(len(vals))
+    x = float(vals[i]) if NUMRE.fullmatch(vals[i]) else 1.0
+    new = r.choice([b"0", b"-1", b"2", b"14", b"16", b"nan", b"1e400", b"", b"1.5",
+                    repr(x * r.choice([1.0005, 1.02, -1, 10])).encode(), repr(x + 1).encode()])
+    vals[i:i + 1] = r.choice([[new], [new], [], [vals[i], new]])
+    v = b"\\".join(vals)
+    return dicom_value(d, r, tag, v + b" " * (len(v) % 2))
+
+
+def m_dicom_length(d, r):
+    """One element's length field changed, or the pixel data cut or padded (its length set to
+    match) by a byte, a row or a frame."""
+    els = dicom_elements(d)
+    if r.random() < 0.5 and 0x7FE00010 in els:
+        at, n = els[0x7FE00010]
+        v, k = d[at + 4:at + 4 + n], r.choice([1, 2, 4, 40, 400, 800])
+        return dicom_value(d, r, 0x7FE00010, v[:-k] if r.random() < 0.5 else v + b"\0" * k)
+    at, n = r.choice(list(els.values()) or [(0, 0)])
+    n = r.choice([0, 0xFFFFFFFF, 0x7FFFFFFF, (n + r.choice([-4, -2, -1, 1, 2, 4, 400])) % 2 ** 32])
+    return d[:at] + struct.pack("<I", n) + d[at + 4:]
+
+
 def m_gzip(d, r):
     """Corrupt a gzip stream: a byte in the deflate data, the CRC, the length, a cut, junk."""
     if len(d) < 20:  # cut by an earlier mutation: no stream left to corrupt
@@ -454,6 +512,10 @@ def mutators(fmt):
         return [m_flip, m_truncate, m_mgh_field, m_mgh_field, m_mgh_field,
                 lambda d, r: d + b"\0" * r.choice([1, 100]),
                 lambda d, r: binary_values(d, r, 284, 4, "i")]
+    if fmt == "dicom":
+        return [m_flip, m_flip, m_truncate, m_dicom_field, m_dicom_field, m_dicom_field, m_dicom_field,
+                m_dicom_length, m_dicom_length, lambda d, r: d + b"\0" * r.choice([1, 8, 100]),
+                lambda d, r: binary_values(d, r, max(0, len(d) - 6000), 4, "i")]
     if fmt == "nii_gz":
         return [m_gzip, m_gzip, m_gzip, m_flip, m_truncate]
     if fmt == "raw":
@@ -510,6 +572,9 @@ def read_counts(stderr):
     m = re.search(r"note: polyhedron: (\d+) vertices, (\d+) triangles", stderr)
     if m:
         return int(m.group(1)), int(m.group(2))
+    m = re.search(r"note: DICOM: (\d+) slices of (\d+) x (\d+) pixels", stderr)
+    if m:  # (columns, rows, frames), as check_dicom reports them
+        return int(m.group(2)), int(m.group(3)), int(m.group(1))
     m = re.search(r"note: point set: (\d+) points", stderr)
     return (int(m.group(1)), None) if m else None
 

@@ -14,7 +14,7 @@ import warnings
 import zlib
 
 warnings.simplefilter("ignore")
-for _name in ("nibabel", "trimesh"):
+for _name in ("nibabel", "trimesh", "pydicom"):
     logging.getLogger(_name).setLevel(logging.CRITICAL + 1)
 
 class Reject(Exception):
@@ -23,6 +23,7 @@ class Reject(Exception):
 
 NUM = re.compile(r"^[+-]?((\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|inf|infinity|nan)$", re.I)
 INT = re.compile(r"^[+-]?\d+$")
+DS = re.compile(rb" *[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)? *")  # DICOM decimal string
 
 
 def num(tok, finite=True):
@@ -507,6 +508,143 @@ def check_mgh(data, frame=1):
     return nibabel_check(data, "MGHImage", frame)
 
 
+def dicom_walk(data):
+    """The preamble; the meta group (explicit VR LE, as long as (0002,0000) says, UIDs of digits
+    and dots); in implicit VR LE, the data set as dicom_set checks it."""
+    if len(data) < 144 or data[128:138] != b"DICM\2\0\0\0UL":
+        raise Reject("no DICM preamble or meta group length")
+    p, end, ts = 144, 144 + struct.unpack_from("<I", data, 140)[0], None
+    while p < min(end, len(data) - 8):
+        g, e, vr = struct.unpack_from("<HH2s", data, p)
+        lv = vr in (b"OB", b"OW", b"OF", b"SQ", b"UT", b"UN")  # a 4-byte length after 2 zeros
+        n, q = struct.unpack_from("<I" if lv else "<H", data, p + 6 + 2 * lv)[0], p + 8 + 4 * lv
+        if g != 2 or (vr == b"UI" and not re.fullmatch(rb"[\d.]*\0?", data[q:q + n])):
+            raise Reject("meta group: bad (%04X,%04X)" % (g, e))
+        ts, p = data[q:q + n] if e == 0x10 else ts, q + n
+    if p != end or data[p:p + 2] == b"\2\0":
+        raise Reject("meta group length wrong")
+    if ts == b"1.2.840.10008.1.2\0":  # other syntaxes: pydicom's checks
+        dicom_set(data, p, len(data), True)
+
+
+def is_sq(tag):
+    try:
+        from pydicom.datadict import dictionary_VR
+        return dictionary_VR(tag) == "SQ"
+    except KeyError:
+        return False
+    except ImportError:  # no pydicom: the base file's sequences
+        return tag in (0x300C0002, 0x300C0004, 0x300C0020)
+
+
+def binary_vr(tag):
+    try:
+        from pydicom.datadict import dictionary_VR
+        return dictionary_VR(tag) in ("US", "UL", "SS", "SL", "FL", "FD", "AT", "OW", "US or SS")
+    except (KeyError, ImportError):
+        return False
+
+
+def dicom_set(data, p, end, top=False):
+    """Implicit VR LE elements from p: in tag order, of even lengths, filling up to `end` (None:
+    up to an item delimitation item), each sequence (undefined length, or SQ in the dictionary)
+    walked item by item, every item a data set; returns where the set ends.
+    dicom-object ignores < 4 trailing bytes (it refuses 4 to 7), does not check tag order, and
+    reads a binary element of odd length (US, UL, ...) as its whole words; the values read are
+    unaffected. So < 4 bytes at the end of the top level, elements out of order and such odd
+    lengths (not PixelData's: the reader checks it) are accepted, but not a tag repeated
+    (dicom-object keeps the later value), except (0000,0000) empty ones."""
+    seen, lim = set(), len(data) if end is None else end
+    while p < lim:
+        if top and lim - p < 4:
+            return lim
+        if lim - p < 8:
+            raise Reject("%d bytes after the last element" % (lim - p))
+        g, e, n = struct.unpack_from("<HHI", data, p)
+        tag, p = g << 16 | e, p + 8
+        if end is None and tag == 0xFFFEE00D and n == 0:  # the end of an undefined-length item
+            return p
+        if g == 0xFFFE or (tag in seen and not tag == n == 0):
+            raise Reject("(%04X,%04X) repeated or out of place" % (g, e))
+        seen.add(tag)
+        if n != 0xFFFFFFFF and n % 2 and tag != 0x7FE00010 and binary_vr(tag):
+            n -= 1
+        if n != 0xFFFFFFFF and (n % 2 or p + n > lim):
+            raise Reject("(%04X,%04X) of odd length or past the end" % (g, e))
+        if n == 0xFFFFFFFF or is_sq(tag):
+            p = dicom_items(data, p, None if n == 0xFFFFFFFF else p + n, lim)
+        else:
+            p += n
+    if p != lim or end is None:
+        raise Reject("a sequence item overruns its end or has no delimitation item")
+    return p
+
+
+def dicom_items(data, p, end, lim):
+    """A sequence's items from p, filling up to `end` (None: up to a sequence delimitation item)
+    within `lim`; returns where the sequence ends."""
+    while end is None or p < end:
+        g, e, n = struct.unpack_from("<HHI", data, p) if p + 8 <= lim else (0, 0, 0)
+        p += 8
+        if end is None and (g, e, n) == (0xFFFE, 0xE0DD, 0):
+            return p
+        if (g, e) != (0xFFFE, 0xE000) or (n != 0xFFFFFFFF and p + n > (end or lim)):
+            raise Reject("(%04X,%04X) in a sequence: not an item, or past its end" % (g, e))
+        p = dicom_set(data, p, None if n == 0xFFFFFFFF else p + n)
+    if p != end:
+        raise Reject("a sequence overruns its length")
+    return p
+
+
+def check_dicom(data):
+    """A multi-frame RT Dose file (frames placed by GridFrameOffsetVector): its structure, then
+    pydicom's reading, the image pixel module and the geometry checked; (cols, rows, frames)."""
+    dicom_walk(data)
+
+    def floats(tag, n):
+        v = getattr(ds.get_item(tag), "value", None)  # the raw decimal strings
+        t = v.split(b"\\") if isinstance(v, bytes) else []
+        if len(t) != n or not all(DS.fullmatch(x) and math.isfinite(float(x)) for x in t):
+            raise Reject("(%04X,%04X): not %d finite numbers" % (tag >> 16, tag & 0xFFFF, n))
+        return [float(x) for x in t]
+    try:
+        import pydicom
+        ds = pydicom.dcmread(io.BytesIO(data))
+        px = [ds.get(k) for k in ("Rows", "Columns", "SamplesPerPixel", "BitsAllocated",
+                                  "BitsStored", "HighBit", "PixelRepresentation")]
+        rows, cols, spp, ba, bs, hb, pr = px
+        if not all(isinstance(x, int) for x in px) or min(rows, cols) < 1 or spp != 1 or \
+                ba not in (8, 16, 32) or not 1 <= bs <= ba or hb != bs - 1 or pr not in (0, 1) or \
+                ds.get("PhotometricInterpretation") not in ("MONOCHROME1", "MONOCHROME2"):
+            raise Reject("image pixel module %r" % px)
+        nf = getattr(ds.get_item(0x00280008), "value", None)
+        if not isinstance(nf, bytes) or not re.fullmatch(rb" *\+?\d{1,9} *", nf) or int(nf) < 2:
+            raise Reject("NumberOfFrames %r: not a whole number >= 2" % nf)
+        frames, ps, _ = int(nf), floats(0x00280030, 2), floats(0x00200032, 3)
+        ax, ay, az, bx, by, bz = floats(0x00200037, 6)
+        if abs(math.hypot(ax, ay, az) - 1) >= 1e-3 or abs(math.hypot(bx, by, bz) - 1) >= 1e-3 or \
+                abs(ax * bx + ay * by + az * bz) >= 1e-3 or min(ps) <= 0:
+            raise Reject("ImageOrientationPatient or PixelSpacing wrong")
+        off = sorted(floats(0x3004000C, frames))
+        mean = (off[-1] - off[0]) / (frames - 1)
+        if any(b - a <= 1e-3 * min(ps) or abs(b - a - mean) > 0.01 * mean
+               for a, b in zip(off, off[1:])):
+            raise Reject("GridFrameOffsetVector: not distinct and evenly spaced")
+        if ds.get_item(0x3004000E) is not None and floats(0x3004000E, 1) == [0]:
+            raise Reject("DoseGridScaling 0")
+        need = rows * cols * frames * ba // 8
+        if len(ds.get_item(0x7FE00010).value) != need + need % 2:
+            raise Reject("PixelData is not Rows x Columns x NumberOfFrames x BitsAllocated")
+        ds.pixel_array
+    except Reject:
+        raise
+    except ImportError:  # no pydicom: the structure only
+        return "image"
+    except Exception as ex:  # pydicom rejects it
+        raise Reject("pydicom: %s" % (str(ex).splitlines() or [type(ex).__name__])[0][:80])
+    return "image", cols, rows, frames
+
+
 def check_nii_gz(data):
     try:
         raw = gzip.decompress(data)  # checks every member's CRC-32 and length
@@ -584,4 +722,4 @@ def trimesh_rejects(path, kind):
 
 CHECKS = {"ply_ascii": check_ply, "ply_binary": check_ply, "off": check_off, "obj": check_obj,
           "stl_ascii": check_stl, "stl_binary": check_stl, "xyz": check_xyz, "nii": check_nifti,
-          "nii_gz": check_nii_gz, "nii2": check_nifti2, "mgh": check_mgh}
+          "nii_gz": check_nii_gz, "nii2": check_nifti2, "mgh": check_mgh, "dicom": check_dicom}

@@ -132,11 +132,13 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
             ),
         });
     }
-    let dicom = opts.raw.is_none()
-        && (named(path, &[".dcm", ".ima"])
-            || super::is_dicom_file(path)
-            || (path.is_dir() && super::is_dicom_folder(path)));
-    if let Some(s) = opts.series.as_deref().filter(|_| !dicom) {
+    let dicom = || {
+        opts.raw.is_none()
+            && (named(path, &[".dcm", ".ima"])
+                || super::is_dicom_file(path)
+                || (path.is_dir() && super::is_dicom_folder(path)))
+    };
+    if let Some(s) = opts.series.as_deref().filter(|_| !dicom()) {
         return Err(ImageError::Frame {
             path: path.to_path_buf(),
             dims: vol.dims().iter().map(|&d| d as u64).collect(),

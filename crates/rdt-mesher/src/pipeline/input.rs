@@ -380,11 +380,9 @@ impl Input<'static> {
     }
 }
 
-/// Whether [`Input::open`] reads the (existing) file or folder `spec` as an image: a folder,
-/// an image extension ([`oracle::image::IMAGE_EXTENSIONS`]: `.nii`, `.nii.gz`, a `.hdr`/`.img`
-/// pair, `.mgh`, `.mgz`, `.nrrd`, `.nhdr`, `.mha`, `.mhd`, `.tif`, `.tiff`, `.raw`, `.dcm`, `.ima`),
-/// a DICOM file of any name, or `raw` (a raw-volume layout is given). A folder is a DICOM
-/// series, a slice stack or an OME-Zarr store.
+/// Whether [`Input::open`] reads the (existing) file or folder `spec` as an image: a folder (a
+/// DICOM series, a slice stack, an OME-Zarr store), an image extension
+/// ([`oracle::image::IMAGE_EXTENSIONS`]), a DICOM file of any name, or `raw` (a layout given).
 ///
 /// ```
 /// use rdt_mesher::pipeline::is_image_spec;
@@ -393,10 +391,8 @@ impl Input<'static> {
 /// assert!(is_image_spec("volume.bin", true));
 /// ```
 pub fn is_image_spec(spec: &str, raw: bool) -> bool {
-    Path::new(spec).is_dir()
-        || oracle::image::is_image_file_name(spec)
-        || raw
-        || oracle::image::is_dicom_file(Path::new(spec))
+    let p = Path::new(spec);
+    raw || p.is_dir() || oracle::image::is_image_file_name(spec) || oracle::image::is_dicom_file(p)
 }
 
 fn open_implicit(rest: &str, bs: Option<BoundingSphere>) -> Result<Input<'static>, PipelineError> {

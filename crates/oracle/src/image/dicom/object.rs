@@ -87,7 +87,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
     };
     let header = Header::of(path, &obj)?;
     let frames = header.frames;
-    let values = decode_pixels(path, &ts, pixel, &header)?;
+    let values = decode_pixels(path, &ts, pixel.0, pixel.1, &header)?;
     let per = header.rows * header.cols;
     let mut planes = Vec::with_capacity(frames);
     for f in 0..frames {
@@ -113,15 +113,17 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
 }
 
 /// The pixel data element: integer (`PixelData`) or float (`FloatPixelData`,
-/// `DoubleFloatPixelData`).
-fn pixel_element(obj: &InMemDicomObject) -> Option<&Value<InMemDicomObject>> {
+/// `DoubleFloatPixelData`), with its length as the file declares it (the parser reads 16-bit
+/// words, so a declared odd length loses its last byte in the value).
+fn pixel_element(obj: &InMemDicomObject) -> Option<(&Value<InMemDicomObject>, Option<usize>)> {
     [
         tags::PIXEL_DATA,
         tags::FLOAT_PIXEL_DATA,
         tags::DOUBLE_FLOAT_PIXEL_DATA,
     ]
     .iter()
-    .find_map(|&t| obj.element_opt(t).ok().flatten().map(|e| e.value()))
+    .find_map(|&t| obj.element_opt(t).ok().flatten())
+    .map(|e| (e.value(), e.length().get().map(|l| l as usize)))
 }
 
 /// The image pixel module and the series, read once per file.
@@ -138,31 +140,36 @@ struct Header {
 }
 
 impl Header {
+    /// The image pixel module (PS3.3 C.7.6.3): every field it needs present and consistent.
     fn of(path: &Path, obj: &InMemDicomObject) -> Result<Header, ImageError> {
+        let bad = |name: &str, detail: String| field(path, FORMAT, name, detail);
         let int = |tag: Tag, name: &str| -> Result<u32, ImageError> {
             uint(obj, tag).ok_or_else(|| {
-                field(
-                    path,
-                    FORMAT,
+                bad(
                     name,
-                    "is missing or not a number; the file is not a complete image",
+                    "is missing or not a number; the file is not a complete image".into(),
                 )
             })
         };
-        let samples = uint(obj, tags::SAMPLES_PER_PIXEL).unwrap_or(1);
-        if samples != 1 {
-            return Err(field(
-                path,
-                FORMAT,
-                "SamplesPerPixel (0028,0002)",
+        let samples = int(tags::SAMPLES_PER_PIXEL, "SamplesPerPixel (0028,0002)")?;
+        let photometric = text(obj, tags::PHOTOMETRIC_INTERPRETATION).unwrap_or_default();
+        if samples != 1 || !matches!(photometric.as_str(), "MONOCHROME1" | "MONOCHROME2") {
+            return Err(bad(
+                "SamplesPerPixel (0028,0002) / PhotometricInterpretation (0028,0004)",
                 format!(
-                    "= {samples}: a colour image, not a greyscale volume; convert it to one \
-                     channel (e.g. its luminance) first"
+                    "= {samples} / {photometric:?}: not a greyscale image (colour, or palette \
+                     indices that are not intensities); convert it to one greyscale channel first"
                 ),
             ));
         }
         let rows = int(tags::ROWS, "Rows (0028,0010)")? as usize;
         let cols = int(tags::COLUMNS, "Columns (0028,0011)")? as usize;
+        if rows == 0 || cols == 0 {
+            return Err(bad(
+                "Rows/Columns",
+                format!("= {rows} x {cols}: an empty image"),
+            ));
+        }
         let frames = match text(obj, tags::NUMBER_OF_FRAMES) {
             None => 1,
             Some(s) => s
@@ -171,9 +178,7 @@ impl Header {
                 .ok()
                 .filter(|&n| n >= 1)
                 .ok_or_else(|| {
-                    field(
-                        path,
-                        FORMAT,
+                    bad(
                         "NumberOfFrames (0028,0008)",
                         format!("= {s:?} is not a positive whole number; the header is damaged"),
                     )
@@ -181,15 +186,9 @@ impl Header {
         };
         let float = obj.element_opt(tags::PIXEL_DATA).ok().flatten().is_none();
         let bits_allocated = int(tags::BITS_ALLOCATED, "BitsAllocated (0028,0100)")?;
-        let ok_bits = if float {
-            [32, 64].contains(&bits_allocated)
-        } else {
-            [8, 16, 32].contains(&bits_allocated)
-        };
-        if !ok_bits {
-            return Err(field(
-                path,
-                FORMAT,
+        let allowed: &[u32] = if float { &[32, 64] } else { &[8, 16, 32] };
+        if !allowed.contains(&bits_allocated) {
+            return Err(bad(
                 "BitsAllocated (0028,0100)",
                 format!(
                     "= {bits_allocated} is not read (8, 16 or 32 bits; 32 or 64 for float pixel \
@@ -197,23 +196,34 @@ impl Header {
                 ),
             ));
         }
-        let bits_stored = uint(obj, tags::BITS_STORED).unwrap_or(bits_allocated);
-        if bits_stored == 0 || bits_stored > bits_allocated {
-            return Err(field(
-                path,
-                FORMAT,
-                "BitsStored (0028,0101)",
+        let (bits_stored, high, representation) = if float {
+            (bits_allocated, bits_allocated - 1, 0)
+        } else {
+            (
+                int(tags::BITS_STORED, "BitsStored (0028,0101)")?,
+                int(tags::HIGH_BIT, "HighBit (0028,0102)")?,
+                int(
+                    tags::PIXEL_REPRESENTATION,
+                    "PixelRepresentation (0028,0103)",
+                )?,
+            )
+        };
+        if bits_stored == 0 || bits_stored > bits_allocated || high + 1 != bits_stored {
+            return Err(bad(
+                "BitsStored (0028,0101) / HighBit (0028,0102)",
                 format!(
-                    "= {bits_stored} with BitsAllocated {bits_allocated}; the header is damaged"
+                    "= {bits_stored} / {high} with BitsAllocated {bits_allocated}: the stored bits \
+                     must fit the allocated ones and HighBit be BitsStored - 1; the header is \
+                     damaged"
                 ),
             ));
         }
-        if rows == 0 || cols == 0 {
-            return Err(field(
-                path,
-                FORMAT,
-                "Rows/Columns",
-                format!("= {rows} x {cols}: an empty image"),
+        if representation > 1 {
+            return Err(bad(
+                "PixelRepresentation (0028,0103)",
+                format!(
+                    "= {representation}: must be 0 (unsigned) or 1 (signed); the header is damaged"
+                ),
             ));
         }
         let series = text(obj, tags::SERIES_INSTANCE_UID).unwrap_or_default();
@@ -227,17 +237,6 @@ impl Header {
         .flatten()
         .collect::<Vec<_>>()
         .join(" ");
-        let representation = uint(obj, tags::PIXEL_REPRESENTATION).unwrap_or(0);
-        if representation > 1 {
-            return Err(field(
-                path,
-                FORMAT,
-                "PixelRepresentation (0028,0103)",
-                format!(
-                    "= {representation}: must be 0 (unsigned) or 1 (signed); the header is damaged"
-                ),
-            ));
-        }
         Ok(Header {
             rows,
             cols,
@@ -382,14 +381,12 @@ fn item(obj: &InMemDicomObject, tag: Tag, i: usize) -> Option<&InMemDicomObject>
 }
 
 /// Exactly `n` finite numbers (decimal strings or binary floats): `Ok(None)` when the element
-/// is absent or empty, an error (the detail) when it holds anything else.
+/// is absent, an error (the detail) when it holds anything else, empty included (every field
+/// read here is required when present).
 fn floats(obj: &InMemDicomObject, tag: Tag, n: usize) -> Result<Option<Vec<f64>>, String> {
     let Some(e) = obj.element_opt(tag).ok().flatten() else {
         return Ok(None);
     };
-    if e.is_empty() {
-        return Ok(None);
-    }
     let shown = || e.to_str().map(|s| s.into_owned()).unwrap_or_default();
     match e.to_multi_float64() {
         Ok(v) if v.len() == n && v.iter().all(|x| x.is_finite()) => Ok(Some(v)),
@@ -400,8 +397,14 @@ fn floats(obj: &InMemDicomObject, tag: Tag, n: usize) -> Result<Option<Vec<f64>>
     }
 }
 
+/// One whole number; `None` when absent, malformed, or of an odd declared length (a binary
+/// value cut: the parser would read its whole words and drop the odd byte).
 fn uint(obj: &InMemDicomObject, tag: Tag) -> Option<u32> {
-    obj.element_opt(tag).ok().flatten()?.to_int::<u32>().ok()
+    let e = obj.element_opt(tag).ok().flatten()?;
+    if e.length().get().is_some_and(|l| l % 2 == 1) {
+        return None;
+    }
+    e.to_int::<u32>().ok()
 }
 
 fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
@@ -431,6 +434,7 @@ fn decode_pixels(
     path: &Path,
     ts: &str,
     value: &Value<InMemDicomObject>,
+    declared: Option<usize>,
     h: &Header,
 ) -> Result<Voxels, ImageError> {
     let prim = match value {
@@ -492,34 +496,28 @@ fn decode_pixels(
     };
     let size = h.bits_allocated as usize / 8;
     let need = n * size;
-    if bytes.len() < need {
+    let have = declared.unwrap_or(bytes.len());
+    if have.min(bytes.len()) < need {
         return Err(ImageError::Truncated {
             path: path.to_path_buf(),
             detail: format!(
-                "PixelData has {} bytes, Rows x Columns x NumberOfFrames = {} x {} x {} at {} \
+                "PixelData has {have} bytes, Rows x Columns x NumberOfFrames = {} x {} x {} at {} \
                  bits needs {need}",
-                bytes.len(),
-                h.rows,
-                h.cols,
-                h.frames,
-                h.bits_allocated
+                h.rows, h.cols, h.frames, h.bits_allocated
             ),
         });
     }
-    if bytes.len() > need + (need % 2) {
+    // One padding byte only when the data is of odd length (DICOM values are even).
+    if have > need + (need % 2) || have % 2 == 1 {
         return Err(field(
             path,
             FORMAT,
             "PixelData (7FE0,0010)",
             format!(
-                "has {} bytes, but Rows x Columns x NumberOfFrames = {} x {} x {} at {} bits \
+                "has {have} bytes, but Rows x Columns x NumberOfFrames = {} x {} x {} at {} bits \
                  needs exactly {need}: the header does not match the data (check Rows, \
                  Columns, NumberOfFrames and BitsAllocated)",
-                bytes.len(),
-                h.rows,
-                h.cols,
-                h.frames,
-                h.bits_allocated
+                h.rows, h.cols, h.frames, h.bits_allocated
             ),
         ));
     }

@@ -48,65 +48,15 @@ pub(crate) fn stack(
     let depth = |p: &Plane| normal.dot(p.position);
     planes.sort_by(|a, b| depth(a).total_cmp(&depth(b)));
     let n = planes.len();
-    let d: Vec<f64> = planes.iter().map(depth).collect();
-    let mut steps: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
-    let span = d[n - 1] - d[0];
-    let mean = span / (n - 1) as f64;
-    let tiny = 1e-3 * first.spacing[0].min(first.spacing[1]);
-    if steps.iter().any(|&s| s <= tiny) {
-        let positions = distinct(&d, tiny);
-        return Err(err(format!(
-            "{n} slices at {positions} distinct positions: several volumes in one series \
-             (echoes, time points, repeated or localizer acquisitions); put the files of each \
-             volume in a folder of its own (`dcm2niix` sorts them)"
-        )));
-    }
-    let (k, worst) = steps
-        .iter()
-        .enumerate()
-        .map(|(k, &s)| (k, s))
-        .max_by(|a, b| (a.1 - mean).abs().total_cmp(&(b.1 - mean).abs()))
-        .unwrap_or((0, mean));
-    steps.sort_by(f64::total_cmp);
-    let median = steps[steps.len() / 2];
-    if (worst - mean).abs() > TOLERANCE * mean {
-        let why = if worst > 1.5 * median {
-            format!(
-                "about {:.0} missing slice(s) there",
-                (worst / median).round() - 1.0
-            )
-        } else {
-            "uneven slice spacing".to_string()
-        };
-        return Err(err(format!(
-            "the slices are not evenly spaced: {} and {} are {worst:.4} mm apart, the median \
-             step is {median:.4} mm ({why}); re-export the complete series, or convert it with \
-             dcm2niix (which can resample uneven stacks)",
-            name(&planes[k]),
-            name(&planes[k + 1])
-        )));
-    }
-    let step = (planes[n - 1].position - first_of(&planes).position) / (n - 1) as f64;
-    let origin = first_of(&planes).position;
-    let off_line = planes
-        .iter()
-        .enumerate()
-        .map(|(k, p)| (p.position - (origin + step * k as f64)).length())
-        .fold(0.0, f64::max);
-    if off_line > TOLERANCE * step.length() {
-        return Err(err(format!(
-            "the slice positions (ImagePositionPatient) do not lie on one line: one is {off_line:.4} \
-             mm off it, for a step of {:.4} mm; convert the series with dcm2niix",
-            step.length()
-        )));
-    }
+    let step = even_step(source, &planes, normal)?;
+    let origin = planes[0].position;
     let voxels = concat(&planes);
     let scaled = voxels.is_none();
     let voxels = match voxels {
         Some(v) => v,
         None => scaled_f32(&planes),
     };
-    let p0 = first_of(&planes);
+    let p0 = &planes[0];
     let axes = [p0.row_dir * p0.spacing[1], p0.col_dir * p0.spacing[0], step];
     let dims = [p0.cols, p0.rows, n];
     let mut vol = Volume::new(dims, voxels, affine(axes, origin, Frame::Lps))
@@ -156,8 +106,69 @@ pub(crate) fn stack(
     Ok(vol)
 }
 
-fn first_of(planes: &[Plane]) -> &Plane {
-    &planes[0]
+/// The step between `planes` (sorted along `normal`): their positions evenly spaced on a line
+/// (within [`TOLERANCE`] of the step), else an error naming the gap (missing slices), the
+/// repeated positions (several volumes) or the slice off the line.
+fn even_step(source: &Path, planes: &[Plane], normal: DVec3) -> Result<DVec3, ImageError> {
+    let err = |detail: String| ImageError::Dicom {
+        path: source.to_path_buf(),
+        detail,
+    };
+    let n = planes.len();
+    let depth = |p: &Plane| normal.dot(p.position);
+    let d: Vec<f64> = planes.iter().map(depth).collect();
+    let mut steps: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
+    let span = d[n - 1] - d[0];
+    let mean = span / (n - 1) as f64;
+    let tiny = 1e-3 * planes[0].spacing[0].min(planes[0].spacing[1]);
+    if steps.iter().any(|&s| s <= tiny) {
+        let positions = distinct(&d, tiny);
+        return Err(err(format!(
+            "{n} slices at {positions} distinct positions: several volumes in one series \
+             (echoes, time points, repeated or localizer acquisitions); put the files of each \
+             volume in a folder of its own (`dcm2niix` sorts them)"
+        )));
+    }
+    let (k, worst) = steps
+        .iter()
+        .enumerate()
+        .map(|(k, &s)| (k, s))
+        .max_by(|a, b| (a.1 - mean).abs().total_cmp(&(b.1 - mean).abs()))
+        .unwrap_or((0, mean));
+    steps.sort_by(f64::total_cmp);
+    let median = steps[steps.len() / 2];
+    if (worst - mean).abs() > TOLERANCE * mean {
+        let why = if worst > 1.5 * median {
+            format!(
+                "about {:.0} missing slice(s) there",
+                (worst / median).round() - 1.0
+            )
+        } else {
+            "uneven slice spacing".to_string()
+        };
+        return Err(err(format!(
+            "the slices are not evenly spaced: {} and {} are {worst:.4} mm apart, the median \
+             step is {median:.4} mm ({why}); re-export the complete series, or convert it with \
+             dcm2niix (which can resample uneven stacks)",
+            name(&planes[k]),
+            name(&planes[k + 1])
+        )));
+    }
+    let step = (planes[n - 1].position - planes[0].position) / (n - 1) as f64;
+    let origin = planes[0].position;
+    let off_line = planes
+        .iter()
+        .enumerate()
+        .map(|(k, p)| (p.position - (origin + step * k as f64)).length())
+        .fold(0.0, f64::max);
+    if off_line > TOLERANCE * step.length() {
+        return Err(err(format!(
+            "the slice positions (ImagePositionPatient) do not lie on one line: one is {off_line:.4} \
+             mm off it, for a step of {:.4} mm; convert the series with dcm2niix",
+            step.length()
+        )));
+    }
+    Ok(step)
 }
 
 /// A plane's file (and frame, in a multi-frame file) for messages.
