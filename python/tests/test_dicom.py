@@ -65,7 +65,8 @@ def ds(values):
 
 
 def write_series(folder, raw, *, rot, spacing, origin, slope, inter, syntax=ExplicitVRLittleEndian,
-                 bits=16, stored=None, series=None, number=1, descending=False, seed=0, **_):
+                 bits=16, stored=None, series=None, number=1, descending=False, seed=0, slopes=None,
+                 **_):
     """Write `raw` (stored values; raw[i, j, k] is column i, row j of the k-th slice along the
     normal) as a classic MR Image Storage series: one file per slice under shuffled random
     names (a third without extension), plus a README.txt. Returns the file names by slice and
@@ -102,7 +103,8 @@ def write_series(folder, raw, *, rot, spacing, origin, slope, inter, syntax=Expl
         d.Rows, d.Columns, d.SamplesPerPixel, d.PhotometricInterpretation = ny, nx, 1, "MONOCHROME2"
         d.BitsAllocated, d.BitsStored = bits, stored or bits
         d.HighBit, d.PixelRepresentation = d.BitsStored - 1, int(signed)
-        d.RescaleSlope, d.RescaleIntercept = DS(slope), DS(inter)
+        d.RescaleSlope = DS(slopes[k] if slopes is not None else slope)
+        d.RescaleIntercept = DS(inter)
         px = np.ascontiguousarray(raw[:, :, k].T.astype(dt))
         d.PixelData = px.tobytes()
         path = os.path.join(folder, names[k])
@@ -195,6 +197,29 @@ def test_the_writer_writes_what_pydicom_reads(tmp_path, variant):
         assert (d.BitsAllocated, d.BitsStored) == (kw.get("bits", 16), kw.get("stored") or kw.get("bits", 16))
         assert np.array_equal(d.pixel_array, raw[:, :, k].T)
         assert d.InstanceNumber == k + 1
+
+
+def test_slices_scaled_apart_are_read_as_float32(tmp_path, xtask):
+    # Per-slice RescaleSlope (Philips MR, PET): each slice's values are its stored ones times
+    # its own slope plus the intercept, as float32; the mesh is the one of that float32 array.
+    c = CASES["crop-u16"]
+    raw = stored_voxels("crop-u16")
+    slopes = [2.0 if k % 2 else 2.5 for k in range(raw.shape[2])]
+    write_series(tmp_path / "s", raw, **{**c, "slopes": slopes})
+    r = subprocess.run([xtask, "mesh", str(tmp_path / "s"), "--iso", str(c["iso"]), "--size",
+                        str(c["size"]), "--no-verify", "-o", str(tmp_path / "s.ply"), "--report",
+                        str(tmp_path / "r.json")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "scaled to float32" in r.stderr
+    a = report_affine(json.load(open(tmp_path / "r.json")))
+    values = (raw.astype(np.float64) * np.array(slopes) + c["inter"]).astype(np.float32)
+    m = rdt_mesher.mesh_file(tmp_path / "s", iso=c["iso"], size=c["size"], verify=False)
+    ref = rdt_mesher.mesh_image(values, affine=a, iso=c["iso"], size=c["size"], verify=False)
+    assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces)
+    # And not the mesh of one slope for all: the slices' scaling matters.
+    one = rdt_mesher.mesh_image((raw * 2.0 + c["inter"]).astype(np.float32), affine=a, iso=c["iso"],
+                                size=c["size"], verify=False)
+    assert len(one.vertices) != len(m.vertices) or not np.array_equal(one.vertices, m.vertices)
 
 
 def test_geometry_is_simpleitks(series):
