@@ -146,9 +146,9 @@ fn what_is_not_a_volume_is_refused_with_the_fix() {
         e.contains("one slice") && e.contains("pass the folder"),
         "{e}"
     );
-    let e = refused(&fixture("MR_small_RLE.dcm"));
+    let e = refused(&fixture("MR_small_jpeg_ls_lossless.dcm"));
     assert!(
-        e.contains("compressed (RLE Lossless") && e.contains("dcm2niix"),
+        e.contains("compressed (JPEG-LS") && e.contains("dcm2niix"),
         "{e}"
     );
     let e = refused(&fixture("emri_small.dcm"));
@@ -170,6 +170,39 @@ fn what_is_not_a_volume_is_refused_with_the_fix() {
         e.contains("cut.dcm") && (e.contains("truncated") || e.contains("damaged")),
         "{e}"
     );
+}
+
+/// Two slices of one series from one file: the file itself and a copy whose position is 1 mm
+/// further along z (the decimal string `6.6406` of `ImagePositionPatient` made `7.6406`, the
+/// same length, in the raw bytes: the compressed pixel data is untouched).
+fn two_slices(name: &str) -> PathBuf {
+    let d = tmpdir(&format!("two-{name}"));
+    let bytes = std::fs::read(fixture(name)).unwrap();
+    let at = bytes.windows(6).position(|w| w == b"6.6406").unwrap();
+    let mut moved = bytes.clone();
+    moved[at] = b'7';
+    std::fs::write(d.join("a"), &bytes).unwrap();
+    std::fs::write(d.join("b"), &moved).unwrap();
+    d
+}
+
+#[test]
+fn compressed_slices_read_as_the_uncompressed_ones() {
+    // pydicom's MR slice uncompressed, RLE Lossless and JPEG 2000 lossless (dicom-pixeldata's
+    // decoders): the same voxels and affine.
+    let plain = read_dicom(&two_slices("MR_small.dcm"), None).unwrap();
+    assert_eq!(plain.dims(), [64, 64, 2]);
+    assert!((plain.affine().matrix3.z_axis - DVec3::new(0.0, 0.0, 1.0)).length() < 1e-12);
+    for name in ["MR_small_RLE.dcm", "MR_small_jp2klossless.dcm"] {
+        let v = read_dicom(&two_slices(name), None).unwrap();
+        assert_eq!(v.voxels(), plain.voxels(), "{name}");
+        assert_eq!(v.affine(), plain.affine(), "{name}");
+        assert!(
+            !v.notes().iter().any(|n| n.contains("lossy")),
+            "{:?}",
+            v.notes()
+        );
+    }
 }
 
 #[test]
@@ -276,10 +309,13 @@ mod damaged {
         #![proptest_config(ProptestConfig { cases: 80, .. ProptestConfig::default() })]
         #[test]
         fn a_damaged_file_is_read_or_refused(
-            which in 0usize..2, kind in 0u8..4, at in 0usize..1 << 20, byte in 0u8..=255,
+            which in 0usize..4, kind in 0u8..4, at in 0usize..1 << 20, byte in 0u8..=255,
             len in 0usize..1000,
         ) {
-            let src = std::fs::read(fixture(["rtdose.dcm", "MR_small.dcm"][which])).unwrap();
+            let src = std::fs::read(fixture(
+                ["rtdose.dcm", "MR_small.dcm", "MR_small_RLE.dcm", "MR_small_jp2klossless.dcm"][which],
+            ))
+            .unwrap();
             let d = tmpdir(&format!("damaged-{which}-{kind}-{at}-{byte}-{len}"));
             let p = d.join("m.dcm");
             std::fs::write(&p, mutate(&src, kind, at, byte, len)).unwrap();

@@ -10,6 +10,7 @@
 //! uneven slices, a single slice. The world frame is RAS+ (the patient's LPS with x and y
 //! negated), as for NIfTI.
 
+mod compressed;
 mod object;
 mod series;
 

@@ -43,6 +43,8 @@ pub(crate) struct Plane {
     pub slope: f64,
     pub inter: f64,
     pub pixels: Voxels,
+    /// Whether the values come from a lossy compression (JPEG baseline, JPEG 2000 lossy).
+    pub lossy: bool,
 }
 
 /// Whether the file starts with the DICOM preamble (`DICM` at byte 128).
@@ -87,7 +89,40 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
     };
     let header = Header::of(path, &obj)?;
     let frames = header.frames;
-    let values = decode_pixels(path, &ts, pixel.0, pixel.1, &header)?;
+    let (values, lossy) = match pixel.0 {
+        Value::PixelSequence(_) => {
+            let Some(lossy) = super::compressed::decodable(&ts) else {
+                return Err(ImageError::Dicom {
+                    path: path.to_path_buf(),
+                    detail: format!(
+                        "the pixel data is compressed ({}, transfer syntax {ts}), which is not \
+                         read; decompress the series first (`gdcmconv --raw IN OUT`, dcmtk's \
+                         `dcmdjpeg`) or convert it with dcm2niix",
+                        syntax_name(&ts)
+                    ),
+                });
+            };
+            let need = [
+                header.cols,
+                header.frames,
+                header.bits_allocated as usize / 8,
+            ]
+            .iter()
+            .try_fold(header.rows, |a, &b| a.checked_mul(b))
+            .filter(|&n| n <= isize::MAX as usize / 8)
+            .ok_or_else(|| {
+                field(
+                    path,
+                    FORMAT,
+                    "Rows/Columns/NumberOfFrames",
+                    "hold more voxels than can be held in memory; the header is damaged",
+                )
+            })?;
+            let bytes = super::compressed::decode(path, &ts, &obj, need)?;
+            (integers(&bytes, &header), lossy)
+        }
+        value => (decode_pixels(path, &ts, value, pixel.1, &header)?, false),
+    };
     let per = header.rows * header.cols;
     let mut planes = Vec::with_capacity(frames);
     for f in 0..frames {
@@ -107,6 +142,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
             slope: geo.slope,
             inter: geo.inter,
             pixels: slice(&values, f * per, per),
+            lossy,
         });
     }
     Ok(Some(planes))
@@ -439,18 +475,7 @@ fn decode_pixels(
 ) -> Result<Voxels, ImageError> {
     let prim = match value {
         Value::Primitive(p) => p,
-        Value::PixelSequence(_) => {
-            return Err(ImageError::Dicom {
-                path: path.to_path_buf(),
-                detail: format!(
-                    "the pixel data is compressed ({}, transfer syntax {ts}), which is not \
-                     read; decompress the series first (`gdcmconv --raw IN OUT`, dcmtk's \
-                     `dcmdjpeg`) or convert it with dcm2niix",
-                    syntax_name(ts)
-                ),
-            });
-        }
-        Value::Sequence(_) => {
+        Value::PixelSequence(_) | Value::Sequence(_) => {
             return Err(field(
                 path,
                 FORMAT,

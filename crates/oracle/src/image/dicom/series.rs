@@ -96,6 +96,13 @@ pub(crate) fn stack(
              resampled"
         ));
     }
+    if planes.iter().any(|p| p.lossy) {
+        vol = vol.with_note(
+            "DICOM: the pixel data is lossy-compressed (JPEG baseline or extended, JPEG 2000): \
+             the values are the decoder's approximation of the scanner's"
+                .to_string(),
+        );
+    }
     if scaled {
         vol = vol.with_note(
             "DICOM: the slices have different voxel types or rescale slopes/intercepts; their \
