@@ -102,22 +102,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
                     ),
                 });
             };
-            let need = [
-                header.cols,
-                header.frames,
-                header.bits_allocated as usize / 8,
-            ]
-            .iter()
-            .try_fold(header.rows, |a, &b| a.checked_mul(b))
-            .filter(|&n| n <= isize::MAX as usize / 8)
-            .ok_or_else(|| {
-                field(
-                    path,
-                    FORMAT,
-                    "Rows/Columns/NumberOfFrames",
-                    "hold more voxels than can be held in memory; the header is damaged",
-                )
-            })?;
+            let need = header.samples(path)? * (header.bits_allocated as usize / 8);
             let bytes = super::compressed::decode(path, &ts, &obj, need)?;
             (integers(&bytes, &header), lossy)
         }
@@ -176,6 +161,23 @@ struct Header {
 }
 
 impl Header {
+    /// `Rows x Columns x NumberOfFrames`, or an error when it cannot be held in memory (the
+    /// bytes, up to 8 a sample, must fit an allocation).
+    fn samples(&self, path: &Path) -> Result<usize, ImageError> {
+        self.rows
+            .checked_mul(self.cols)
+            .and_then(|v| v.checked_mul(self.frames))
+            .filter(|&v| v <= isize::MAX as usize / 8)
+            .ok_or_else(|| {
+                field(
+                    path,
+                    FORMAT,
+                    "Rows/Columns/NumberOfFrames",
+                    "hold more voxels than can be held in memory; the header is damaged",
+                )
+            })
+    }
+
     /// The image pixel module (PS3.3 C.7.6.3): every field it needs present and consistent.
     fn of(path: &Path, obj: &InMemDicomObject) -> Result<Header, ImageError> {
         let bad = |name: &str, detail: String| field(path, FORMAT, name, detail);
@@ -484,19 +486,7 @@ fn decode_pixels(
             ));
         }
     };
-    let n = h
-        .rows
-        .checked_mul(h.cols)
-        .and_then(|v| v.checked_mul(h.frames))
-        .filter(|&v| v <= isize::MAX as usize / 8)
-        .ok_or_else(|| {
-            field(
-                path,
-                FORMAT,
-                "Rows/Columns/NumberOfFrames",
-                "hold more voxels than can be held in memory; the header is damaged",
-            )
-        })?;
+    let n = h.samples(path)?;
     let big_endian = ts == "1.2.840.10008.1.2.2";
     // The values as little-endian bytes of `BitsAllocated` each.
     let bytes: Vec<u8> = match prim {
