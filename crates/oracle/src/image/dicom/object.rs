@@ -108,9 +108,19 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
         }
         value => (decode_pixels(path, &ts, value, pixel.1, &header)?, false),
     };
-    let per = header.rows * header.cols;
+    // Each frame's values in the file's type: the whole buffer for one frame, else cut from
+    // its little-endian bytes (`Voxels`' own conversions).
+    let frame_pixels: Vec<Voxels> = if frames == 1 {
+        vec![values]
+    } else {
+        let (dtype, le) = (values.dtype(), values.to_le_bytes());
+        drop(values); // at most two copies of the frames at a time
+        le.chunks_exact(le.len() / frames)
+            .map(|b| Voxels::from_bytes(dtype, b, false))
+            .collect()
+    };
     let mut planes = Vec::with_capacity(frames);
-    for f in 0..frames {
+    for (f, pixels) in frame_pixels.into_iter().enumerate() {
         let geo = frame_geometry(path, &obj, f, frames)?;
         planes.push(Plane {
             file: path.to_path_buf(),
@@ -126,7 +136,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
             spacing: geo.spacing,
             slope: geo.slope,
             inter: geo.inter,
-            pixels: slice(&values, f * per, per),
+            pixels,
             lossy,
         });
     }
@@ -580,21 +590,5 @@ fn integers(bytes: &[u8], h: &Header) -> Voxels {
         (16, true) => Voxels::I16(it.map(|v| signed(v) as i16).collect()),
         (_, false) => Voxels::U32(it.map(|v| v & mask).collect()),
         (_, true) => Voxels::I32(it.map(signed).collect()),
-    }
-}
-
-/// `len` values of `v` from `start`, in the same type.
-fn slice(v: &Voxels, start: usize, len: usize) -> Voxels {
-    let r = start..start + len;
-    match v {
-        Voxels::U8(d) => Voxels::U8(d[r].to_vec()),
-        Voxels::I8(d) => Voxels::I8(d[r].to_vec()),
-        Voxels::U16(d) => Voxels::U16(d[r].to_vec()),
-        Voxels::I16(d) => Voxels::I16(d[r].to_vec()),
-        Voxels::U32(d) => Voxels::U32(d[r].to_vec()),
-        Voxels::I32(d) => Voxels::I32(d[r].to_vec()),
-        Voxels::F32(d) => Voxels::F32(d[r].to_vec()),
-        Voxels::F64(d) => Voxels::F64(d[r].to_vec()),
-        Voxels::Shared(_) => unreachable!("decoded pixels are owned"),
     }
 }
