@@ -320,7 +320,7 @@ def mesh_file(
     .tif, .tiff, .raw, a DICOM folder or multi-frame file, a folder of slices), a mesh (.ply .off .obj .stl), a point set (.xyz, a .ply without faces),
     or ``implicit:NAME`` / ``implicit:EXPR`` (with ``bounding_sphere=(center, radius)``).
     The same defaults as the CLI, hence the same mesh. ``frame`` picks one 3D volume of a
-    NIfTI series (``--frame``); ``nan_as`` gives NaN voxels a value (``--nan-as``);
+    NIfTI or MGH series, or of a DICOM series holding several volumes (``--frame``); ``nan_as`` gives NaN voxels a value (``--nan-as``);
     ``series`` picks one series of a DICOM folder by its SeriesNumber or SeriesInstanceUID
     (``--series``)."""
     if not isinstance(path, (str, os.PathLike)):
@@ -346,7 +346,7 @@ def mesh_file(
     p = _params(**criteria)
     which = _labels_arg(labels, label)
     if which is not None:
-        todo = _core.file_labels(spec, frame) if which == "all" else which
+        todo = _core.file_labels(spec, frame, series) if which == "all" else which
         if not todo:
             raise ValueError(f"labels: {spec} has no label other than the background 0: nothing to mesh")
         return {

@@ -583,8 +583,8 @@ fn mesh_spec<'py>(
 
 /// The labels of an image file, without 0.
 #[pyfunction]
-#[pyo3(signature = (spec, frame=None))]
-fn file_labels(spec: String, frame: Option<usize>) -> PyResult<Vec<i64>> {
+#[pyo3(signature = (spec, frame=None, series=None))]
+fn file_labels(spec: String, frame: Option<usize>, series: Option<String>) -> PyResult<Vec<i64>> {
     if !Path::new(&spec).exists() {
         return Err(PyFileNotFoundError::new_err(format!(
             "{spec}: no such file or folder"
@@ -592,6 +592,7 @@ fn file_labels(spec: String, frame: Option<usize>) -> PyResult<Vec<i64>> {
     }
     let load = oracle::image::LoadOptions {
         frame,
+        series,
         ..Default::default()
     };
     pipeline::image_labels(&spec, &load).map_err(pipeline_err)

@@ -67,11 +67,14 @@ def ds(values):
 
 def write_series(folder, raw, *, rot, spacing, origin, slope, inter, syntax=ExplicitVRLittleEndian,
                  bits=16, stored=None, series=None, number=1, descending=False, seed=0, slopes=None,
-                 **_):
+                 study=None, extra=None, instance_base=0, instance_stride=1, **_):
     """Write `raw` (stored values; raw[i, j, k] is column i, row j of the k-th slice along the
     normal) as a classic MR Image Storage series: one file per slice under shuffled random
     names (a third without extension), plus a README.txt. Returns the file names by slice and
-    the RAS voxel-to-world affine the spec gives from the tags as written (decimal strings)."""
+    the RAS voxel-to-world affine the spec gives from the tags as written (decimal strings).
+    Several volumes of one series are written by calls sharing `series` and `study`, each with
+    its `extra` attributes (e.g. EchoNumbers) and InstanceNumbers `instance_base + 1 +
+    instance_stride * k`."""
     os.makedirs(folder, exist_ok=True)
     nx, ny, nz = raw.shape
     r = rotation(*rot)
@@ -79,7 +82,8 @@ def write_series(folder, raw, *, rot, spacing, origin, slope, inter, syntax=Expl
     row, col = np.array(iop[:3], float), np.array(iop[3:], float)
     normal = np.cross(row, col)
     series = series or generate_uid()
-    study, frame = generate_uid(), generate_uid()
+    study = study or generate_uid()
+    frame = generate_uid(prefix=None, entropy_srcs=[study])
     rng = np.random.default_rng(seed)
     names = [f"{rng.integers(1 << 40):010x}" + (".dcm" if k % 3 else "") for k in range(nz)]
     signed = raw.dtype.kind == "i"
@@ -97,7 +101,9 @@ def write_series(folder, raw, *, rot, spacing, origin, slope, inter, syntax=Expl
         d.StudyInstanceUID, d.SeriesInstanceUID, d.FrameOfReferenceUID = study, series, frame
         d.Modality, d.Manufacturer, d.PatientName, d.PatientID = "MR", "rdt", "Test^Dicom", "rdt"
         d.PatientPosition, d.ProtocolName, d.SeriesNumber = "HFS", "t1", number
-        d.InstanceNumber = int(nz - k if descending else k + 1)
+        d.InstanceNumber = int(instance_base + 1 + instance_stride * (nz - 1 - k if descending else k))
+        for key, value in (extra or {}).items():
+            setattr(d, key, value)
         d.ImagePositionPatient = ipp[k] = ds(np.asarray(origin) + k * spacing[2] * normal)
         d.ImageOrientationPatient = iop
         d.PixelSpacing = ds([spacing[1], spacing[0]])  # row spacing (along j), column spacing (i)
@@ -369,3 +375,82 @@ def test_bad_series_are_refused_with_one_line(tmp_path, xtask, crop_mesh):
         with pytest.raises(ValueError) as e:
             rdt_mesher.mesh_file(bad, iso=100)
         assert word in str(e.value) and "\n" not in str(e.value).strip(), e.value
+
+
+def test_echoes_are_frames_in_the_scanners_order(tmp_path, xtask):
+    # Two echoes of one series in one folder (shared SeriesInstanceUID, EchoNumbers 1 and 2,
+    # InstanceNumbers interleaved, shuffled names): without --frame a one-line error listing
+    # them; --frame k meshes echo k+1 exactly as a folder holding that echo alone; dcm2niix
+    # splits the same echoes (_e1, _e2) with the same values at the same voxels.
+    c = CASES["crop-u16"]
+    raw = stored_voxels("crop-u16")
+    echoes = [raw, (raw.astype(np.float64) * 0.8 + 3).astype(raw.dtype)]
+    uid, study = generate_uid(), generate_uid()
+    both = tmp_path / "both"
+    for e, vol in enumerate(echoes):
+        kw = dict(series=uid, study=study, seed=10 + e, extra={"EchoNumbers": e + 1, "EchoTime": 10 * (e + 1)},
+                  instance_base=e, instance_stride=2)
+        write_series(both, vol, **{**c, **kw})
+        write_series(tmp_path / f"alone{e}", vol, **{**c, **kw})
+    out = tmp_path / "out.ply"
+    err = one_error_line(mesh_cli(xtask, both, out, "--iso", "100"), out, "2 volumes", "--frame 0 to 1",
+                         "EchoNumbers 1", "EchoNumbers 2", str(both))
+    one_error_line(mesh_cli(xtask, both, out, "--iso", "100", "--frame", "2"), out, "--frame 2", "0 to 1")
+    meshes = []
+    for e in range(2):
+        rep = tmp_path / f"frame{e}.json"
+        r = mesh_cli(xtask, both, out, "--iso", str(c["iso"]), "--size", str(c["size"]), "--frame", str(e),
+                     "--no-verify", "--report", str(rep))
+        assert r.returncode == 0, r.stderr
+        assert f"frame {e} of 2 volumes" in r.stdout + r.stderr and f"EchoNumbers {e + 1}" in r.stdout + r.stderr
+        m = rdt_mesher.mesh_file(both, frame=e, iso=c["iso"], size=c["size"], verify=False)
+        alone = rdt_mesher.mesh_file(tmp_path / f"alone{e}", iso=c["iso"], size=c["size"], verify=False)
+        assert len(m.vertices) > 1000
+        assert np.array_equal(m.vertices, alone.vertices) and np.array_equal(m.faces, alone.faces)
+        cli = meshio.read(out)
+        assert np.array_equal(cli.points, m.vertices)
+        meshes.append((m, json.loads(rep.read_text())))
+    assert len(meshes[0][0].vertices) != len(meshes[1][0].vertices)
+    d2n = tmp_path / "dcm2niix"
+    d2n.mkdir()
+    r = subprocess.run([dcm2niix_binary(), "-z", "n", "-f", "out", "-o", str(d2n), str(both)],
+                       capture_output=True, text=True)
+    files = sorted(p.name for p in d2n.glob("*.nii"))
+    assert r.returncode == 0 and files == ["out_e1.nii", "out_e2.nii"], (files, r.stdout[-800:])
+    ijk = np.indices(raw.shape).reshape(3, -1)
+    for e, name in enumerate(files):
+        ref = nib.load(d2n / name)
+        a = report_affine(meshes[e][1])
+        q = np.linalg.solve(ref.affine[:3, :3], a[:3, :3] @ ijk + a[:3, 3:] - ref.affine[:3, 3:])
+        qi = np.rint(q).astype(np.int64)
+        assert np.abs(q - qi).max() < 1e-3
+        values = echoes[e].astype(np.float64) * c["slope"] + c["inter"]
+        assert np.array_equal(ref.get_fdata()[qi[0], qi[1], qi[2]], values.reshape(-1))
+
+
+def test_volumes_without_a_distinguishing_tag_follow_instance_numbers(tmp_path, xtask):
+    # Three time points told apart by InstanceNumber alone (volume after volume), and the same
+    # series with one slice of the last volume removed: the first meshes its second volume with
+    # --frame 1 (and says how it chose), the second is refused (positions hold 2 or 3 slices).
+    c = CASES["crop-u16"]
+    raw = stored_voxels("crop-u16")[:, :, :24]
+    nz = raw.shape[2]
+    vols = [raw, raw // 2 + 60, raw // 3 + 90]
+    uid, study = generate_uid(), generate_uid()
+    names = []
+    for t, vol in enumerate(vols):
+        n, _ = write_series(tmp_path / "three", vol, **{**c, "series": uid, "study": study, "seed": 20 + t,
+                                                         "instance_base": t * nz})
+        names.append(n)
+    write_series(tmp_path / "second", vols[1], **c)
+    m = rdt_mesher.mesh_file(tmp_path / "three", frame=1, iso=150, size=c["size"], verify=False)
+    ref = rdt_mesher.mesh_file(tmp_path / "second", iso=150, size=c["size"], verify=False)
+    assert len(m.vertices) > 100
+    assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces)
+    out = tmp_path / "out.ply"
+    r = mesh_cli(xtask, tmp_path / "three", out, "--iso", "150", "--frame", "1", "--no-verify")
+    assert r.returncode == 0 and "2nd slice at each position by InstanceNumber" in r.stdout + r.stderr, r.stderr
+    os.remove(tmp_path / "three" / names[2][5])
+    out = tmp_path / "refused.ply"
+    one_error_line(mesh_cli(xtask, tmp_path / "three", out, "--iso", "100", "--frame", "1"), out,
+                   "holding 2 to 3 slice(s)", str(tmp_path / "three"))

@@ -187,6 +187,30 @@ fn two_slices(name: &str) -> PathBuf {
 }
 
 #[test]
+fn a_siemens_mosaic_is_refused_not_read_as_a_slice() {
+    use std::io::Read;
+    // nibabel's Siemens DWI mosaic (a volume tiled in one image): before, two such files of a
+    // series made a 2-slice volume of tiles, meshed and verified; now each is refused.
+    let d = tmpdir("mosaic");
+    let mut bytes = Vec::new();
+    flate2::read::GzDecoder::new(std::fs::File::open(fixture("siemens_dwi_0.dcm.gz")).unwrap())
+        .read_to_end(&mut bytes)
+        .unwrap();
+    std::fs::write(d.join("b0.dcm"), &bytes).unwrap();
+    // A second file of the series one slice step away, as the nibabel pair `0.dcm`, `1.dcm`.
+    let at = bytes.windows(10).position(|w| w == b"-75.097641").unwrap();
+    bytes[at + 1..at + 3].copy_from_slice(b"72");
+    std::fs::write(d.join("b1.dcm"), &bytes).unwrap();
+    for p in [d.join("b0.dcm"), d.clone()] {
+        let e = refused(&p);
+        assert!(
+            e.contains("b0.dcm: a Siemens mosaic") && e.contains("dcm2niix"),
+            "{e}"
+        );
+    }
+}
+
+#[test]
 fn compressed_slices_read_as_the_uncompressed_ones() {
     // pydicom's MR slice uncompressed, RLE Lossless and JPEG 2000 lossless (dicom-pixeldata's
     // decoders): the same voxels and affine.
@@ -238,12 +262,45 @@ fn a_folder_is_one_volume_of_one_series() {
         .join("../../fixtures/images/phantom_i16_32.nii.gz");
     let e = load_volume(&nifti, &opts).unwrap_err().to_string();
     assert!(e.contains("series are picked from DICOM folders"), "{e}");
-    // The same slice twice: two volumes at one position.
+    // The same slice twice (one SOPInstanceUID): a copied file, not a second volume.
     let d = tmpdir("repeated");
     std::fs::copy(fixture("MR_small.dcm"), d.join("1.dcm")).unwrap();
     std::fs::copy(fixture("MR_small.dcm"), d.join("2.dcm")).unwrap();
     let e = refused(&d);
-    assert!(e.contains("2 slices at 1 distinct positions"), "{e}");
+    assert!(
+        e.contains("1.dcm and ") && e.contains("2.dcm are the same image"),
+        "{e}"
+    );
+    // Two images at one position (another SOPInstanceUID, its last digit changed everywhere):
+    // two volumes; either one is a single slice, refused as such (it panicked once).
+    let uid = b"1.3.6.1.4.1.5962.1.1.4.1.1.20040826185059.5457";
+    let mut bytes = std::fs::read(fixture("MR_small.dcm")).unwrap();
+    let mut changed = 0;
+    while let Some(at) = bytes.windows(uid.len()).position(|w| w == uid) {
+        bytes[at + uid.len() - 1] = b'8';
+        changed += 1;
+    }
+    assert!(changed >= 1);
+    std::fs::write(d.join("2.dcm"), &bytes).unwrap();
+    let e = refused(&d);
+    assert!(
+        e.contains("2 volumes at the same 1 slice position(s)"),
+        "{e}"
+    );
+    for frame in [0, 1] {
+        let opts = LoadOptions {
+            frame: Some(frame),
+            ..LoadOptions::default()
+        };
+        let e = load_volume(&d, &opts).unwrap_err().to_string();
+        assert!(e.contains("one slice"), "{e}");
+    }
+    let opts = LoadOptions {
+        frame: Some(2),
+        ..LoadOptions::default()
+    };
+    let e = load_volume(&d, &opts).unwrap_err().to_string();
+    assert!(e.contains("--frame 2: the series holds 2 volume(s)"), "{e}");
     // A multi-frame file in a folder, beside a text file: read, the other file noted.
     let d = tmpdir("with_readme");
     std::fs::copy(fixture("rtdose.dcm"), d.join("dose")).unwrap();

@@ -31,7 +31,8 @@ pub struct SurfaceOptions {
     /// Image stacks and raw volumes: voxel spacing `sx,sy,sz` in world units.
     #[arg(long, allow_hyphen_values = true, value_parser = parse_spacing)]
     pub spacing: Option<[f64; 3]>,
-    /// Image: the 3D volume of a NIfTI or MGH series (fMRI, diffusion) to mesh, from 0.
+    /// Image: the 3D volume of a series (fMRI, diffusion, echoes) to mesh, from 0: NIfTI and
+    /// MGH series, DICOM series with several volumes at the same slice positions.
     #[arg(long)]
     pub frame: Option<usize>,
     /// Image: mesh NaN voxels (no value: resampled or masked float images) as this value,

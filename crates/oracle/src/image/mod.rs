@@ -2,7 +2,7 @@
 //!
 //! - [`Volume`]: voxels in their native type ([`Voxels`]), dims, a voxel-to-world affine
 //!   (`glam::DAffine3`, voxel centres at integer coordinates) and the intensity scaling.
-//! - Loaders: [`read_dicom`] (a folder of one DICOM series, a multi-frame DICOM file), [`read_nifti`] (NIfTI-1 and NIfTI-2 `.nii`, `.nii.gz`, `.hdr`/`.img`; one frame of a series: [`read_nifti_frame`]), [`read_mgh`] (FreeSurfer `.mgh`, `.mgz`), [`read_nrrd`]
+//! - Loaders: [`read_dicom`] (a folder of one DICOM series, a multi-frame DICOM file; one volume of several at the same positions: [`read_dicom_frame`]), [`read_nifti`] (NIfTI-1 and NIfTI-2 `.nii`, `.nii.gz`, `.hdr`/`.img`; one frame of a series: [`read_nifti_frame`]), [`read_mgh`] (FreeSurfer `.mgh`, `.mgz`), [`read_nrrd`]
 //!   (`.nrrd`, `.nhdr`), [`read_metaimage`] (`.mha`, `.mhd`), [`read_ome_zarr`] (OME-Zarr
 //!   multiscale level 0, Zarr v2 or v3), [`read_slice_folder`]
 //!   (PNG/TIFF slices, 8/16 bit, natural name order), [`read_tiff_stack`] (multi-page TIFF),
@@ -78,7 +78,7 @@ mod topology;
 mod volume;
 mod zarr;
 
-pub use dicom::{dicom_subfolders, is_dicom_file, is_dicom_folder, read_dicom};
+pub use dicom::{dicom_subfolders, is_dicom_file, is_dicom_folder, read_dicom, read_dicom_frame};
 pub use error::ImageError;
 pub use metaimage::read_metaimage;
 pub use mgh::read_mgh;

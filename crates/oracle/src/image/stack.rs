@@ -26,9 +26,10 @@ pub struct LoadOptions {
     pub spacing: Option<[f64; 3]>,
     /// Read the file as raw voxels with this layout (whatever its extension).
     pub raw: Option<RawOptions>,
-    /// The 3D volume of a NIfTI or MGH series (`dim[4] > 1`, `nframes > 1`) to read, from 0
-    /// (`--frame`); a series without it is refused. Other files (and raw volumes) hold one
-    /// volume: only 0 is accepted.
+    /// The 3D volume of a NIfTI or MGH series (`dim[4] > 1`, `nframes > 1`) or of a DICOM
+    /// series holding several volumes at the same slice positions to read, from 0 (`--frame`);
+    /// a series without it is refused. Other files (and raw volumes) hold one volume: only 0
+    /// is accepted.
     pub frame: Option<usize>,
     /// Give NaN voxels this value (`--nan-as`; see [`Volume::replace_nan`]); without it a NaN
     /// voxel is an error when the surface is built.
@@ -121,23 +122,23 @@ pub fn unsupported_volume_format(name: &str) -> Option<(&'static str, &'static s
 /// ```
 pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
     let vol = read_volume(path, opts)?;
-    let series = opts.raw.is_none() && (named(path, &NIFTI) || named(path, &MGH));
-    if let Some(k) = opts.frame.filter(|&k| k > 0 && !series) {
-        return Err(ImageError::Frame {
-            path: path.to_path_buf(),
-            dims: vol.dims().iter().map(|&d| d as u64).collect(),
-            detail: format!(
-                "--frame {k}: this file holds one 3D volume (frame 0); series are read from \
-                 NIfTI and MGH files"
-            ),
-        });
-    }
     let dicom = || {
         opts.raw.is_none()
             && (named(path, &[".dcm", ".ima"])
                 || super::is_dicom_file(path)
                 || (path.is_dir() && super::is_dicom_folder(path)))
     };
+    let series = opts.raw.is_none() && (named(path, &NIFTI) || named(path, &MGH) || dicom());
+    if let Some(k) = opts.frame.filter(|&k| k > 0 && !series) {
+        return Err(ImageError::Frame {
+            path: path.to_path_buf(),
+            dims: vol.dims().iter().map(|&d| d as u64).collect(),
+            detail: format!(
+                "--frame {k}: this file holds one 3D volume (frame 0); series are read from \
+                 NIfTI, MGH and DICOM"
+            ),
+        });
+    }
     if let Some(s) = opts.series.as_deref().filter(|_| !dicom()) {
         return Err(ImageError::Frame {
             path: path.to_path_buf(),
@@ -194,7 +195,7 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
             return super::read_ome_zarr(path);
         }
         if super::is_dicom_folder(path) {
-            return super::read_dicom(path, opts.series.as_deref());
+            return super::read_dicom_frame(path, opts.series.as_deref(), opts.frame);
         }
         return read_slice_folder(path, opts.spacing).map_err(|e| match e {
             ImageError::NoSlices { .. } => dicom_below(path).unwrap_or(e),
@@ -217,7 +218,7 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
     } else if ends(".tif") || ends(".tiff") {
         read_tiff_stack(path, opts.spacing)
     } else if ends(".dcm") || ends(".ima") || super::is_dicom_file(path) {
-        super::read_dicom(path, opts.series.as_deref())
+        super::read_dicom_frame(path, opts.series.as_deref(), opts.frame)
     } else if ends(".raw") {
         Err(ImageError::RawNeedsDims {
             path: path.to_path_buf(),

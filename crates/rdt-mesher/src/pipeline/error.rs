@@ -155,6 +155,16 @@ impl PipelineError {
         }
     }
 
+    /// An image reader's error on `spec`: "opening image SPEC: why", or the reader's own
+    /// message when it already starts with the path (not named twice on one line).
+    pub(crate) fn opening_image(spec: &str, source: oracle::image::ImageError) -> Self {
+        if source.to_string().starts_with(spec) {
+            PipelineError::read(source)
+        } else {
+            PipelineError::backend(format!("opening image {spec}"), source)
+        }
+    }
+
     /// A reader's error, reported as it is.
     pub(crate) fn read(source: impl std::error::Error + Send + Sync + 'static) -> Self {
         PipelineError::Read(Box::new(source))

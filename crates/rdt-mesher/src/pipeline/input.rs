@@ -423,7 +423,7 @@ fn open_implicit(rest: &str, bs: Option<BoundingSphere>) -> Result<Input<'static
 fn open_image(spec: &str, opts: &InputOptions) -> Result<Input<'static>, PipelineError> {
     let path = Path::new(spec);
     let img = ImageSurface::open(path, &opts.load, &opts.image)
-        .map_err(|e| PipelineError::backend(format!("opening image {spec}"), e))?;
+        .map_err(|e| PipelineError::opening_image(spec, e))?;
     Ok(Input::image(img, stem(path)))
 }
 
@@ -763,7 +763,7 @@ pub fn stem(p: &Path) -> String {
 /// ```
 pub fn image_labels(spec: &str, load: &LoadOptions) -> Result<Vec<i64>, PipelineError> {
     let vol = oracle::image::load_volume(Path::new(spec), load)
-        .map_err(|e| PipelineError::backend(format!("opening image {spec}"), e))?;
+        .map_err(|e| PipelineError::opening_image(spec, e))?;
     let labels = vol
         .labels()
         .map_err(|source| PipelineError::NotALabelImage {

@@ -3,16 +3,19 @@
 //! per-frame functional groups, RT Dose).
 //!
 //! Read: the native transfer syntaxes (implicit and explicit VR little endian, explicit VR
-//! big endian) and deflate; 8, 16 or 32-bit integers (masked to `BitsStored`, signed when
+//! big endian) and deflate, RLE, JPEG lossless, baseline and extended, and JPEG 2000
+//! (`compressed`); 8, 16 or 32-bit integers (masked to `BitsStored`, signed when
 //! `PixelRepresentation` is 1) and float pixel data; `RescaleSlope`/`RescaleIntercept` (per
-//! frame in enhanced objects; `DoseGridScaling` in RT Dose). Refused with the fix: compressed
-//! pixel data, colour images, several series or several volumes in one folder, missing or
-//! uneven slices, a single slice. The world frame is RAS+ (the patient's LPS with x and y
-//! negated), as for NIfTI.
+//! frame in enhanced objects; `DoseGridScaling` in RT Dose); one volume of several at the same
+//! slice positions with `--frame` (`volumes`). Refused with the fix: JPEG-LS and HTJ2K pixel
+//! data, colour images, several series in one folder without `--series`, several volumes at
+//! the same positions without `--frame`, missing or uneven slices, a single slice. The world
+//! frame is RAS+ (the patient's LPS with x and y negated), as for NIfTI.
 
 mod compressed;
 mod object;
 mod series;
+mod volumes;
 
 use super::ImageError;
 use super::Volume;
@@ -43,6 +46,24 @@ pub fn is_dicom_folder(dir: &Path) -> bool {
 /// # Ok::<(), oracle::image::ImageError>(())
 /// ```
 pub fn read_dicom(path: &Path, wanted: Option<&str>) -> Result<Volume, ImageError> {
+    read_dicom_frame(path, wanted, None)
+}
+
+/// [`read_dicom`] for a series holding several volumes at the same slice positions (echoes,
+/// time points, diffusion directions): `frame` picks volume k (from 0, `--frame`), the k-th
+/// slice at every position in the scanner's order (`EchoNumbers`, then
+/// `TemporalPositionIdentifier`, `AcquisitionNumber`, `InstanceNumber`); without it such a
+/// series is refused, the error listing the volumes.
+///
+/// ```no_run
+/// let echo2 = oracle::image::read_dicom_frame("multi_echo/".as_ref(), None, Some(1))?;
+/// # Ok::<(), oracle::image::ImageError>(())
+/// ```
+pub fn read_dicom_frame(
+    path: &Path,
+    wanted: Option<&str>,
+    frame: Option<usize>,
+) -> Result<Volume, ImageError> {
     if path.is_dir() {
         let files = files_of(path)?;
         let mut planes = Vec::new();
@@ -66,14 +87,14 @@ pub fn read_dicom(path: &Path, wanted: Option<&str>) -> Result<Volume, ImageErro
             });
         }
         let planes = series::pick(path, planes, wanted)?;
-        series::stack(path, planes, skipped)
+        series::stack(path, planes, skipped, frame)
     } else {
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().to_ascii_uppercase())
             .unwrap_or_default();
         match object::read_planes(path)? {
-            Some(planes) => series::stack(path, series::pick(path, planes, wanted)?, 0),
+            Some(planes) => series::stack(path, series::pick(path, planes, wanted)?, 0, frame),
             None if name == "DICOMDIR" => Err(ImageError::Dicom {
                 path: path.to_path_buf(),
                 detail: "a DICOMDIR index, not an image; pass the folder that holds the files \

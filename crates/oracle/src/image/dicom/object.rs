@@ -7,6 +7,7 @@
 
 use super::super::orient::field;
 use super::super::{ImageError, Voxels};
+use super::volumes::VolumeOrder;
 use dicom_core::Tag;
 use dicom_core::header::HasLength;
 use dicom_core::value::{PrimitiveValue, Value};
@@ -45,6 +46,10 @@ pub(crate) struct Plane {
     pub pixels: Voxels,
     /// Whether the values come from a lossy compression (JPEG baseline, JPEG 2000 lossy).
     pub lossy: bool,
+    /// Its place among the volumes of a series at one slice position.
+    pub order: VolumeOrder,
+    /// `SOPInstanceUID` (empty when absent): the same image under two file names.
+    pub instance_uid: String,
 }
 
 /// Whether the file starts with the DICOM preamble (`DICM` at byte 128).
@@ -88,6 +93,16 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
         return Ok(None);
     };
     let header = Header::of(path, &obj)?;
+    if let Some(kind) = mosaic(&obj) {
+        return Err(ImageError::Dicom {
+            path: path.to_path_buf(),
+            detail: format!(
+                "a Siemens mosaic ({kind}): each image tiles the slices of a whole volume, \
+                 whose positions are in Siemens' private CSA header, which is not read; convert \
+                 the series with dcm2niix"
+            ),
+        });
+    }
     let frames = header.frames;
     let (values, lossy) = match pixel.0 {
         Value::PixelSequence(_) => {
@@ -119,6 +134,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
             .map(|b| Voxels::from_bytes(dtype, b, false))
             .collect()
     };
+    let uid = text(&obj, tags::SOP_INSTANCE_UID).unwrap_or_default();
     let mut planes = Vec::with_capacity(frames);
     for (f, pixels) in frame_pixels.into_iter().enumerate() {
         let geo = frame_geometry(path, &obj, f, frames)?;
@@ -138,6 +154,12 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
             inter: geo.inter,
             pixels,
             lossy,
+            instance_uid: uid.clone(),
+            order: VolumeOrder::of(
+                &obj,
+                item(&obj, tags::PER_FRAME_FUNCTIONAL_GROUPS_SEQUENCE, f),
+                f,
+            ),
         });
     }
     Ok(Some(planes))
@@ -421,6 +443,23 @@ fn frame_geometry(
         slope,
         inter,
     })
+}
+
+/// How `obj` says it is a Siemens mosaic (`ImageType` holding `MOSAIC`, or the private
+/// `NumberOfImagesInMosaic` (0019,100A) above 1), else `None`.
+fn mosaic(obj: &InMemDicomObject) -> Option<String> {
+    let image_type = obj
+        .element_opt(tags::IMAGE_TYPE)
+        .ok()
+        .flatten()
+        .and_then(|e| e.to_multi_str().ok().map(|v| v.to_vec()))
+        .unwrap_or_default();
+    if image_type.iter().any(|v| v.trim() == "MOSAIC") {
+        return Some(format!("ImageType {}", image_type.join("\\")));
+    }
+    uint(obj, Tag(0x0019, 0x100A))
+        .filter(|&n| n > 1)
+        .map(|n| format!("NumberOfImagesInMosaic (0019,100A) = {n}"))
 }
 
 /// Item `i` of the sequence `tag`.

@@ -21,16 +21,22 @@ const TOLERANCE: f64 = 0.01;
 
 /// Stack `planes` (read from `source`, a folder or a multi-frame file) into a volume, in
 /// RAS+ world coordinates (LPS with x and y negated, as nibabel and dcm2niix do).
+/// `frame` picks one of several volumes at the same positions ([`super::volumes::select`]).
 pub(crate) fn stack(
     source: &Path,
-    mut planes: Vec<Plane>,
+    planes: Vec<Plane>,
     skipped: usize,
+    frame: Option<usize>,
 ) -> Result<Volume, ImageError> {
     let err = |detail: String| ImageError::Dicom {
         path: source.to_path_buf(),
         detail,
     };
-    let first = planes[0].clone();
+    for p in &planes[1..] {
+        same_grid(&planes[0], p)?;
+    }
+    let (mut planes, which) = super::volumes::select(source, planes, frame)?;
+    let first = &planes[0];
     if planes.len() == 1 {
         let folder = first.file.parent().unwrap_or(Path::new("."));
         return Err(err(format!(
@@ -40,9 +46,6 @@ pub(crate) fn stack(
             first.rows,
             folder.display()
         )));
-    }
-    for p in &planes[1..] {
-        same_grid(&first, p)?;
     }
     let normal = first.row_dir.cross(first.col_dir);
     let depth = |p: &Plane| normal.dot(p.position);
@@ -96,6 +99,9 @@ pub(crate) fn stack(
              resampled"
         ));
     }
+    if let Some(which) = which {
+        vol = vol.with_note(which);
+    }
     if planes.iter().any(|p| p.lossy) {
         vol = vol.with_note(
             "DICOM: the pixel data is lossy-compressed (JPEG baseline or extended, JPEG 2000): \
@@ -114,8 +120,8 @@ pub(crate) fn stack(
 }
 
 /// The step between `planes` (sorted along `normal`): their positions evenly spaced on a line
-/// (within [`TOLERANCE`] of the step), else an error naming the gap (missing slices), the
-/// repeated positions (several volumes) or the slice off the line.
+/// (within [`TOLERANCE`] of the step), else an error naming the gap (missing slices) or the
+/// slice off the line.
 fn even_step(source: &Path, planes: &[Plane], normal: DVec3) -> Result<DVec3, ImageError> {
     let err = |detail: String| ImageError::Dicom {
         path: source.to_path_buf(),
@@ -127,15 +133,8 @@ fn even_step(source: &Path, planes: &[Plane], normal: DVec3) -> Result<DVec3, Im
     let mut steps: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
     let span = d[n - 1] - d[0];
     let mean = span / (n - 1) as f64;
-    let tiny = 1e-3 * planes[0].spacing[0].min(planes[0].spacing[1]);
-    if steps.iter().any(|&s| s <= tiny) {
-        let positions = distinct(&d, tiny);
-        return Err(err(format!(
-            "{n} slices at {positions} distinct positions: several volumes in one series \
-             (echoes, time points, repeated or localizer acquisitions); put the files of each \
-             volume in a folder of its own (`dcm2niix` sorts them)"
-        )));
-    }
+    // `volumes::select` left one plane per position: every step is positive.
+    debug_assert!(steps.iter().all(|&s| s > 0.0));
     let (k, worst) = steps
         .iter()
         .enumerate()
@@ -304,11 +303,6 @@ fn same_grid(first: &Plane, p: &Plane) -> Result<(), ImageError> {
         );
     }
     Ok(())
-}
-
-/// The number of distinct values of sorted `d`, equal within `tol`.
-fn distinct(d: &[f64], tol: f64) -> usize {
-    1 + d.windows(2).filter(|w| w[1] - w[0] > tol).count()
 }
 
 /// The planes' pixels one after the other in their native type, when every plane has the same
