@@ -14,6 +14,7 @@
 
 mod compressed;
 mod object;
+mod order;
 mod series;
 mod volumes;
 

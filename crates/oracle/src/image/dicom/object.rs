@@ -7,7 +7,7 @@
 
 use super::super::orient::field;
 use super::super::{ImageError, Voxels};
-use super::volumes::VolumeOrder;
+use super::order::VolumeOrder;
 use dicom_core::Tag;
 use dicom_core::header::HasLength;
 use dicom_core::value::{PrimitiveValue, Value};
