@@ -13,6 +13,7 @@
 //! frame is RAS+ (the patient's LPS with x and y negated), as for NIfTI.
 
 mod compressed;
+mod lengths;
 mod object;
 mod order;
 mod series;

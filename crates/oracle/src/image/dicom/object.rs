@@ -74,6 +74,13 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
                 .into(),
         });
     }
+    super::lengths::check(&bytes[132..]).map_err(|why| ImageError::Dicom {
+        path: path.to_path_buf(),
+        detail: format!(
+            "cannot parse the DICOM data set ({why}); the file is damaged or truncated: \
+             re-export it"
+        ),
+    })?;
     let obj = OpenFileOptions::new()
         .read_preamble(ReadPreamble::Never)
         .from_reader(&bytes[128..])
