@@ -454,3 +454,67 @@ def test_volumes_without_a_distinguishing_tag_follow_instance_numbers(tmp_path, 
     out = tmp_path / "refused.ply"
     one_error_line(mesh_cli(xtask, tmp_path / "three", out, "--iso", "100", "--frame", "1"), out,
                    "holding 2 to 3 slice(s)", str(tmp_path / "three"))
+
+
+def write_enhanced(path, vols, *, spacing, origin, rot, slope, inter, **_):
+    """`vols` (stored values, each (nx, ny, nz)) as one Enhanced MR Image Storage file: frames
+    volume after volume, each with its PlanePositionSequence and FrameContentSequence
+    (TemporalPositionIndex t + 1), the orientation, spacing and rescale shared."""
+    from pydicom.sequence import Sequence
+    nx, ny, nz = vols[0].shape
+    r = rotation(*rot)
+    iop = ds(np.concatenate([r[:, 0], r[:, 1]]))
+    normal = np.cross(np.array(iop[:3], float), np.array(iop[3:], float))
+    meta = FileMetaDataset()
+    meta.MediaStorageSOPClassUID = "1.2.840.10008.5.1.4.1.1.4.1"
+    meta.MediaStorageSOPInstanceUID = generate_uid()
+    meta.TransferSyntaxUID = ExplicitVRLittleEndian
+    d = Dataset()
+    d.file_meta = meta
+    d.SOPClassUID, d.SOPInstanceUID = meta.MediaStorageSOPClassUID, meta.MediaStorageSOPInstanceUID
+    d.StudyInstanceUID, d.SeriesInstanceUID, d.FrameOfReferenceUID = generate_uid(), generate_uid(), generate_uid()
+    d.Modality, d.SeriesNumber, d.InstanceNumber = "MR", 5, 1
+    d.Rows, d.Columns, d.SamplesPerPixel, d.PhotometricInterpretation = ny, nx, 1, "MONOCHROME2"
+    d.BitsAllocated, d.BitsStored, d.HighBit, d.PixelRepresentation = 16, 16, 15, 0
+    d.NumberOfFrames = nz * len(vols)
+    shared = Dataset()
+    o, m, t = Dataset(), Dataset(), Dataset()
+    o.ImageOrientationPatient = iop
+    m.PixelSpacing, m.SliceThickness = ds([spacing[1], spacing[0]]), DS(spacing[2], auto_format=True)
+    t.RescaleSlope, t.RescaleIntercept, t.RescaleType = DS(slope), DS(inter), "US"
+    shared.PlaneOrientationSequence = Sequence([o])
+    shared.PixelMeasuresSequence = Sequence([m])
+    shared.PixelValueTransformationSequence = Sequence([t])
+    d.SharedFunctionalGroupsSequence = Sequence([shared])
+    frames = []
+    for ti in range(len(vols)):
+        for k in range(nz):
+            f, p, c = Dataset(), Dataset(), Dataset()
+            p.ImagePositionPatient = ds(np.asarray(origin) + k * spacing[2] * normal)
+            c.TemporalPositionIndex = ti + 1
+            c.StackID, c.InStackPositionNumber = "1", k + 1
+            f.PlanePositionSequence, f.FrameContentSequence = Sequence([p]), Sequence([c])
+            frames.append(f)
+    d.PerFrameFunctionalGroupsSequence = Sequence(frames)
+    px = np.concatenate([v.transpose(2, 1, 0) for v in vols]).astype("<u2")
+    d.PixelData = px.tobytes()
+    d.save_as(path, enforce_file_format=True)
+
+
+def test_an_enhanced_file_of_two_time_points_gives_each_as_its_classic_series(tmp_path, xtask):
+    # One enhanced multi-frame file holding two volumes (TemporalPositionIndex 1 and 2, frames
+    # volume after volume): --frame k meshes volume k as the classic series of its slices does.
+    c = CASES["crop-u16"]
+    raw = stored_voxels("crop-u16")[:, :, :20]
+    vols = [raw, (raw.astype(np.float64) * 0.8 + 3).astype(raw.dtype)]
+    write_enhanced(tmp_path / "dce.dcm", vols, **c)
+    out = tmp_path / "out.ply"
+    one_error_line(mesh_cli(xtask, tmp_path / "dce.dcm", out, "--iso", "100"), out, "2 volumes",
+                   "TemporalPositionIndex 1", "TemporalPositionIndex 2")
+    for t, vol in enumerate(vols):
+        write_series(tmp_path / f"classic{t}", vol, **c)
+        m = rdt_mesher.mesh_file(tmp_path / "dce.dcm", frame=t, iso=150, size=c["size"], verify=False)
+        ref = rdt_mesher.mesh_file(tmp_path / f"classic{t}", iso=150, size=c["size"], verify=False)
+        assert len(m.vertices) > 500
+        assert np.array_equal(m.vertices, ref.vertices) and np.array_equal(m.faces, ref.faces)
+        assert report_affine(m.report).tolist() == report_affine(ref.report).tolist()

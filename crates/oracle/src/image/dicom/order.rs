@@ -10,7 +10,8 @@ use std::cmp::Ordering;
 /// number). Only the order of the planes at one position depends on it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct VolumeOrder {
-    /// `EchoNumbers` (0018,0086); in an enhanced object the frame's `EffectiveEchoTime`.
+    /// `EchoNumbers` (0018,0086); in an enhanced object the frame's `EffectiveEchoTime`
+    /// (0018,9082).
     pub echo: Option<f64>,
     /// `TemporalPositionIdentifier` (0020,0100); in an enhanced object the frame's
     /// `TemporalPositionIndex` (0020,9128).
@@ -19,6 +20,8 @@ pub(crate) struct VolumeOrder {
     pub acquisition: Option<f64>,
     /// `InstanceNumber` (0020,0013); in a multi-frame object the frame's number.
     pub instance: Option<f64>,
+    /// Whether `echo` and `time` come from an enhanced object's functional groups.
+    pub enhanced: bool,
 }
 
 impl VolumeOrder {
@@ -42,10 +45,18 @@ impl VolumeOrder {
                 .first()?;
             num(item, tag)
         };
-        let echo = num(obj, tags::ECHO_NUMBERS)
-            .or_else(|| group(tags::MR_ECHO_SEQUENCE, tags::EFFECTIVE_ECHO_TIME));
-        let time = num(obj, tags::TEMPORAL_POSITION_IDENTIFIER)
-            .or_else(|| group(tags::FRAME_CONTENT_SEQUENCE, tags::TEMPORAL_POSITION_INDEX));
+        let enhanced = per_frame.is_some();
+        let (echo, time) = if enhanced {
+            (
+                group(tags::MR_ECHO_SEQUENCE, tags::EFFECTIVE_ECHO_TIME),
+                group(tags::FRAME_CONTENT_SEQUENCE, tags::TEMPORAL_POSITION_INDEX),
+            )
+        } else {
+            (
+                num(obj, tags::ECHO_NUMBERS),
+                num(obj, tags::TEMPORAL_POSITION_IDENTIFIER),
+            )
+        };
         let instance = match per_frame {
             Some(_) => Some(f as f64),
             None => num(obj, tags::INSTANCE_NUMBER),
@@ -55,6 +66,7 @@ impl VolumeOrder {
             time,
             acquisition: num(obj, tags::ACQUISITION_NUMBER),
             instance,
+            enhanced,
         }
     }
 

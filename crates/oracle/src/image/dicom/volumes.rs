@@ -24,11 +24,14 @@ use std::path::Path;
 /// One key of a [`VolumeOrder`].
 type Key = fn(&VolumeOrder) -> Option<f64>;
 
-/// The keys of [`VolumeOrder`] that can name a volume, with their names for messages.
-const NAMED: [(&str, Key); 3] = [
-    ("EchoNumbers", |o| o.echo),
-    ("TemporalPositionIdentifier", |o| o.time),
-    ("AcquisitionNumber", |o| o.acquisition),
+/// The keys of [`VolumeOrder`] that can name a volume, with their names for messages (classic
+/// images, then enhanced objects).
+const NAMED: [(&str, &str, Key); 3] = [
+    ("EchoNumbers", "EffectiveEchoTime", |o| o.echo),
+    ("TemporalPositionIdentifier", "TemporalPositionIndex", |o| {
+        o.time
+    }),
+    ("AcquisitionNumber", "AcquisitionNumber", |o| o.acquisition),
 ];
 
 /// The planes of volume `frame` (`None`: the only one) of `planes` (one series, one grid),
@@ -163,8 +166,10 @@ fn describe(planes: &[Plane], positions: &[Vec<usize>], k: usize) -> String {
     let members: Vec<usize> = positions.iter().map(kth).collect();
     let names: Vec<String> = NAMED
         .iter()
-        .filter_map(|(name, get)| {
-            let v = get(&planes[members[0]].order)?;
+        .filter_map(|(classic, enhanced, get)| {
+            let order = &planes[members[0]].order;
+            let name = if order.enhanced { enhanced } else { classic };
+            let v = get(order)?;
             let uniform = members.iter().all(|&i| get(&planes[i].order) == Some(v));
             let varies = positions[0]
                 .iter()
@@ -173,9 +178,14 @@ fn describe(planes: &[Plane], positions: &[Vec<usize>], k: usize) -> String {
         })
         .collect();
     if names.is_empty() {
+        let (by, keys) = if planes[members[0]].order.enhanced {
+            ("frame number", "EffectiveEchoTime, TemporalPositionIndex")
+        } else {
+            ("InstanceNumber", "EchoNumbers, TemporalPositionIdentifier")
+        };
         format!(
-            "the {} slice at each position by InstanceNumber (no EchoNumbers, \
-             TemporalPositionIdentifier or AcquisitionNumber tells the volumes apart)",
+            "the {} slice at each position by {by} (no {keys} or AcquisitionNumber tells the \
+             volumes apart)",
             ordinal(k + 1)
         )
     } else {
