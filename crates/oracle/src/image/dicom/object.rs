@@ -81,7 +81,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
              re-export it"
         ),
     })?;
-    let obj = OpenFileOptions::new()
+    let mut obj = OpenFileOptions::new()
         .read_preamble(ReadPreamble::Never)
         .from_reader(&bytes[128..])
         .map_err(|e| ImageError::Dicom {
@@ -91,12 +91,15 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
                  re-export it"
             ),
         })?;
+    // The object owns its values: the file's bytes are not needed any more (a multi-frame
+    // file was held four times while read, twice since; see `stack`).
+    drop(bytes);
     let ts = obj
         .meta()
         .transfer_syntax()
         .trim_end_matches('\0')
         .to_string();
-    let Some(pixel) = pixel_element(&obj) else {
+    let Some((pixel_tag, declared, encapsulated)) = pixel_element(&obj) else {
         return Ok(None);
     };
     let header = Header::of(path, &obj)?;
@@ -111,8 +114,8 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
         });
     }
     let frames = header.frames;
-    let (values, lossy) = match pixel.0 {
-        Value::PixelSequence(_) => {
+    let (values, lossy) = match encapsulated {
+        true => {
             let Some(lossy) = super::compressed::decodable(&ts) else {
                 return Err(ImageError::Dicom {
                     path: path.to_path_buf(),
@@ -128,8 +131,23 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
             let bytes = super::compressed::decode(path, &ts, &obj, need)?;
             (integers(&bytes, &header), lossy)
         }
-        value => (decode_pixels(path, &ts, value, pixel.1, &header)?, false),
+        false => {
+            // Owned, so that its copy goes once converted (at most two copies at a time).
+            let value = obj
+                .take_element(pixel_tag)
+                .map_err(|e| field(path, FORMAT, "PixelData (7FE0,0010)", format!("{e}")))?
+                .into_value();
+            (decode_pixels(path, &ts, value, declared, &header)?, false)
+        }
     };
+    // Decoded: the element's copy of the pixels goes (the geometry is read from `obj` below).
+    for tag in [
+        tags::PIXEL_DATA,
+        tags::FLOAT_PIXEL_DATA,
+        tags::DOUBLE_FLOAT_PIXEL_DATA,
+    ] {
+        obj.remove_element(tag);
+    }
     // Each frame's values in the file's type: the whole buffer for one frame, else cut from
     // its little-endian bytes (`Voxels`' own conversions).
     let frame_pixels: Vec<Voxels> = if frames == 1 {
@@ -175,7 +193,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
 /// The pixel data element: integer (`PixelData`) or float (`FloatPixelData`,
 /// `DoubleFloatPixelData`), with its length as the file declares it (the parser reads 16-bit
 /// words, so a declared odd length loses its last byte in the value).
-fn pixel_element(obj: &InMemDicomObject) -> Option<(&Value<InMemDicomObject>, Option<usize>)> {
+fn pixel_element(obj: &InMemDicomObject) -> Option<(Tag, Option<usize>, bool)> {
     [
         tags::PIXEL_DATA,
         tags::FLOAT_PIXEL_DATA,
@@ -183,7 +201,11 @@ fn pixel_element(obj: &InMemDicomObject) -> Option<(&Value<InMemDicomObject>, Op
     ]
     .iter()
     .find_map(|&t| obj.element_opt(t).ok().flatten())
-    .map(|e| (e.value(), e.length().get().map(|l| l as usize)))
+    .map(|e| {
+        let encapsulated = matches!(e.value(), Value::PixelSequence(_));
+        let tag = dicom_core::header::Header::tag(e);
+        (tag, e.length().get().map(|l| l as usize), encapsulated)
+    })
 }
 
 /// The image pixel module and the series, read once per file.
@@ -527,7 +549,7 @@ fn syntax_name(uid: &str) -> &'static str {
 fn decode_pixels(
     path: &Path,
     ts: &str,
-    value: &Value<InMemDicomObject>,
+    value: Value<InMemDicomObject>,
     declared: Option<usize>,
     h: &Header,
 ) -> Result<Voxels, ImageError> {
@@ -545,8 +567,10 @@ fn decode_pixels(
     let n = h.samples(path)?;
     let big_endian = ts == "1.2.840.10008.1.2.2";
     // The values as little-endian bytes of `BitsAllocated` each.
+    let float = matches!(prim, PrimitiveValue::F32(_) | PrimitiveValue::F64(_));
+    // Each arm consumes the value: one copy of the pixels at a time beside the bytes.
     let bytes: Vec<u8> = match prim {
-        PrimitiveValue::U8(v) if !big_endian || h.bits_allocated == 8 => v.to_vec(),
+        PrimitiveValue::U8(v) if !big_endian || h.bits_allocated == 8 => v.into_vec(),
         PrimitiveValue::U16(v) if !big_endian || h.bits_allocated == 16 => {
             v.iter().flat_map(|w| w.to_le_bytes()).collect()
         }
@@ -593,7 +617,6 @@ fn decode_pixels(
         ));
     }
     let bytes = &bytes[..need];
-    let float = matches!(prim, PrimitiveValue::F32(_) | PrimitiveValue::F64(_));
     Ok(if float {
         let t = if size == 4 {
             super::super::Dtype::F32
