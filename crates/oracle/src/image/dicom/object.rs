@@ -13,7 +13,7 @@ use dicom_core::header::HasLength;
 use dicom_core::value::{PrimitiveValue, Value};
 use dicom_dictionary_std::tags;
 use dicom_object::file::ReadPreamble;
-use dicom_object::{InMemDicomObject, OpenFileOptions};
+use dicom_object::{FileDicomObject, InMemDicomObject, OpenFileOptions};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
@@ -52,6 +52,18 @@ pub(crate) struct Plane {
     pub instance_uid: String,
 }
 
+impl Plane {
+    /// Its file (and frame, in a multi-frame file) for messages.
+    pub fn name(&self) -> String {
+        let file = self.file.display();
+        if self.frame > 0 {
+            format!("{file} (frame {})", self.frame + 1)
+        } else {
+            file.to_string()
+        }
+    }
+}
+
 /// Whether the file starts with the DICOM preamble (`DICM` at byte 128).
 pub(crate) fn has_preamble(path: &Path) -> bool {
     use std::io::Read;
@@ -62,9 +74,10 @@ pub(crate) fn has_preamble(path: &Path) -> bool {
         && &head[128..] == b"DICM"
 }
 
-/// The planes of the DICOM file at `path`; `Ok(None)` when it holds no image (a structured
-/// report, a DICOMDIR, a presentation state).
-pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError> {
+/// The file at `path` parsed, its declared lengths checked first (`lengths`). The object owns
+/// its values: the file's bytes go when this returns (a multi-frame file was held four times
+/// while read, twice since).
+fn parse(path: &Path) -> Result<FileDicomObject<InMemDicomObject>, ImageError> {
     let bytes = super::super::orient::read(path)?;
     if bytes.len() < 132 || &bytes[128..132] != b"DICM" {
         return Err(ImageError::Dicom {
@@ -81,7 +94,7 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
              re-export it"
         ),
     })?;
-    let mut obj = OpenFileOptions::new()
+    let obj = OpenFileOptions::new()
         .read_preamble(ReadPreamble::Never)
         .from_reader(&bytes[128..])
         .map_err(|e| ImageError::Dicom {
@@ -91,9 +104,13 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
                  re-export it"
             ),
         })?;
-    // The object owns its values: the file's bytes are not needed any more (a multi-frame
-    // file was held four times while read, twice since; see `stack`).
-    drop(bytes);
+    Ok(obj)
+}
+
+/// The planes of the DICOM file at `path`; `Ok(None)` when it holds no image (a structured
+/// report, a DICOMDIR, a presentation state).
+pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError> {
+    let mut obj = parse(path)?;
     let ts = obj
         .meta()
         .transfer_syntax()

@@ -156,8 +156,8 @@ fn even_step(source: &Path, planes: &[Plane], normal: DVec3) -> Result<DVec3, Im
             "the slices are not evenly spaced: {} and {} are {worst:.4} mm apart, the median \
              step is {median:.4} mm ({why}); re-export the complete series, or convert it with \
              dcm2niix (which can resample uneven stacks)",
-            name(&planes[k]),
-            name(&planes[k + 1])
+            planes[k].name(),
+            planes[k + 1].name()
         )));
     }
     let step = (planes[n - 1].position - planes[0].position) / (n - 1) as f64;
@@ -175,16 +175,6 @@ fn even_step(source: &Path, planes: &[Plane], normal: DVec3) -> Result<DVec3, Im
         )));
     }
     Ok(step)
-}
-
-/// A plane's file (and frame, in a multi-frame file) for messages.
-fn name(p: &Plane) -> String {
-    let file = p.file.display();
-    if p.frame > 0 {
-        format!("{file} (frame {})", p.frame + 1)
-    } else {
-        file.to_string()
-    }
 }
 
 /// The planes of the series `wanted` (a `SeriesNumber` or a `SeriesInstanceUID`), or all of
@@ -275,7 +265,7 @@ fn same_grid(first: &Plane, p: &Plane) -> Result<(), ImageError> {
             format!(
                 "= {b}, but {} has {a}: the slices of one volume must share it (a localizer \
                  or a reformat in the series?); keep only the slices of one volume in the folder",
-                name(first)
+                first.name()
             ),
         ))
     };

@@ -76,6 +76,10 @@ pub(crate) fn select(
         )));
     }
     let volumes = most;
+    for run in &mut positions {
+        run.sort_by(|&a, &b| rank(&planes[a], &planes[b]));
+        tied(source, &planes, run)?;
+    }
     let name_of = |k: usize| describe(&planes, &positions, k);
     let k = match frame {
         None if volumes == 1 => return Ok((planes, None)),
@@ -108,8 +112,7 @@ pub(crate) fn select(
         name_of(k)
     );
     let mut picked = vec![false; n];
-    for run in &mut positions {
-        run.sort_by(|&a, &b| rank(&planes[a], &planes[b]));
+    for run in &positions {
         picked[run[k]] = true;
     }
     let mut flags = picked.into_iter();
@@ -147,6 +150,28 @@ fn duplicates(source: &Path, planes: &[Plane], run: &[usize]) -> Result<(), Imag
     }
 }
 
+/// Errors when two planes of `run` (one position, ranked) have the same [`VolumeOrder`]:
+/// only their file names would order them, so a volume could take slices of several.
+fn tied(source: &Path, planes: &[Plane], run: &[usize]) -> Result<(), ImageError> {
+    match run
+        .windows(2)
+        .find(|w| planes[w[0]].order.cmp(&planes[w[1]].order).is_eq())
+    {
+        None => Ok(()),
+        Some(w) => Err(ImageError::Dicom {
+            path: source.to_path_buf(),
+            detail: format!(
+                "{} and {} lie at the same slice position with the same EchoNumbers, \
+                 TemporalPositionIdentifier, AcquisitionNumber and InstanceNumber: nothing \
+                 tells their volumes apart; put the files of each volume in a folder of its own \
+                 (`dcm2niix` sorts them)",
+                planes[w[0]].name(),
+                planes[w[1]].name()
+            ),
+        }),
+    }
+}
+
 /// The order of two planes at one position: their [`VolumeOrder`], then file and frame.
 fn rank(a: &Plane, b: &Plane) -> Ordering {
     a.order
@@ -155,15 +180,10 @@ fn rank(a: &Plane, b: &Plane) -> Ordering {
         .then(a.frame.cmp(&b.frame))
 }
 
-/// Volume `k` named by the keys that hold one value over its planes and differ between the
+/// Volume `k` (`positions`: each run ranked) named by the keys that hold one value over its planes and differ between the
 /// volumes, e.g. "EchoNumbers 2"; else by its rank.
 fn describe(planes: &[Plane], positions: &[Vec<usize>], k: usize) -> String {
-    let kth = |run: &Vec<usize>| {
-        let mut run = run.clone();
-        run.sort_by(|&a, &b| rank(&planes[a], &planes[b]));
-        run[k]
-    };
-    let members: Vec<usize> = positions.iter().map(kth).collect();
+    let members: Vec<usize> = positions.iter().map(|run| run[k]).collect();
     let names: Vec<String> = NAMED
         .iter()
         .filter_map(|(classic, enhanced, get)| {
