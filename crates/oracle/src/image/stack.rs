@@ -128,8 +128,9 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
                 || super::is_dicom_file(path)
                 || (path.is_dir() && super::is_dicom_folder(path)))
     };
-    let series = opts.raw.is_none() && (named(path, &NIFTI) || named(path, &MGH) || dicom());
-    if let Some(k) = opts.frame.filter(|&k| k > 0 && !series) {
+    // Asked only for a frame above 0: `dicom()` may read the folder's files again.
+    let series = || opts.raw.is_none() && (named(path, &NIFTI) || named(path, &MGH) || dicom());
+    if let Some(k) = opts.frame.filter(|&k| k > 0 && !series()) {
         return Err(ImageError::Frame {
             path: path.to_path_buf(),
             dims: vol.dims().iter().map(|&d| d as u64).collect(),

@@ -157,14 +157,9 @@ pub(crate) fn read_planes(path: &Path) -> Result<Option<Vec<Plane>>, ImageError>
             (decode_pixels(path, &ts, value, declared, &header)?, false)
         }
     };
-    // Decoded: the element's copy of the pixels goes (the geometry is read from `obj` below).
-    for tag in [
-        tags::PIXEL_DATA,
-        tags::FLOAT_PIXEL_DATA,
-        tags::DOUBLE_FLOAT_PIXEL_DATA,
-    ] {
-        obj.remove_element(tag);
-    }
+    // Decoded: the compressed element's copy goes too (the geometry is read from `obj` below;
+    // the native one was taken above).
+    obj.remove_element(pixel_tag);
     // Each frame's values in the file's type: the whole buffer for one frame, else cut from
     // its little-endian bytes (`Voxels`' own conversions).
     let frame_pixels: Vec<Voxels> = if frames == 1 {
