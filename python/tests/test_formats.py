@@ -187,3 +187,75 @@ def test_the_same_volume_gives_the_same_mesh_bytes(tmp_path):
         with open(os.path.join(str(tmp_path), name + ".ply"), "rb") as f:
             out[name] = f.read()
     assert len(set(out.values())) == 1
+
+
+@pytest.fixture(scope="module")
+def series_4d(tmp_path_factory):
+    """nibabel's real fMRI series example4d.nii.gz (128 x 96 x 24 x 2, an oblique sform),
+    written as 4D NRRD by pynrrd (the frames' axis first, as older Slicer DWI files, and
+    last) and as 4D MetaImage by SimpleITK, with each frame as a 3D file beside it."""
+    nib = pytest.importorskip("nibabel")
+    nrrd = pytest.importorskip("nrrd")
+    sitk = pytest.importorskip("SimpleITK")
+    tmp = str(tmp_path_factory.mktemp("series4d"))
+    src = os.path.join(os.path.dirname(nib.__file__), "tests", "data", "example4d.nii.gz")
+    img = nib.load(src)
+    d, a = np.asarray(img.dataobj), img.affine
+    dirs = [list(a[:3, i]) for i in range(3)]
+    none = [np.nan] * 3
+    base = {"space": "right-anterior-superior", "space origin": list(a[:3, 3])}
+    nrrd.write(os.path.join(tmp, "last.nrrd"), d,
+               dict(base, **{"space directions": dirs + [none], "kinds": ["domain"] * 3 + ["list"]}))
+    nrrd.write(os.path.join(tmp, "first.nrrd"), np.ascontiguousarray(np.moveaxis(d, 3, 0)),
+               dict(base, **{"space directions": [none] + dirs, "kinds": ["list"] + ["domain"] * 3}))
+    s4 = sitk.ReadImage(src)
+    sitk.WriteImage(s4, os.path.join(tmp, "s.mha"))
+    for t in range(2):
+        nrrd.write(os.path.join(tmp, f"f{t}.nrrd"), np.ascontiguousarray(d[..., t]),
+                   dict(base, **{"space directions": dirs, "kinds": ["domain"] * 3}))
+        size = list(s4.GetSize()[:3]) + [0]
+        sitk.WriteImage(sitk.Extract(s4, size, [0, 0, 0, t]), os.path.join(tmp, f"f{t}.mha"))
+    return src, tmp
+
+
+def mesh_bytes(tmp, image, out, *extra):
+    if not os.path.exists(XTASK):
+        pytest.skip("target/release/xtask is not built")
+    path = os.path.join(tmp, out)
+    cmd = [XTASK, "mesh", "-q", image, "--iso", "420.5", "--size", "6", "--no-verify",
+           "-o", path, *extra]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    with open(path, "rb") as f:
+        return f.read(), r.stderr
+
+
+@pytest.mark.parametrize("frame", [0, 1])
+def test_a_4d_nrrd_frame_is_the_nifti_frame_and_pynrrds_3d_file(series_4d, frame):
+    src, tmp = series_4d
+    want, _ = mesh_bytes(tmp, src, f"nii{frame}.ply", "--frame", str(frame))
+    three, _ = mesh_bytes(tmp, os.path.join(tmp, f"f{frame}.nrrd"), f"n3d{frame}.ply")
+    assert three == want
+    for name in ["first.nrrd", "last.nrrd"]:
+        got, err = mesh_bytes(tmp, os.path.join(tmp, name), f"{name}{frame}.ply",
+                              "--frame", str(frame))
+        assert got == want, name
+        assert f"frame {frame} of 2 along axis" in err and "kinds: list" in err
+
+
+@pytest.mark.parametrize("frame", [0, 1])
+def test_a_4d_metaimage_frame_is_simpleitks_extracted_volume(series_4d, frame):
+    _, tmp = series_4d
+    want, _ = mesh_bytes(tmp, os.path.join(tmp, f"f{frame}.mha"), f"m3d{frame}.ply")
+    got, err = mesh_bytes(tmp, os.path.join(tmp, "s.mha"), f"m4d{frame}.ply", "--frame", str(frame))
+    assert got == want
+    assert f"frame {frame} of 2" in err
+
+
+def test_a_4d_series_without_a_frame_names_the_range(series_4d):
+    _, tmp = series_4d
+    for name in ["last.nrrd", "s.mha"]:
+        r = subprocess.run([XTASK, "mesh", os.path.join(tmp, name), "--iso", "420.5"],
+                           capture_output=True, text=True)
+        assert r.returncode != 0
+        assert "pass --frame K (0 to 1)" in r.stderr, r.stderr

@@ -109,7 +109,7 @@ fn frames_are_refused_where_there_is_no_series() {
     };
     let msg = load_volume(&raw, &opts).unwrap_err().to_string();
     assert!(
-        msg.contains("series are read from NIfTI, MGH and DICOM"),
+        msg.contains("series are read from NIfTI, MGH, NRRD, MetaImage and DICOM"),
         "{msg}"
     );
     // A raw layout given for a file named like a NIfTI one: raw, one volume.

@@ -2,7 +2,8 @@
 //! data after `ElementDataFile = LOCAL`, or a `.mhd` header naming a data file (relative to
 //! the header's folder, e.g. a `.raw`), uncompressed or zlib (`CompressedData = True`).
 //!
-//! Fields read: `NDims` (3), `DimSize`, `ElementType` (`MET_CHAR` .. `MET_DOUBLE`),
+//! Fields read: `NDims` (3, or 4 for a series read one frame at a time with `--frame`,
+//! [`super::frame_axis`]), `DimSize`, `ElementType` (`MET_CHAR` .. `MET_DOUBLE`),
 //! `ElementSpacing`, `Offset` (or `Origin`/`Position`), `TransformMatrix` (or
 //! `Rotation`/`Orientation`; as ITK reads it, the numbers are the direction of axis 0, then
 //! of axis 1, then of axis 2), `BinaryDataByteOrderMSB` (or `ElementByteOrderMSB`),
@@ -11,6 +12,7 @@
 //! space is LPS+ whatever `AnatomicalOrientation` says, so the axes and offset are mapped to
 //! the RAS+ world of the NIfTI reader by negating x and y (see [`super::orient`]).
 
+use super::frame_axis::{FrameAxis, frame_bytes};
 use super::orient::{self, Frame};
 use super::{Dtype, ImageError, Volume, Voxels};
 use glam::DVec3;
@@ -147,8 +149,19 @@ fn load_data(
     })
 }
 
-/// Read a MetaImage volume (`.mha` or `.mhd`); see the module documentation.
+/// Read a MetaImage volume (`.mha` or `.mhd`); see the module documentation. A 4D series
+/// is refused: [`read_metaimage_frame`] reads one of its volumes.
 pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
+    read_metaimage_frame(path, None)
+}
+
+/// [`read_metaimage`] of frame `frame` of a 4D series (`NDims = 4`: ITK's 3D + time or
+/// series images, the fourth axis the frames, as SimpleITK's `JoinSeries` writes them).
+/// `None` reads a 3D volume, or a series of one frame, and refuses a longer series.
+pub fn read_metaimage_frame(
+    path: impl AsRef<Path>,
+    frame: Option<usize>,
+) -> Result<Volume, ImageError> {
     let path = path.as_ref();
     let bytes = orient::read(path)?;
     let (f, data_start) = parse_header(path, &bytes)?;
@@ -159,33 +172,9 @@ pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             format!("= {t}: only Image is read"),
         ));
     }
-    let nd = f.get("NDims").map(String::as_str);
-    if nd != Some("3") {
-        return Err(err(
-            path,
-            "NDims",
-            format!(
-                "= {}: only 3D volumes are read (extract one 3D volume, e.g. with SimpleITK)",
-                nd.unwrap_or("(missing)")
-            ),
-        ));
-    }
-    let ds = f
-        .get("DimSize")
-        .ok_or_else(|| err(path, "DimSize", "is missing; give the three sizes"))?;
-    let dims: Vec<usize> = ds
-        .split_whitespace()
-        .map(|t| t.parse::<usize>().ok().filter(|&v| v > 0))
-        .collect::<Option<_>>()
-        .filter(|v: &Vec<usize>| v.len() == 3)
-        .ok_or_else(|| {
-            err(
-                path,
-                "DimSize",
-                format!("= {ds:?}: expected three positive whole numbers"),
-            )
-        })?;
-    let dims = [dims[0], dims[1], dims[2]];
+    let (sizes, series, k) = layout(path, &f, frame)?;
+    let nd = sizes.len();
+    let dims = [sizes[0], sizes[1], sizes[2]];
     let channels = f.get("ElementNumberOfChannels").map_or("1", String::as_str);
     if channels != "1" {
         return Err(err(
@@ -208,19 +197,28 @@ pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
         path,
         &f,
         &["ElementSpacing", "ElementSize"],
-        3,
-        vec![1.0; 3],
+        nd,
+        vec![1.0; nd],
     )?;
-    let offset = vector(path, &f, &["Offset", "Origin", "Position"], 3, vec![0.0; 3])?;
-    let eye = vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let offset = vector(
+        path,
+        &f,
+        &["Offset", "Origin", "Position"],
+        nd,
+        vec![0.0; nd],
+    )?;
+    let eye: Vec<f64> = (0..nd * nd)
+        .map(|i| if i / nd == i % nd { 1.0 } else { 0.0 })
+        .collect();
     let tm = vector(
         path,
         &f,
         &["TransformMatrix", "Rotation", "Orientation"],
-        9,
+        nd * nd,
         eye,
     )?;
-    let need = orient::byte_count(path, FMT, "DimSize", dims, dtype.size())?;
+    let tm = spatial_block(path, &f, &tm, nd)?;
+    let need = orient::byte_count(path, FMT, "DimSize", &sizes, dtype.size())?;
     let (src, raw) = load_data(path, &f, bytes, data_start, need, compressed)?;
     let data = if compressed {
         orient::inflate_zlib(&src, &raw, need)?
@@ -248,12 +246,112 @@ pub fn read_metaimage(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
         ));
     }
     let axes = [0, 1, 2].map(|i| DVec3::new(tm[3 * i], tm[3 * i + 1], tm[3 * i + 2]) * spacing[i]);
-    let affine = orient::affine(axes, DVec3::from_slice(&offset), Frame::Lps);
+    let affine = orient::affine(axes, DVec3::from_slice(&offset[..3]), Frame::Lps);
     super::volume::check_affine(
         &affine,
         Some(path),
         "TransformMatrix / ElementSpacing / Offset",
     )?;
+    let (data, note) = match &series {
+        Some(fa) => {
+            let s = [sizes[0], sizes[1], sizes[2], sizes[3]];
+            (frame_bytes(&data, s, 3, k, dtype.size()), fa.note(path, k))
+        }
+        None => (data, None),
+    };
     let voxels = Voxels::from_bytes(dtype, &data, big);
-    Ok(Volume::new(dims, voxels, affine)?.with_source(path))
+    let vol = Volume::new(dims, voxels, affine)?.with_source(path);
+    Ok(match note {
+        Some(n) => vol.with_note(n),
+        None => vol,
+    })
+}
+
+/// `NDims` and `DimSize`, the frames' axis of a 4D series, and the frame to read (see
+/// [`read_metaimage_frame`]).
+fn layout(
+    path: &Path,
+    f: &HashMap<String, String>,
+    frame: Option<usize>,
+) -> Result<(Vec<usize>, Option<FrameAxis>, usize), ImageError> {
+    let nd = match f.get("NDims").map(String::as_str) {
+        Some("3") => 3,
+        Some("4") => 4,
+        nd => {
+            return Err(err(
+                path,
+                "NDims",
+                format!(
+                    "= {}: only 3D volumes and 4D series (read with --frame) are read (extract \
+                     one 3D volume, e.g. with SimpleITK)",
+                    nd.unwrap_or("(missing)")
+                ),
+            ));
+        }
+    };
+    let ds = f
+        .get("DimSize")
+        .ok_or_else(|| err(path, "DimSize", format!("is missing; give the {nd} sizes")))?;
+    let sizes: Vec<usize> = ds
+        .split_whitespace()
+        .map(|t| t.parse::<usize>().ok().filter(|&v| v > 0))
+        .collect::<Option<_>>()
+        .filter(|v: &Vec<usize>| v.len() == nd)
+        .ok_or_else(|| {
+            err(
+                path,
+                "DimSize",
+                format!("= {ds:?}: expected {nd} positive whole numbers (NDims = {nd})"),
+            )
+        })?;
+    let series = (nd == 4).then(|| FrameAxis {
+        axis: 3,
+        frames: sizes[3],
+        label: "the fourth of NDims = 4".into(),
+    });
+    let k = match &series {
+        Some(fa) => fa.pick(path, &sizes, frame)?,
+        None => {
+            if let Some(k) = frame.filter(|&k| k > 0) {
+                return Err(ImageError::Frame {
+                    path: path.to_path_buf(),
+                    dims: sizes.iter().map(|&d| d as u64).collect(),
+                    detail: format!("--frame {k}: this file holds one 3D volume (frame 0)"),
+                });
+            }
+            0
+        }
+    };
+    Ok((sizes, series, k))
+}
+
+/// The 3 x 3 direction block (axis 0's direction, then axis 1's, then axis 2's) of an
+/// `nd x nd` `TransformMatrix`; for `nd = 4`, the frame axis must not mix with space (its
+/// row and column zero but the diagonal), else the frames would not share one geometry.
+fn spatial_block(
+    path: &Path,
+    f: &HashMap<String, String>,
+    tm: &[f64],
+    nd: usize,
+) -> Result<Vec<f64>, ImageError> {
+    if nd == 3 {
+        return Ok(tm.to_vec());
+    }
+    if (0..3).any(|i| tm[4 * i + 3] != 0.0 || tm[12 + i] != 0.0) {
+        let key = ["TransformMatrix", "Rotation", "Orientation"]
+            .into_iter()
+            .find(|k| f.contains_key(*k))
+            .unwrap_or("TransformMatrix");
+        return Err(err(
+            path,
+            key,
+            format!(
+                "= {tm:?}: the fourth axis (the frames) mixes with space; its row and column \
+                 must be 0 but the diagonal"
+            ),
+        ));
+    }
+    Ok((0..3)
+        .flat_map(|i| (0..3).map(move |j| tm[4 * i + j]))
+        .collect())
 }

@@ -102,7 +102,7 @@ pub fn read_mgh(path: impl AsRef<Path>, frame: Option<usize>) -> Result<Volume, 
             ));
         }
     };
-    let one = orient::byte_count(path, FMT, "width/height/depth", dims, dtype.size())?;
+    let one = orient::byte_count(path, FMT, "width/height/depth", &dims, dtype.size())?;
     let need = one.saturating_mul(frames);
     if b.len() - HEADER < need {
         return Err(ImageError::Truncated {

@@ -59,6 +59,7 @@ mod distance;
 // Documented on helper M's branch (NIfTI reader hardening); allowed until it merges.
 #[allow(missing_docs)]
 mod error;
+mod frame_axis;
 mod metaimage;
 mod mgh;
 mod nifti_header;
@@ -80,12 +81,12 @@ mod zarr;
 
 pub use dicom::{dicom_subfolders, is_dicom_file, is_dicom_folder, read_dicom, read_dicom_frame};
 pub use error::ImageError;
-pub use metaimage::read_metaimage;
+pub use metaimage::{read_metaimage, read_metaimage_frame};
 pub use mgh::read_mgh;
 pub use nifti_io::{
     NiftiWriteOptions, Qform, nifti_affine, read_nifti, read_nifti_frame, write_nifti,
 };
-pub use nrrd::read_nrrd;
+pub use nrrd::{read_nrrd, read_nrrd_frame};
 pub use otsu::{BINS as OTSU_BINS, otsu_threshold};
 pub use pinch::{BINARY_LEVEL, CONTACT_DM_VOXELS};
 pub(crate) use shared::with_view;

@@ -5,9 +5,12 @@
 //! World coordinates: `space directions` (one vector per axis) and `space origin` in the
 //! `space` frame, mapped to the RAS+ world of the NIfTI reader (see [`super::orient`]: an
 //! LPS header, Slicer's and pynrrd's usual one, has x and y negated); without them,
-//! `spacings` (or 1) along the axes, origin 0. Only 3D scalar volumes (`dimension: 3`) are
-//! read; every other case is an error naming the field and the fix.
+//! `spacings` (or 1) along the axes, origin 0. 3D scalar volumes (`dimension: 3`) and, one
+//! frame at a time (`--frame`, [`super::frame_axis`]), 4D series with one non-spatial axis
+//! (`kinds` other than domain or space, or `none` as its space direction: Slicer's DWI
+//! volumes, time series) are read; every other case is an error naming the field and the fix.
 
+use super::frame_axis::{FrameAxis, frame_bytes};
 use super::orient::{self, Frame};
 use super::{Dtype, ImageError, Volume, Voxels};
 use glam::DVec3;
@@ -90,36 +93,186 @@ fn dtype(path: &Path, t: &str) -> Result<Dtype, ImageError> {
     })
 }
 
-/// `(a,b,c) (d,e,f) (g,h,i)`: three vectors.
-fn directions(path: &Path, s: &str) -> Result<[DVec3; 3], ImageError> {
-    let vecs: Vec<&str> = s.split_whitespace().collect();
+/// The kinds (lower case) of a spatial axis; `???` and `none` say nothing, so they count as
+/// spatial.
+const SPATIAL_KINDS: [&str; 4] = ["domain", "space", "???", "none"];
+
+/// The array's axes: every size (3 or 4 of them) and, for a 4D array, its non-spatial axis.
+///
+/// Invariant: `sizes.len()` is 3 without `frame` and 4 with it.
+struct Axes {
+    sizes: Vec<usize>,
+    frame: Option<FrameAxis>,
+}
+
+impl Axes {
+    /// The indices of the three spatial axes, in order.
+    fn spatial(&self) -> [usize; 3] {
+        let skip = self.frame.as_ref().map_or(usize::MAX, |f| f.axis);
+        let v: Vec<usize> = (0..self.sizes.len()).filter(|&i| i != skip).collect();
+        [v[0], v[1], v[2]]
+    }
+
+    /// The sizes of the three spatial axes.
+    fn dims(&self) -> [usize; 3] {
+        self.spatial().map(|i| self.sizes[i])
+    }
+}
+
+/// The tokens of a per-axis field (`kinds`, `space directions`, `spacings`), one per axis.
+fn per_axis<'a>(
+    path: &Path,
+    h: &'a Header,
+    key: &str,
+    n: usize,
+) -> Result<Option<Vec<&'a str>>, ImageError> {
+    let Some(s) = h.fields.get(key) else {
+        return Ok(None);
+    };
+    let t: Vec<&str> = s.split_whitespace().collect();
+    if t.len() != n {
+        return Err(err(
+            path,
+            key,
+            format!("= {s:?}: expected {n} entries, one per axis (dimension = {n})"),
+        ));
+    }
+    Ok(Some(t))
+}
+
+/// `dimension`, `sizes`, and which axis is not spatial (`kinds` not domain or space, or a
+/// `none` space direction): none of a 3D volume, exactly one of a 4D series.
+fn axes(path: &Path, h: &Header) -> Result<Axes, ImageError> {
+    let f = &h.fields;
+    let d = f.get("dimension").map(|s| s.trim().to_string());
+    let n = match d.as_deref() {
+        Some("3") => 3,
+        Some("4") => 4,
+        _ => {
+            return Err(err(
+                path,
+                "dimension",
+                format!(
+                    "= {}: only 3D volumes and 4D series (one non-spatial axis, read with \
+                     --frame) are read (extract one 3D volume, e.g. with pynrrd or Slicer)",
+                    d.as_deref().unwrap_or("(missing)")
+                ),
+            ));
+        }
+    };
+    let s = f.get("sizes").ok_or_else(|| {
+        err(
+            path,
+            "sizes",
+            format!("is missing; give the {n} axis sizes"),
+        )
+    })?;
+    let sizes: Vec<usize> = s
+        .split_whitespace()
+        .map(|t| t.parse::<usize>().ok().filter(|&v| v > 0))
+        .collect::<Option<_>>()
+        .filter(|v: &Vec<usize>| v.len() == n)
+        .ok_or_else(|| {
+            err(
+                path,
+                "sizes",
+                format!("= {s:?}: expected {n} positive whole numbers (dimension = {n})"),
+            )
+        })?;
+    if f.get("space dimension").is_some_and(|d| d.trim() == "4") {
+        return Err(err(
+            path,
+            "space dimension",
+            "= 4 (ITK's 4D NRRD: the frames' axis in a 4D space) is not read; write the series \
+             as MetaImage (.mha, read with --frame) or NIfTI",
+        ));
+    }
+    let kinds = per_axis(path, h, "kinds", n)?;
+    let dirs = per_axis(path, h, "space directions", n)?;
+    let by_kind: Vec<usize> = kinds.as_ref().map_or(vec![], |k| {
+        (0..n)
+            .filter(|&i| !SPATIAL_KINDS.contains(&k[i].to_ascii_lowercase().as_str()))
+            .collect()
+    });
+    let by_dir: Vec<usize> = dirs
+        .as_ref()
+        .map_or(vec![], |v| (0..n).filter(|&i| v[i] == "none").collect());
+    let kind_of = |i: usize| kinds.as_ref().map(|k| k[i]);
+    if n == 3 {
+        if let Some(&i) = by_kind.first().or(by_dir.first()) {
+            let what =
+                kind_of(i).map_or("space direction none".to_string(), |k| format!("kinds {k}"));
+            return Err(err(
+                path,
+                "dimension",
+                format!(
+                    "= 3 with axis {i} not spatial ({what}): a 2D image of {} values per \
+                     pixel, not a volume; give a 3D volume",
+                    sizes[i]
+                ),
+            ));
+        }
+        return Ok(Axes { sizes, frame: None });
+    }
+    if dirs.is_some() && kinds.is_some() && !by_kind.is_empty() && by_kind != by_dir {
+        return Err(err(
+            path,
+            "kinds",
+            format!(
+                "and space directions disagree on the non-spatial axis (kinds: {by_kind:?}, \
+                 `none` directions: {by_dir:?}); fix the header"
+            ),
+        ));
+    }
+    let found = if dirs.is_some() { &by_dir } else { &by_kind };
+    match found.as_slice() {
+        [a] => Ok(Axes {
+            frame: Some(FrameAxis {
+                axis: *a,
+                frames: sizes[*a],
+                label: kind_of(*a).map_or("space direction none".to_string(), |k| {
+                    format!("kinds: {k}")
+                }),
+            }),
+            sizes,
+        }),
+        _ => Err(err(
+            path,
+            if dirs.is_some() {
+                "space directions"
+            } else {
+                "kinds"
+            },
+            format!(
+                "of a 4D array must mark exactly one axis as not spatial (found {found:?}): \
+                 e.g. kinds: domain domain domain list, or `none` as that axis's space direction"
+            ),
+        )),
+    }
+}
+
+/// `(a,b,c)`: one vector of `space directions`.
+fn direction(path: &Path, s: &str, v: &str) -> Result<DVec3, ImageError> {
     let bad = || {
         err(
             path,
             "space directions",
             format!(
-                "= {s:?}: expected three vectors like (1,0,0) (0,1,0) (0,0,1) (no `none` axis: \
-                 a 3D scalar volume)"
+                "= {s:?}: expected one vector like (1,0,0) per spatial axis (and `none` for the \
+                 axis of a 4D series' frames)"
             ),
         )
     };
-    if vecs.len() != 3 {
-        return Err(bad());
-    }
-    let mut out = [DVec3::ZERO; 3];
-    for (k, v) in vecs.iter().enumerate() {
-        let inner = v
-            .strip_prefix('(')
-            .and_then(|v| v.strip_suffix(')'))
-            .ok_or_else(bad)?;
-        let n = orient::numbers(inner, 3).ok_or_else(bad)?;
-        out[k] = DVec3::new(n[0], n[1], n[2]);
-    }
-    Ok(out)
+    let inner = v
+        .strip_prefix('(')
+        .and_then(|v| v.strip_suffix(')'))
+        .ok_or_else(bad)?;
+    let n = orient::numbers(inner, 3).ok_or_else(bad)?;
+    Ok(DVec3::new(n[0], n[1], n[2]))
 }
 
 /// The voxel-to-world axes and origin, and the frame they are in.
-fn geometry(path: &Path, h: &Header) -> Result<([DVec3; 3], DVec3, Frame), ImageError> {
+fn geometry(path: &Path, h: &Header, ax: &Axes) -> Result<([DVec3; 3], DVec3, Frame), ImageError> {
     let f = &h.fields;
     let frame = match (f.get("space"), f.get("space dimension")) {
         (Some(s), _) => Frame::of_nrrd(s).ok_or_else(|| {
@@ -142,8 +295,14 @@ fn geometry(path: &Path, h: &Header) -> Result<([DVec3; 3], DVec3, Frame), Image
         }
         (None, None) => Frame::Plain,
     };
-    if let Some(d) = f.get("space directions") {
-        let axes = directions(path, d)?;
+    let n = ax.sizes.len();
+    let spatial = ax.spatial();
+    if let Some(v) = per_axis(path, h, "space directions", n)? {
+        let s = &f["space directions"];
+        let mut axes = [DVec3::ZERO; 3];
+        for (k, &i) in spatial.iter().enumerate() {
+            axes[k] = direction(path, s, v[i])?;
+        }
         let origin = match f.get("space origin") {
             Some(o) => {
                 let inner = o.trim().strip_prefix('(').and_then(|v| v.strip_suffix(')'));
@@ -156,14 +315,20 @@ fn geometry(path: &Path, h: &Header) -> Result<([DVec3; 3], DVec3, Frame), Image
         };
         return Ok((axes, origin, frame));
     }
-    let s = match f.get("spacings") {
-        Some(s) => orient::numbers(s, 3).ok_or_else(|| {
-            err(
-                path,
-                "spacings",
-                format!("= {s:?}: expected three finite numbers"),
-            )
-        })?,
+    let s = match per_axis(path, h, "spacings", n)? {
+        Some(t) => {
+            let picked = spatial.map(|i| t[i]).join(" ");
+            orient::numbers(&picked, 3).ok_or_else(|| {
+                err(
+                    path,
+                    "spacings",
+                    format!(
+                        "= {:?}: expected a finite number per spatial axis",
+                        f["spacings"]
+                    ),
+                )
+            })?
+        }
         None => vec![1.0; 3],
     };
     Ok((
@@ -171,38 +336,6 @@ fn geometry(path: &Path, h: &Header) -> Result<([DVec3; 3], DVec3, Frame), Image
         DVec3::ZERO,
         frame,
     ))
-}
-
-fn dims(path: &Path, h: &Header) -> Result<[usize; 3], ImageError> {
-    let f = &h.fields;
-    let d = f.get("dimension").map(|s| s.trim().to_string());
-    if d.as_deref() != Some("3") {
-        return Err(err(
-            path,
-            "dimension",
-            format!(
-                "= {}: only 3D scalar volumes are read (extract one 3D volume, e.g. with \
-                 pynrrd or Slicer)",
-                d.as_deref().unwrap_or("(missing)")
-            ),
-        ));
-    }
-    let s = f
-        .get("sizes")
-        .ok_or_else(|| err(path, "sizes", "is missing; give the three axis sizes"))?;
-    let n: Vec<usize> = s
-        .split_whitespace()
-        .map(|t| t.parse::<usize>().ok().filter(|&v| v > 0))
-        .collect::<Option<_>>()
-        .filter(|v: &Vec<usize>| v.len() == 3)
-        .ok_or_else(|| {
-            err(
-                path,
-                "sizes",
-                format!("= {s:?}: expected three positive whole numbers"),
-            )
-        })?;
-    Ok([n[0], n[1], n[2]])
 }
 
 /// The voxel bytes: from the attached data or the `data file`, skipped and decoded.
@@ -294,12 +427,33 @@ fn data(
     Ok((out, src))
 }
 
-/// Read an NRRD volume (`.nrrd` or `.nhdr`); see the module documentation.
+/// Read an NRRD volume (`.nrrd` or `.nhdr`); see the module documentation. A 4D series
+/// is refused: [`read_nrrd_frame`] reads one of its volumes.
 pub fn read_nrrd(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
+    read_nrrd_frame(path, None)
+}
+
+/// [`read_nrrd`] of frame `frame` of a 4D series (`dimension: 4` with one non-spatial axis:
+/// `kinds` not domain or space, or `none` in `space directions`; DWI gradients, time
+/// points). `None` reads a 3D volume, or a series of one frame, and refuses a longer series.
+pub fn read_nrrd_frame(path: impl AsRef<Path>, frame: Option<usize>) -> Result<Volume, ImageError> {
     let path = path.as_ref();
     let bytes = orient::read(path)?;
     let h = parse_header(path, &bytes)?;
-    let dims = dims(path, &h)?;
+    let ax = axes(path, &h)?;
+    let k = match &ax.frame {
+        Some(fa) => fa.pick(path, &ax.sizes, frame)?,
+        None => {
+            if let Some(k) = frame.filter(|&k| k > 0) {
+                return Err(ImageError::Frame {
+                    path: path.to_path_buf(),
+                    dims: ax.sizes.iter().map(|&d| d as u64).collect(),
+                    detail: format!("--frame {k}: this file holds one 3D volume (frame 0)"),
+                });
+            }
+            0
+        }
+    };
     let ty = h.fields.get("type").ok_or_else(|| {
         err(
             path,
@@ -323,11 +477,21 @@ pub fn read_nrrd(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             ));
         }
     };
-    let (axes, origin, frame) = geometry(path, &h)?;
-    let need = orient::byte_count(path, FMT, "sizes", dims, dtype.size())?;
-    let (raw, _) = data(path, &h, bytes, need)?;
+    let (axes, origin, space) = geometry(path, &h, &ax)?;
+    let need = orient::byte_count(path, FMT, "sizes", &ax.sizes, dtype.size())?;
+    let (mut raw, _) = data(path, &h, bytes, need)?;
+    let mut note = None;
+    if let Some(fa) = &ax.frame {
+        let s = &ax.sizes;
+        raw = frame_bytes(&raw, [s[0], s[1], s[2], s[3]], fa.axis, k, dtype.size());
+        note = fa.note(path, k);
+    }
     let voxels = Voxels::from_bytes(dtype, &raw, big);
-    let affine = orient::affine(axes, origin, frame);
+    let affine = orient::affine(axes, origin, space);
     super::volume::check_affine(&affine, Some(path), "space directions / space origin")?;
-    Ok(Volume::new(dims, voxels, affine)?.with_source(path))
+    let vol = Volume::new(ax.dims(), voxels, affine)?.with_source(path);
+    Ok(match note {
+        Some(n) => vol.with_note(n),
+        None => vol,
+    })
 }

@@ -155,7 +155,7 @@ pub(crate) fn byte_count(
     path: &Path,
     format: &'static str,
     fieldname: &str,
-    dims: [usize; 3],
+    dims: &[usize],
     size: usize,
 ) -> Result<usize, ImageError> {
     dims.iter()

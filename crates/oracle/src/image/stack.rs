@@ -1,6 +1,8 @@
 //! Image stacks (ours: a folder of 2D slices, a multi-page TIFF) and raw volumes.
 
-use super::{Dtype, ImageError, Volume, Voxels, read_metaimage, read_nifti_frame, read_nrrd};
+use super::{
+    Dtype, ImageError, Volume, Voxels, read_metaimage_frame, read_nifti_frame, read_nrrd_frame,
+};
 use glam::{DAffine3, DMat3, DVec3};
 use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
@@ -26,7 +28,8 @@ pub struct LoadOptions {
     pub spacing: Option<[f64; 3]>,
     /// Read the file as raw voxels with this layout (whatever its extension).
     pub raw: Option<RawOptions>,
-    /// The 3D volume of a NIfTI or MGH series (`dim[4] > 1`, `nframes > 1`) or of a DICOM
+    /// The 3D volume of a NIfTI, MGH, NRRD or MetaImage series (`dim[4] > 1`, `nframes > 1`,
+    /// a 4D array with one non-spatial axis, `NDims = 4`) or of a DICOM
     /// series holding several volumes at the same slice positions to read, from 0 (`--frame`);
     /// a series without it is refused. Other files (and raw volumes) hold one volume: only 0
     /// is accepted.
@@ -129,14 +132,20 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError
                 || (path.is_dir() && super::is_dicom_folder(path)))
     };
     // Asked only for a frame above 0: `dicom()` may read the folder's files again.
-    let series = || opts.raw.is_none() && (named(path, &NIFTI) || named(path, &MGH) || dicom());
+    let series = || {
+        opts.raw.is_none()
+            && ([&NIFTI[..], &MGH, &NRRD, &METAIMAGE]
+                .iter()
+                .any(|e| named(path, e))
+                || dicom())
+    };
     if let Some(k) = opts.frame.filter(|&k| k > 0 && !series()) {
         return Err(ImageError::Frame {
             path: path.to_path_buf(),
             dims: vol.dims().iter().map(|&d| d as u64).collect(),
             detail: format!(
                 "--frame {k}: this file holds one 3D volume (frame 0); series are read from \
-                 NIfTI, MGH and DICOM"
+                 NIfTI, MGH, NRRD, MetaImage and DICOM"
             ),
         });
     }
@@ -185,6 +194,10 @@ fn named(path: &Path, ends: &[&str]) -> bool {
 const NIFTI: [&str; 6] = [".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz"];
 /// A FreeSurfer volume's endings.
 const MGH: [&str; 3] = [".mgh", ".mgz", ".mgh.gz"];
+/// An NRRD file's endings.
+const NRRD: [&str; 2] = [".nrrd", ".nhdr"];
+/// A MetaImage file's endings.
+const METAIMAGE: [&str; 2] = [".mha", ".mhd"];
 
 /// [`load_volume`] before the frame check and the NaN replacement.
 fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
@@ -212,10 +225,10 @@ fn read_volume(path: &Path, opts: &LoadOptions) -> Result<Volume, ImageError> {
         read_nifti_frame(path, opts.frame)
     } else if named(path, &MGH) {
         super::read_mgh(path, opts.frame)
-    } else if ends(".nrrd") || ends(".nhdr") {
-        read_nrrd(path)
-    } else if ends(".mha") || ends(".mhd") {
-        read_metaimage(path)
+    } else if named(path, &NRRD) {
+        read_nrrd_frame(path, opts.frame)
+    } else if named(path, &METAIMAGE) {
+        read_metaimage_frame(path, opts.frame)
     } else if ends(".tif") || ends(".tiff") {
         read_tiff_stack(path, opts.spacing)
     } else if ends(".dcm") || ends(".ima") || super::is_dicom_file(path) {

@@ -329,7 +329,7 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
         }
         stride = stride.saturating_mul(shape[a] as usize);
     }
-    let need = orient::byte_count(path, FMT, "shape", dims, dtype.size())?;
+    let need = orient::byte_count(path, FMT, "shape", &dims, dtype.size())?;
     let missing = missing_chunks(path, &array, &store, &level, version)?;
     let bytes = array
         .retrieve_array_subset(&array.subset_all())
