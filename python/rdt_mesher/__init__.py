@@ -413,6 +413,19 @@ def mesh_implicit(
         if not np.all(np.isfinite(v)):
             raise ValueError("mesh_implicit: f returned non-finite values")
         vals[s : s + len(i)] = v
+    # The contract of an implicit surface (as the CLI's): f > 0 on and outside the bounding
+    # sphere. A sample there at or below 0 means S crosses the sphere, and the mesh of the
+    # lattice would close it along the cube's faces: a surface f does not have.
+    g = np.stack(np.meshgrid(*ax, indexing="ij"), axis=-1).reshape(-1, 3, order="F")
+    bad = np.nonzero((np.linalg.norm(g - np.asarray(c), axis=1) >= r) & (vals <= 0.0))[0]
+    if bad.size:
+        q, fq = g[bad[0]], vals[bad[0]]
+        raise ValueError(
+            f"mesh_implicit: the surface crosses or touches the bounding sphere (center "
+            f"({c[0]}, {c[1]}, {c[2]}), radius {r}): f({q[0]}, {q[1]}, {q[2]}) = {fq}, but f must "
+            f"be > 0 on and outside the sphere ({bad.size} of the lattice's samples there are "
+            f"not); enlarge the radius or move the center"
+        )
     vol = vals.reshape((n, n, n), order="F")
     a = np.eye(4)
     a[[0, 1, 2], [0, 1, 2]] = h

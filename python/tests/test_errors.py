@@ -53,6 +53,11 @@ SPHERE = ((0, 0, 0), 2.0)
         (lambda: rdt_mesher.mesh_implicit("sphere", bounding_sphere=5), TypeError, "bounding_sphere"),
         (lambda: rdt_mesher.mesh_implicit(5, bounding_sphere=SPHERE), TypeError, "callable"),
         (lambda: rdt_mesher.mesh_implicit(lambda p: p[:, 0][:3], bounding_sphere=SPHERE, grid=8), ValueError, "values"),
+        # A callable whose surface crosses the bounding sphere: the lattice's mesh would close
+        # it along the cube (a unit sphere inside a sphere of radius 0.8 meshed as a cube's
+        # rounded edge with every check PASS, 2026-12-07); refused as the CLI refuses it.
+        (lambda: rdt_mesher.mesh_implicit(lambda p: np.linalg.norm(p, axis=1) - 1.0, bounding_sphere=((0, 0, 0), 0.8), grid=16), ValueError, "crosses or touches the bounding sphere"),
+        (lambda: rdt_mesher.mesh_implicit(lambda p: np.linalg.norm(p - [0.9, 0, 0], axis=1) - 0.5, bounding_sphere=((0, 0, 0), 1.0), grid=16), ValueError, "crosses or touches the bounding sphere"),
         (lambda: rdt_mesher.remesh(np.zeros((3, 2)), [[0, 1, 2]]), ValueError, "vertices"),
         (lambda: rdt_mesher.remesh(np.eye(3), [[0, 1, 5]]), ValueError, "index 5"),
         (lambda: rdt_mesher.remesh(np.eye(3), [[0.0, 1.0, 2.0]]), TypeError, "faces"),

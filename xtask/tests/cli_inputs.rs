@@ -142,3 +142,62 @@ fn verify_report_lists_are_bounded() {
     assert!(r["checks"].as_array().unwrap().len() > 10);
     assert!(r.get("checks_total").is_none());
 }
+
+/// `--labels all` with one label refused (its forecast over `--max-memory`): that label's
+/// error is one line naming it, the other label is meshed and written, and the run ends with
+/// a non-zero status naming the label left out (before, the first refusal ended the run and
+/// the labels after it were never meshed).
+#[test]
+fn labels_all_meshes_the_other_labels_when_one_is_refused() {
+    let dir =
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("labels-go-on-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 40i32;
+    let mut b = vec![0u8; (n * n * n) as usize];
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let at = (i + n * (j + n * k)) as usize;
+                let d2 = |c: i32| (i - c).pow(2) + (j - 20).pow(2) + (k - 20).pow(2);
+                if d2(14) <= 169 {
+                    b[at] = 1;
+                } else if d2(33) <= 9 {
+                    b[at] = 2;
+                }
+            }
+        }
+    }
+    std::fs::write(dir.join("lab.raw"), &b).unwrap();
+    let out = xtask_in(
+        &dir,
+        &[
+            "mesh",
+            "lab.raw",
+            "--dims",
+            "40,40,40",
+            "--dtype",
+            "u8",
+            "--labels",
+            "all",
+            "--size",
+            "0.3",
+            "--max-memory",
+            "30M",
+            "--no-verify",
+            "-q",
+            "-o",
+            "m.ply",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("error: label 1: --size 0.3: refused before meshing"),
+        "{err}"
+    );
+    assert!(err.contains("1 of 2 label(s) not meshed (1)"), "{err}");
+    assert!(!dir.join("m_label1.ply").exists());
+    assert!(dir.join("m_label2.ply").exists(), "{err}");
+}

@@ -580,6 +580,10 @@ fn topology_checks(r: &mut Report, mesh: &TriMesh, ml: usize) {
     let ok = degenerate.1 == 0;
     let what = "triangles with a repeated index or collinear corners (exact)";
     push_listed(r, "degenerate-triangles", ok, what, degenerate);
+    let short = (&t.short_edges[..], t.short_edges_total);
+    let what = "edges shorter than 1e-9 of the bounding-box diagonal (numerically coincident \
+                vertices: a refinement run away at a point; float32 files merge them)";
+    push_listed(r, "short-edges", short.1 == 0, what, short);
     r.push(
         "unreferenced-vertices",
         if t.unreferenced_vertices_total == 0 {

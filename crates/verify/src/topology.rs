@@ -55,7 +55,18 @@ pub struct Topology {
     pub degenerate_triangles: Vec<usize>,
     pub unreferenced_vertices_total: usize,
     pub unreferenced_vertices: Vec<u32>,
+    pub short_edges_total: usize,
+    /// Edges (sorted vertex pairs) shorter than [`SHORT_EDGE`] times the bounding-box
+    /// diagonal of the referenced vertices: numerically coincident ends.
+    pub short_edges: Vec<[u32; 2]>,
 }
+
+/// An edge shorter than this fraction of the mesh's extent joins numerically coincident
+/// vertices: no sampling of a surface puts vertices that close (a mesh's edges follow its
+/// size bound, or the surface's features), float32 files (`.glb`, `.gii`, `.stl`) merge
+/// them, and a cluster of such vertices is a refinement that ran away at one point (a label
+/// volume's mesh had 1,500 vertices within 2 of its 2,000 units, edges down to 9e-16).
+pub const SHORT_EDGE: f64 = 1e-9;
 
 impl Topology {
     /// No boundary edge.
@@ -208,6 +219,9 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
 
     let mut unreferenced = unreferenced_vertices(mesh);
     let unreferenced_total = unreferenced.len();
+    let mut short_edges = short_edge_pairs(mesh);
+    let short_edges_total = short_edges.len();
+    cap(max_listed, &mut short_edges);
 
     let (bt, nt, it, nvt) = (
         boundary_edges.len(),
@@ -238,6 +252,8 @@ pub fn analyze(mesh: &TriMesh, max_listed: usize) -> Topology {
         degenerate_triangles,
         unreferenced_vertices_total: unreferenced_total,
         unreferenced_vertices: unreferenced,
+        short_edges_total,
+        short_edges,
     }
 }
 
@@ -567,6 +583,33 @@ fn duplicate_vertex_pairs(mesh: &TriMesh) -> Vec<[u32; 2]> {
     }
     duplicate_vertices.sort_unstable();
     duplicate_vertices
+}
+
+/// The triangles' edges (sorted pairs, each once, sorted) shorter than [`SHORT_EDGE`] times
+/// the bounding-box diagonal of the vertices the triangles use; an edge of two equal indices
+/// is a degenerate triangle's, counted there.
+fn short_edge_pairs(mesh: &TriMesh) -> Vec<[u32; 2]> {
+    let (mut lo, mut hi) = (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY);
+    for t in &mesh.triangles {
+        for &v in t {
+            let p = mesh.vertices[v as usize];
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    let limit = SHORT_EDGE * (hi - lo).length();
+    let mut out: Vec<[u32; 2]> = mesh
+        .triangles
+        .iter()
+        .flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]])
+        .filter(|&[a, b]| {
+            a != b && mesh.vertices[a as usize].distance(mesh.vertices[b as usize]) < limit
+        })
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 /// Vertices used by no triangle.

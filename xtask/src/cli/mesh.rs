@@ -168,14 +168,21 @@ fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
     if labels.is_empty() {
         bail!("--labels all: {spec} has no label other than the background 0: nothing to mesh");
     }
-    let list: Vec<String> = labels.iter().map(|l| l.to_string()).collect();
+    let list: Vec<String> = labels.iter().take(20).map(|l| l.to_string()).collect();
+    let n = labels.len();
     eprintln!(
-        "note: {} label(s) to mesh: {}",
-        labels.len(),
-        list.join(", ")
+        "note: {n} label(s) to mesh: {}{}",
+        list.join(", "),
+        if n > 20 { ", ..." } else { "" }
     );
     let mut failures = Vec::new();
-    for l in labels {
+    // A label that cannot be meshed (a budget, an oracle error) is reported and the others
+    // are meshed: one line each, and the run's exit status says so at the end.
+    let mut errors: Vec<String> = Vec::new();
+    for (i, l) in labels.into_iter().enumerate() {
+        if n > 1 {
+            eprintln!("label {l} ({} of {n})", i + 1);
+        }
         let mut b = a.clone();
         b.labels = None;
         b.surface.label = Some(l);
@@ -205,9 +212,28 @@ fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
                 .display()
                 .to_string(),
         });
-        if let Verdict::Fail(f) = run(&b).with_context(|| format!("label {l}"))? {
-            failures.extend(f);
+        match run(&b) {
+            Ok(Verdict::Fail(f)) => failures.extend(f),
+            Ok(_) => {}
+            Err(e) => {
+                eprintln!("error: label {l}: {e:#}");
+                errors.push(l.to_string());
+            }
         }
+    }
+    if !errors.is_empty() {
+        bail!(
+            "--labels all: {} of {n} label(s) not meshed ({}{}); each error is above, the other \
+             labels' meshes are written",
+            errors.len(),
+            errors
+                .iter()
+                .take(20)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", "),
+            if errors.len() > 20 { ", ..." } else { "" }
+        );
     }
     Ok(if failures.is_empty() {
         Verdict::Pass
