@@ -218,7 +218,7 @@ fn bad_nrrd_files_give_one_error_line() {
     std::fs::write(&cut, &std::fs::read(&p).unwrap()[..len as usize - 1000]).unwrap();
     refused(&d, &cut, &["cut.nrrd", "truncated"]);
     edit(&p, "sizes: 24 20 16", "sizes: 24 20");
-    refused(&d, &p, &["blob_oblique.nrrd", "sizes", "three positive"]);
+    refused(&d, &p, &["blob_oblique.nrrd", "sizes", "3 positive"]);
     let p = copy("blob_oblique_gz.nrrd", &d);
     let b = std::fs::read(&p).unwrap();
     std::fs::write(&p, &b[..b.len() - 300]).unwrap();
@@ -312,7 +312,7 @@ fn bad_metaimage_files_give_one_error_line() {
     );
     copy("blob_oblique.raw", &d);
     edit(&p, "DimSize = 24 20 16", "DimSize = 24 20 x");
-    refused(&d, &p, &["DimSize", "three positive"]);
+    refused(&d, &p, &["DimSize", "3 positive"]);
 }
 
 #[test]

@@ -452,6 +452,11 @@ pub fn read_tiff_stack(path: &Path, spacing: Option<[f64; 3]>) -> Result<Volume,
     })?;
     let mut dec = Decoder::new(std::io::BufReader::new(file)).map_err(dec_err)?;
     let (w, h) = dec.dimensions().map_err(dec_err)?;
+    let unread = if spacing.is_none() {
+        declared_spacing(&mut dec)
+    } else {
+        None
+    };
     let mut out: Option<Voxels> = None;
     let mut nz = 0usize;
     loop {
@@ -536,5 +541,44 @@ pub fn read_tiff_stack(path: &Path, spacing: Option<[f64; 3]>) -> Result<Volume,
             nz: 1,
         });
     }
-    Ok(Volume::new([w as usize, h as usize, nz], voxels, affine)?.with_source(path))
+    let vol = Volume::new([w as usize, h as usize, nz], voxels, affine)?.with_source(path);
+    Ok(match unread {
+        Some(what) => vol.with_note(format!(
+            "{}: voxel spacing 1 x 1 x 1 (no --spacing): the file declares {what}, which this \
+             reader does not apply (its units are not certain); pass --spacing sx,sy,sz",
+            path.display()
+        )),
+        None => vol,
+    })
+}
+
+/// What page 0 of a TIFF says about its pixel size, for the note of a stack read without
+/// `--spacing` (before 2026-12-07 such a stack was meshed in voxel units without a word): the
+/// resolution tags and a `spacing` in the description (ImageJ's and tifffile's metadata).
+fn declared_spacing<R: std::io::Read + std::io::Seek>(
+    dec: &mut tiff::decoder::Decoder<R>,
+) -> Option<String> {
+    use tiff::decoder::ifd::Value;
+    use tiff::tags::Tag;
+    let mut found = Vec::new();
+    for (tag, name) in [
+        (Tag::XResolution, "XResolution"),
+        (Tag::YResolution, "YResolution"),
+    ] {
+        if let Ok(Some(Value::Rational(n, d))) = dec.find_tag(tag) {
+            found.push(format!("{name} {n}/{d}"));
+        }
+    }
+    if let Ok(text) = dec.get_tag_ascii_string(Tag::ImageDescription)
+        && let Some(at) = text.find("spacing")
+    {
+        let v: String = text[at..]
+            .chars()
+            .take_while(|&c| c != '\n' && c != ',')
+            .filter(|&c| c != '"')
+            .take(40)
+            .collect();
+        found.push(format!("`{}` in its description", v.trim()));
+    }
+    (!found.is_empty()).then(|| found.join(", "))
 }
