@@ -228,11 +228,6 @@ pub struct Stats {
     /// Refinement points not inserted because a sample point lies closer to them than half
     /// their ball's radius (an inexact construction, `crate::schedule::batch`).
     pub unsound_centers: usize,
-    /// Bad facets left unrefined on a sampled surface (an image) because their surface
-    /// Delaunay ball is below [`crate::schedule::batch::BELOW_RESOLUTION`] of the resolution
-    /// (`crate::schedule::batch`); the final checks report them.
-    #[serde(default)]
-    pub below_resolution: usize,
     /// Insertions forced by the manifold patch.
     pub manifold_insertions: usize,
     /// Rounds of neck reseeding (images: scan components split in Del_S(E), see

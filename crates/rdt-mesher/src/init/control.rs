@@ -21,18 +21,6 @@ fn control_points(s: &dyn Surface, opts: &MeshOptions) -> Vec<DVec3> {
         None => s.seed_points(opts.seed),
     };
     pts.retain(|p| p.is_finite());
-    // Seeds projected onto S from different starts can meet at one point (a near-critical
-    // point of an image's level set attracts the projections): keep the first of those
-    // closer than a hundredth of the oracle's precision, which would otherwise be an edge that
-    // nothing refines (a label volume's mesh got an edge of 9e-16).
-    let floor = 0.01 * s.tolerance();
-    let mut kept: Vec<DVec3> = Vec::with_capacity(pts.len());
-    for p in pts {
-        if kept.iter().all(|q| q.distance(p) >= floor) {
-            kept.push(p);
-        }
-    }
-    let pts = kept;
     let k = opts.max_control_points.max(4);
     if pts.len() <= k {
         return pts;

@@ -27,15 +27,6 @@ const NEAR_FACTOR: f64 = 3.0;
 /// Largest batch.
 const MAX_BATCH: usize = 32;
 
-/// On a sampled surface (an image, `MeshOptions::resolution` h), a bad facet whose surface
-/// Delaunay ball has a radius below this fraction of h is not refined: the refinement's
-/// termination (section 6.1) rests on a positive local feature size, and where the trilinear
-/// level set comes within rounding of a critical point the angle criterion graded the sample
-/// down towards it without end in sight: a real label volume (a Voronoi partition of 192^3 at
-/// 8 x 8 x 40) got 1,500 vertices within 2 units of one point, edges down to 1e-9, which float32
-/// files merge (a non-manifold mesh). Such facets stay, and the final checks report them.
-pub(crate) const BELOW_RESOLUTION: f64 = 1e-4;
-
 /// A batch point's conflict zone, and the `cell_info` of the cells its insertion will create
 /// (`Cavity::new_cells` order, which is `Changes::created` order).
 #[derive(Default)]
@@ -136,13 +127,6 @@ impl Scheduler {
                 rf = m.resolve_lazy(e.idx(), rf)?;
             }
             if e.forced() && rf.radius < m.manifold_floor(rf.center) {
-                continue;
-            }
-            if m.opts
-                .resolution
-                .is_some_and(|h| rf.radius < BELOW_RESOLUTION * h)
-            {
-                m.stats.below_resolution += 1;
                 continue;
             }
             // A point close to one already in the batch has overlapping conflict zones.
