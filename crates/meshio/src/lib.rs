@@ -130,8 +130,9 @@ pub enum MeshIoError {
     #[error("{path}: the file is empty; expected a {format} mesh: re-export or re-download it")]
     Empty { path: PathBuf, format: Format },
     #[error(
-        "{path}: not a {format} mesh: {reason}; check that the file really is {format} \
-         (the format is chosen from the extension)"
+        "{path}: not {} {format} mesh: {reason}; check that the file really is {format} \
+         (the format is chosen from the extension)",
+        article(&format.to_string())
     )]
     NotAMesh {
         path: PathBuf,
@@ -628,3 +629,12 @@ pub(crate) fn parse_f64(tok: &str) -> Option<f64> {
 }
 
 pub(crate) use check_vertices as check_vertex_coords;
+
+/// "an" before a format's initialism read letter by letter when its first letter's name
+/// starts with a vowel sound (an OBJ, an STL, an OFF), else "a" (a PLY, a GLB).
+fn article(name: &str) -> &'static str {
+    match name.chars().next().map(|c| c.to_ascii_uppercase()) {
+        Some('A' | 'E' | 'F' | 'H' | 'I' | 'L' | 'M' | 'N' | 'O' | 'R' | 'S' | 'X') => "an",
+        _ => "a",
+    }
+}

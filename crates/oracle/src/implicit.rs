@@ -79,7 +79,7 @@ pub enum ImplicitError {
     )]
     NaN { point: [f64; 3] },
     #[error(
-        "no surface inside the bounding sphere: f >= 0 at all {samples} points of a {n}^3 grid (step {step}); the solid f < 0 is empty or thinner than the step: refine with `seed_grid` or pass seed points"
+        "no surface inside the bounding sphere: f >= 0 at all {samples} points of a {n}^3 grid (step {step}); the solid f < 0 is empty or thinner than the step: shrink the bounding sphere around the surface (the step scales with it; in the library, `ImplicitSurface::seed_grid` refines the grid)"
     )]
     NoSurfaceInside { n: usize, samples: usize, step: f64 },
     #[error("invalid {name} = {value}: it must be finite and > 0")]

@@ -52,6 +52,7 @@ pub mod quality;
 pub mod scan_components;
 pub mod scan_sim;
 pub mod short_loops;
+pub mod solid;
 mod surface_checks;
 pub mod topology;
 
@@ -467,6 +468,7 @@ fn run(mesh: &TriMesh, surface: Option<&dyn Surface>, opts: &Options) -> Report 
 
     opts.stage("quality");
     quality_checks(&mut r, mesh, opts);
+    solid_check(&mut r, mesh, &bvh);
 
     let Some(surface) = surface else {
         return r;
@@ -627,6 +629,56 @@ fn self_intersection_checks(
             "disabled by options".into(),
         );
     }
+}
+
+/// `solid`: each component of a closed, consistently oriented manifold without
+/// self-intersections bounds the solid on the side its facets face away from (see
+/// [`solid`]). Before 2026-12-07 an inside-out mesh, or two nested spheres facing the same
+/// way, passed `verify` (CGAL's `is_outward_oriented` fails the first).
+fn solid_check(r: &mut Report, mesh: &TriMesh, bvh: &bvh::TriangleBvh) {
+    let intersecting = r
+        .self_intersections
+        .as_ref()
+        .is_some_and(|si| si.pairs_total > 0);
+    let Some(t) = r
+        .topology
+        .as_ref()
+        .filter(|t| t.is_closed_oriented_manifold() && !intersecting)
+    else {
+        r.push(
+            "solid",
+            Status::Info,
+            "not measured: not a closed, consistently oriented manifold without \
+             self-intersections"
+                .into(),
+        );
+        return;
+    };
+    let (probed, wrong) = solid::wrong_sides(mesh, t, bvh);
+    let detail = match wrong.first() {
+        None => format!(
+            "winding number 1 behind and 0 in front of each of the {probed} component(s) probed: \
+             the facets face out of the solid"
+        ),
+        Some(w) => format!(
+            "{} of {probed} component(s) face the wrong way: winding number {:.2} behind and \
+             {:.2} in front of triangle {} at ({:.4}, {:.4}, {:.4}) (want 1 and 0: {}); reverse \
+             the triangles of the components that face into the solid",
+            wrong.len(),
+            w.behind,
+            w.in_front,
+            w.first_triangle,
+            w.at.x,
+            w.at.y,
+            w.at.z,
+            if w.behind.round() == 0.0 && w.in_front.round() == -1.0 {
+                "inside out"
+            } else {
+                "nested in a component that faces the same way"
+            }
+        ),
+    };
+    r.push("solid", pass_fail(wrong.is_empty()), detail);
 }
 
 /// The triangles whose smallest angle is below `min_deg` (degenerate ones included) and the

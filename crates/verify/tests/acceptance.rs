@@ -281,3 +281,57 @@ fn progress_names_each_stage_in_order() {
     verify::check(&m, &o);
     assert_eq!(*heard.lock().unwrap(), all[..3]);
 }
+
+/// `solid`: an inside-out sphere and two nested spheres facing the same way fail; a hollow
+/// shell (the cavity facing inward) and two disjoint spheres pass; both failures passed
+/// `verify` before (issue found by a CGAL user's broken inputs, 2026-12-07).
+#[test]
+fn each_component_must_face_out_of_the_solid() {
+    let flip = |m: &TriMesh| TriMesh {
+        vertices: m.vertices.clone(),
+        triangles: m.triangles.iter().map(|&[a, b, c]| [a, c, b]).collect(),
+    };
+    let outer = uv_sphere(DVec3::ZERO, 1.0, 16, 24);
+    let inner = uv_sphere(DVec3::ZERO, 0.5, 12, 18);
+    let far = uv_sphere(DVec3::new(3.0, 0.0, 0.0), 0.5, 12, 18);
+    let r = check(&outer, &opts());
+    assert_status(&r, "solid", Status::Pass);
+    let r = check(&flip(&outer), &opts());
+    assert_status(&r, "solid", Status::Fail);
+    assert!(r.summary().contains("inside out"), "{}", r.summary());
+    let r = check(&union(&[outer.clone(), inner.clone()]), &opts());
+    assert_status(&r, "solid", Status::Fail);
+    assert!(r.summary().contains("nested"), "{}", r.summary());
+    let r = check(&union(&[outer.clone(), flip(&inner)]), &opts());
+    assert_status(&r, "solid", Status::Pass);
+    let r = check(&union(&[outer, far]), &opts());
+    assert_status(&r, "solid", Status::Pass);
+    // Not a closed manifold: not measured.
+    let mut open = cube();
+    open.triangles.pop();
+    assert_status(&check(&open, &opts()), "solid", Status::Info);
+}
+
+/// `short-edges`: an edge under 1e-9 of the extent (numerically one point) fails, even where
+/// every other check passes; the cube passes.
+#[test]
+fn numerically_coincident_vertices_fail_short_edges() {
+    assert_status(&check(&cube(), &opts()), "short-edges", Status::Pass);
+    // A sphere's first triangle moved to a copy of its first corner 1e-12 away, the two
+    // corners joined by a sliver triangle.
+    let mut m = uv_sphere(DVec3::ZERO, 1.0, 8, 12);
+    let [a, b, c] = m.triangles[0];
+    let p = m.vertices[a as usize] + DVec3::new(1e-12, 0.0, 0.0);
+    m.vertices.push(p);
+    let q = (m.vertices.len() - 1) as u32;
+    m.triangles[0] = [q, b, c];
+    m.triangles.push([a, q, c]);
+    let r = check(&m, &opts());
+    assert_status(&r, "short-edges", Status::Fail);
+    assert_eq!(
+        r.topology.as_ref().unwrap().short_edges_total,
+        1,
+        "{}",
+        r.summary()
+    );
+}

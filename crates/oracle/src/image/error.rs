@@ -67,7 +67,7 @@ pub enum ImageError {
         actual: u64,
     },
     #[error(
-        "{}: datatype {field} is not supported; convert the image to u8, i8, u16, i16, u32, i32, f32 or f64",
+        "{}: {field} is not supported; convert the image to u8, i8, u16, i16, u32, i32, f32 or f64",
         path.display()
     )]
     UnsupportedType { path: PathBuf, field: String },

@@ -114,8 +114,8 @@ pub enum PipelineError {
     },
     /// The forecast of the requested size exceeds a budget: refused before meshing.
     #[error(
-        "{input}: the forecast is {forecast}, over {budget}: sigma = {fits} fits (or raise \
-         Request::max_vertices / max_memory)"
+        "{input}: the forecast is {forecast}, over {budget}: sigma = {fits} fits (or raise the \
+         budget: --max-vertices / --max-memory, Python's max_vertices= / max_memory=)"
     )]
     OverBudget {
         /// The input's name.
