@@ -207,10 +207,20 @@ def _volume(volume) -> np.ndarray:
     if volume.dtype.kind not in "biuf":
         raise TypeError(f"volume: dtype {volume.dtype} is not supported; use bool, integers or floats")
     if volume.dtype.kind in "iu" and volume.dtype.itemsize == 8:
+        # 64-bit integers (connectomics label ids): held exactly by the narrowest type that
+        # can, int32, uint32, else float64 up to 2^53; beyond, consecutive ids would merge.
         lo, hi = (int(volume.min()), int(volume.max())) if volume.size else (0, 0)
-        if lo < -(2**31) or hi >= 2**31:
-            raise ValueError("volume: 64-bit integers outside the int32 range; cast to float64")
-        volume = volume.astype(np.int32, order="K")
+        if -(2**31) <= lo and hi < 2**31:
+            volume = volume.astype(np.int32, order="K")
+        elif 0 <= lo and hi < 2**32:
+            volume = volume.astype(np.uint32, order="K")
+        elif max(-lo, hi) <= 9 * 10**15:
+            volume = volume.astype(np.float64, order="K")
+        else:
+            raise ValueError(
+                f"volume: 64-bit integers up to {max(-lo, hi)}: beyond 9e15 float64 cannot tell "
+                "consecutive ids apart; relabel with smaller ids (numpy.unique(ids, return_inverse=True))"
+            )
     if not volume.dtype.isnative:
         volume = volume.astype(volume.dtype.newbyteorder("="), order="K")
     if volume.dtype == np.float16:

@@ -60,6 +60,27 @@ def test_labels_all_one_mesh_per_label():
     assert np.array_equal(one.vertices, out[5].vertices)
 
 
+def test_uint64_label_ids_are_exact():
+    """Connectomics ids are uint64: those a uint32 holds mesh as the uint32 volume does (they
+    were refused before), larger ones up to 9e15 through float64 (exact), and beyond that the
+    error says why (consecutive ids would merge)."""
+    vol = np.zeros((24, 24, 24), dtype=np.uint64)
+    big = 2**32 - 7
+    vol[3:11, 3:11, 3:11] = big
+    vol[13:21, 13:21, 13:21] = 5
+    want = rdt_mesher.mesh_image(vol.astype(np.uint32), label=big, size=1.0)
+    got = rdt_mesher.mesh_image(vol, label=big, size=1.0)
+    assert np.array_equal(want.vertices, got.vertices) and np.array_equal(want.faces, got.faces)
+    huge = vol.copy()
+    huge[huge == big] = 2**45 + 1
+    out = rdt_mesher.mesh_image(huge, labels="all", size=1.0)
+    assert sorted(out) == [5, 2**45 + 1]
+    assert np.array_equal(out[5].vertices, rdt_mesher.mesh_image(vol, label=5, size=1.0).vertices)
+    huge[huge == 5] = 2**60
+    with pytest.raises(ValueError, match="beyond 9e15"):
+        rdt_mesher.mesh_image(huge, labels="all", size=1.0)
+
+
 @pytest.mark.parametrize("dtype", [np.bool_, np.uint8, np.int16, np.uint16, np.int32, np.float32, np.float64])
 def test_every_dtype(dtype):
     vol = ball_volume(24, 8.0) > 0

@@ -178,6 +178,11 @@ pub enum ImageError {
         show(path)
     )]
     NotLabels { path: Option<PathBuf>, value: f64 },
+    #[error(
+        "{}label {value} is beyond 9e15, where float64 values cannot tell consecutive integers apart; relabel the image with smaller ids (e.g. numpy.unique(ids, return_inverse=True))",
+        show(path)
+    )]
+    LabelTooLarge { path: Option<PathBuf>, value: f64 },
     #[error("{}: {detail}", path.display())]
     Dicom { path: PathBuf, detail: String },
     #[error("{}: no PNG or TIFF slices found in the folder; put the 2D slices (*.png, *.tif, *.tiff) there", dir.display())]

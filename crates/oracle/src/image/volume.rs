@@ -536,8 +536,14 @@ impl Volume {
         };
         for (x, c) in raw {
             let v = self.slope * x + self.inter;
-            if v.fract() != 0.0 || v.abs() > 9.0e15 {
+            if v.fract() != 0.0 {
                 return Err(ImageError::NotLabels {
+                    path: self.source.clone(),
+                    value: v,
+                });
+            }
+            if v.abs() > 9.0e15 {
+                return Err(ImageError::LabelTooLarge {
                     path: self.source.clone(),
                     value: v,
                 });

@@ -32,13 +32,16 @@ pub fn genus_summary(genera: &[Option<i64>]) -> String {
 }
 
 /// Cut every array of objects longer than `limit` inside `v` to its first `limit` entries and
-/// add `KEY_total` beside it (arrays of numbers, such as histograms, are kept whole).
+/// add `KEY_total` beside it (arrays of numbers, such as histograms, are kept whole, and so
+/// is every `checks` array: the certificate's checks are never cut; with 22 checks since
+/// 2026-12-07 a limit of 20 dropped `scan-genus` and the last check from image reports).
 pub fn bound_lists(v: &mut Value, limit: usize) {
     match v {
         Value::Object(map) => {
             let mut totals = Vec::new();
             for (k, item) in map.iter_mut() {
                 if let Value::Array(a) = item
+                    && k != "checks"
                     && a.len() > limit
                     && a.iter().any(Value::is_object)
                 {
@@ -194,10 +197,15 @@ mod tests {
     fn long_lists_of_objects_are_cut_with_their_total() {
         let comps: Vec<Value> = (0..50).map(|i| json!({ "genus": i })).collect();
         let hist: Vec<Value> = (0..50).map(|i| json!(i)).collect();
-        let mut v = json!({ "topology": { "components": comps }, "histogram": hist });
+        let checks: Vec<Value> = (0..30).map(|i| json!({ "name": i })).collect();
+        let mut v = json!({ "topology": { "components": comps }, "histogram": hist,
+                            "verify": { "checks": checks } });
         bound_lists(&mut v, 20);
         assert_eq!(v["topology"]["components"].as_array().unwrap().len(), 20);
         assert_eq!(v["topology"]["components_total"], 50);
         assert_eq!(v["histogram"].as_array().unwrap().len(), 50);
+        // The certificate's checks are never cut.
+        assert_eq!(v["verify"]["checks"].as_array().unwrap().len(), 30);
+        assert!(v["verify"].get("checks_total").is_none());
     }
 }
