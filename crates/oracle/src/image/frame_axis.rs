@@ -63,6 +63,25 @@ impl FrameAxis {
     }
 }
 
+/// The frame to read of a file whose frames' axis is `axis` ([`FrameAxis::pick`]), or of a
+/// file holding one 3D volume (`None`): frame 0, and `--frame` above 0 an error.
+pub(crate) fn pick(
+    axis: Option<&FrameAxis>,
+    path: &Path,
+    sizes: &[usize],
+    frame: Option<usize>,
+) -> Result<usize, ImageError> {
+    match (axis, frame) {
+        (Some(fa), _) => fa.pick(path, sizes, frame),
+        (None, Some(k)) if k > 0 => Err(ImageError::Frame {
+            path: path.to_path_buf(),
+            dims: sizes.iter().map(|&d| d as u64).collect(),
+            detail: format!("--frame {k}: this file holds one 3D volume (frame 0)"),
+        }),
+        (None, _) => Ok(0),
+    }
+}
+
 /// The bytes of frame `k` along `axis` of an array of `sizes` (axis 0 fastest) whose
 /// elements are `elem` bytes: the other three axes in their order. `raw` holds exactly the
 /// whole array.

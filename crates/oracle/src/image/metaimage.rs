@@ -12,7 +12,7 @@
 //! space is LPS+ whatever `AnatomicalOrientation` says, so the axes and offset are mapped to
 //! the RAS+ world of the NIfTI reader by negating x and y (see [`super::orient`]).
 
-use super::frame_axis::{FrameAxis, frame_bytes};
+use super::frame_axis::{self, FrameAxis, frame_bytes};
 use super::orient::{self, Frame};
 use super::{Dtype, ImageError, Volume, Voxels};
 use glam::DVec3;
@@ -309,19 +309,7 @@ fn layout(
         frames: sizes[3],
         label: "the fourth of NDims = 4".into(),
     });
-    let k = match &series {
-        Some(fa) => fa.pick(path, &sizes, frame)?,
-        None => {
-            if let Some(k) = frame.filter(|&k| k > 0) {
-                return Err(ImageError::Frame {
-                    path: path.to_path_buf(),
-                    dims: sizes.iter().map(|&d| d as u64).collect(),
-                    detail: format!("--frame {k}: this file holds one 3D volume (frame 0)"),
-                });
-            }
-            0
-        }
-    };
+    let k = frame_axis::pick(series.as_ref(), path, &sizes, frame)?;
     Ok((sizes, series, k))
 }
 

@@ -10,7 +10,7 @@
 //! (`kinds` other than domain or space, or `none` as its space direction: Slicer's DWI
 //! volumes, time series) are read; every other case is an error naming the field and the fix.
 
-use super::frame_axis::{FrameAxis, frame_bytes};
+use super::frame_axis::{self, FrameAxis, frame_bytes};
 use super::orient::{self, Frame};
 use super::{Dtype, ImageError, Volume, Voxels};
 use glam::DVec3;
@@ -441,19 +441,7 @@ pub fn read_nrrd_frame(path: impl AsRef<Path>, frame: Option<usize>) -> Result<V
     let bytes = orient::read(path)?;
     let h = parse_header(path, &bytes)?;
     let ax = axes(path, &h)?;
-    let k = match &ax.frame {
-        Some(fa) => fa.pick(path, &ax.sizes, frame)?,
-        None => {
-            if let Some(k) = frame.filter(|&k| k > 0) {
-                return Err(ImageError::Frame {
-                    path: path.to_path_buf(),
-                    dims: ax.sizes.iter().map(|&d| d as u64).collect(),
-                    detail: format!("--frame {k}: this file holds one 3D volume (frame 0)"),
-                });
-            }
-            0
-        }
-    };
+    let k = frame_axis::pick(ax.frame.as_ref(), path, &ax.sizes, frame)?;
     let ty = h.fields.get("type").ok_or_else(|| {
         err(
             path,
