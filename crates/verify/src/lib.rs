@@ -44,6 +44,7 @@ pub mod bvh;
 pub mod certificate;
 pub mod data_support;
 pub mod distance;
+pub mod grid_scan;
 mod hypothesis;
 pub mod intersect;
 pub mod level_set;
@@ -164,6 +165,12 @@ pub struct Options {
     /// `quality`, `distances`, `certificate`, `components`): a front end's progress lines.
     /// Default: none.
     pub progress: Option<Progress>,
+    /// Implicit functions: scan `f` on grids of this many nodes per axis and twice as fine
+    /// ([`grid_scan`]; `grid_scan::DEFAULT_NODES` in `mesh` and `verify`): a point of S on
+    /// each scan component joins the `components-sampled` seeds, and the `grid-genus` check
+    /// compares the total genus. Ignored for images (their own voxel scan counts). Default
+    /// `None`: no scan.
+    pub grid_scan: Option<usize>,
 }
 
 /// A stage callback of [`Options::progress`].
@@ -208,6 +215,7 @@ impl Default for Options {
             sliver_points: Vec::new(),
             dropped_triangles: Vec::new(),
             progress: None,
+            grid_scan: None,
         }
     }
 }
@@ -260,7 +268,7 @@ pub struct Check {
     /// `components`, `duplicate-vertices`, `degenerate-triangles`, `unreferenced-vertices`,
     /// `self-intersections`, `angles`, `radius-edge`, `area-volume`, `hausdorff`, `normals`,
     /// `loose-epsilon`, `components-sampled`, `scan-topology`, `scan-genus`, `theorem-4.7`,
-    /// `data-support`, `input-topology`
+    /// `data-support`, `input-topology`, `grid-genus`
     /// (the mesher's, for a closed input mesh).
     pub name: String,
     pub status: Status,

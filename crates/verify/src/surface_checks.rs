@@ -43,7 +43,13 @@ pub(crate) fn against(
     crate::hypothesis::reconcile(r, opts);
 
     opts.stage("components");
-    components_sampled_check(r, mesh, bvh, surface, opts, &balls);
+    let grid = crate::grid_scan::run(surface, opts);
+    let extra = grid.as_ref().and_then(|g| g.as_ref().ok());
+    let extra = extra.map_or(&[][..], |g| &g.seeds[..]);
+    components_sampled_check(r, mesh, bvh, surface, opts, &balls, extra);
+    if let Some(g) = &grid {
+        crate::grid_scan::genus_check(r, mesh, g, opts);
+    }
 }
 
 /// Mesh <-> S distances and the `hausdorff` check; gives the normal deviation and the
@@ -454,11 +460,13 @@ fn components_sampled_check(
     surface: &dyn Surface,
     opts: &Options,
     balls: &[certificate::SurfaceBall],
+    grid_seeds: &[DVec3],
 ) {
-    let seeds = match &opts.component_seeds {
+    let mut seeds = match &opts.component_seeds {
         Some(s) => s.clone(),
         None => surface.seed_points(opts.seed),
     };
+    seeds.extend_from_slice(grid_seeds);
     let mut radius: Vec<f64> = mesh
         .triangles
         .iter()

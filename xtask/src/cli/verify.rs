@@ -129,6 +129,8 @@ pub fn run(a: &VerifyArgs) -> Result<()> {
             let opts = verify::Options {
                 surface_samples: samples,
                 surface_samples_source: source,
+                grid_scan: (opened.kind == rdt_mesher::pipeline::InputKind::Implicit)
+                    .then_some(verify::grid_scan::DEFAULT_NODES),
                 ..opts
             };
             let mut r = verify::check_against(&mesh, opened.surface(), &opts);

@@ -15,7 +15,7 @@ use std::time::Instant;
 const MAX_RAY_ROUNDS: u32 = 16;
 
 /// Control points: the oracle's seeds (or the user's), thinned by farthest-point selection.
-fn control_points(s: &dyn Surface, opts: &MeshOptions) -> Vec<DVec3> {
+pub(crate) fn control_points(s: &dyn Surface, opts: &MeshOptions) -> Vec<DVec3> {
     let mut pts = match &opts.control_points {
         Some(p) => p.clone(),
         None => s.seed_points(opts.seed),

@@ -2,6 +2,7 @@
 //! facets (section 6.2, with section 6.4.2's bipolar variant: `persistent`).
 
 mod control;
+pub(crate) use control::control_points;
 mod persistent;
 
 pub use persistent::{PersistentInit, persistent_facet_points, persistent_facets};

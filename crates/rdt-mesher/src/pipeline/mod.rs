@@ -29,6 +29,7 @@
 mod angle_sources;
 mod auto_size;
 mod budget;
+mod component_seeds;
 mod error;
 mod forecast;
 mod handles;

@@ -84,7 +84,7 @@ pub fn plan<'p, 's>(
     let mut notes = input.notes.clone();
     let budgets = Budgets::of(request);
     let (mode, forecast) = size_mode(input, request, &budgets, &mut notes)?;
-    let options = MeshOptions {
+    let mut options = MeshOptions {
         criteria: Criteria {
             size: match mode {
                 Mode::Constant(s) => Some(Sizing::Constant(s)),
@@ -109,6 +109,10 @@ pub fn plan<'p, 's>(
         cancel: request.cancel.clone(),
         spatial_order_from: MeshOptions::default().spatial_order_from,
     };
+    if let Some((control, cap)) = super::component_seeds::added(input, &options, &mut notes) {
+        options.control_points = Some(control);
+        options.max_control_points = cap;
+    }
     Ok(Plan {
         input,
         request,
@@ -633,6 +637,8 @@ fn verify_options(
             .map(|d| d.center)
             .collect(),
         dropped_triangles: out.dropped_triangles.clone(),
+        grid_scan: (input.kind == super::InputKind::Implicit)
+            .then_some(verify::grid_scan::DEFAULT_NODES),
         ..Default::default()
     }
 }
