@@ -55,7 +55,10 @@ fn a_component_between_seed_grid_nodes_is_meshed() {
         let pieces = verify::topology::vertex_components(&out.mesh);
         assert_eq!(pieces.len(), 2, "size {size}");
         let small = out.mesh.vertices.iter().filter(|v| v.x > 3.0).count();
-        assert!(small >= 4, "size {size}: {small} vertices on the small sphere");
+        assert!(
+            small >= 4,
+            "size {size}: {small} vertices on the small sphere"
+        );
         let r = out.report.as_ref().unwrap();
         assert!(out.verdict.passed(), "size {size}: {}", r.summary());
         assert_eq!(check(r, "grid-genus").status, Status::Pass);
@@ -108,11 +111,19 @@ fn verify_compares_with_the_grid_scan() {
     let r = against(&unit, BIG_SMALL, [0.0; 3], 6.0);
     let c = check(&r, "components-sampled");
     assert_eq!(c.status, Status::Fail, "{}", c.detail);
-    assert!(c.detail.contains("(3.9") || c.detail.contains("(4.0"), "{}", c.detail);
-    // Without the scan the seeds miss it (the old verdict).
+    assert!(
+        c.detail.contains("(3.9") || c.detail.contains("(4.0"),
+        "{}",
+        c.detail
+    );
+    // The S -> mesh side of `hausdorff` counts it: the small sphere is about 3 away.
+    let s2m = |r: &verify::Report| r.geometry.as_ref().unwrap().surface_to_mesh.max;
+    assert!((2.9..3.1).contains(&s2m(&r)), "{}", s2m(&r));
+    // Without the scan the seeds and the S -> mesh samples miss it (the old verdict).
     let input = open(BIG_SMALL, [0.0; 3], 6.0);
     let plain = verify::check_against(&unit, input.surface(), &Default::default());
     assert_eq!(check(&plain, "components-sampled").status, Status::Pass);
+    assert!(s2m(&plain) < 0.1, "{}", s2m(&plain));
     assert!(plain.checks.iter().all(|c| c.name != "grid-genus"));
 
     let r = against(&unit, torus, [0.0; 3], 1.5);

@@ -368,6 +368,10 @@ fn mesh_samples(
 
 /// S -> mesh statistics of the given samples of S (exact nearest triangle).
 pub fn surface_to_mesh(dist: &MeshDistance<'_>, samples: &[DVec3]) -> DistanceStats {
+    surface_to_mesh_acc(dist, samples).stats()
+}
+
+fn surface_to_mesh_acc(dist: &MeshDistance<'_>, samples: &[DVec3]) -> Acc {
     let per_chunk: Vec<Acc> = samples
         .par_chunks(4096)
         .map(|ps| {
@@ -382,7 +386,7 @@ pub fn surface_to_mesh(dist: &MeshDistance<'_>, samples: &[DVec3]) -> DistanceSt
     for a in &per_chunk {
         acc.merge(a);
     }
-    acc.stats()
+    acc
 }
 
 /// Mesh -> S statistics of samples on the triangles and the number of failed projections.
@@ -492,7 +496,7 @@ pub fn geometry(
     per_edge: usize,
     surface_samples: Option<&[DVec3]>,
 ) -> Geometry {
-    geometry_labelled(mesh, bvh, surface, per_edge, surface_samples, None)
+    geometry_labelled(mesh, bvh, surface, per_edge, surface_samples, None, None)
 }
 
 /// [`geometry`] with a description of the given samples for the report.
@@ -503,6 +507,7 @@ pub(crate) fn geometry_labelled(
     per_edge: usize,
     surface_samples: Option<&[DVec3]>,
     label: Option<&str>,
+    scan: Option<&[DVec3]>,
 ) -> Geometry {
     let trusted = data_defined_facets(mesh, surface);
     let trusted = trusted.as_deref();
@@ -539,14 +544,32 @@ pub(crate) fn geometry_labelled(
             },
             None,
         ),
-        (None, _) => (
-            s2m.stats(),
-            format!(
-                "{} points of S found for the mesh samples (only the parts of S near the mesh)",
-                s2m.n
+        (None, _) => match scan {
+            None => (
+                s2m.stats(),
+                format!(
+                    "{} points of S found for the mesh samples (only the parts of S near the \
+                     mesh)",
+                    s2m.n
+                ),
+                None,
             ),
-            None,
-        ),
+            // The grid scan's points reach the parts of S away from the mesh too.
+            Some(pts) => {
+                let mut all = s2m;
+                all.merge(&surface_to_mesh_acc(&dist, pts));
+                (
+                    all.stats(),
+                    format!(
+                        "{} points of S found for the mesh samples and {} from the grid scan of \
+                         f (its fine grid's crossings projected onto S)",
+                        s2m.n,
+                        pts.len()
+                    ),
+                    None,
+                )
+            }
+        },
     };
     let mesh_to_surface = m2s.stats();
     let m2s_max = mesh_to_surface.max;

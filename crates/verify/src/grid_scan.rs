@@ -42,13 +42,20 @@ pub struct GridScan {
     pub fine: ImageSurface,
     /// Step of the fine grid (half the coarse one).
     pub step: f64,
-    /// Surface components and total genus of the coarse and the fine scan.
+    /// Surface components and total genus of the coarse scan.
     pub coarse_figures: (usize, Option<usize>),
+    /// The same of the fine scan.
     pub fine_figures: (usize, Option<usize>),
     /// One point of S per fine scan component (its seed projected onto S by the oracle);
     /// components whose seed did not project are left out and counted in `unprojected`.
     pub seeds: Vec<DVec3>,
+    /// Fine scan components whose point did not project onto S within two steps.
     pub unprojected: usize,
+    /// Points of S from the fine grid: its edge crossings (the marching-cubes vertices of the
+    /// trilinear level set) projected onto S by the oracle, those that land within two steps;
+    /// the S -> mesh distances of `hausdorff` are measured from them too, so that parts of S
+    /// away from the mesh count.
+    pub surface_points: Vec<DVec3>,
 }
 
 impl GridScan {
@@ -92,11 +99,7 @@ fn sample(surface: &dyn Surface, n: usize) -> Result<(Volume, f64), ScanError> {
     let lo = bs.center - DVec3::splat(bs.radius);
     let affine = DAffine3::from_mat3_translation(DMat3::from_diagonal(DVec3::splat(step)), lo);
     let node = |p: usize| {
-        let ijk = DVec3::new(
-            (p % n) as f64,
-            ((p / n) % n) as f64,
-            (p / (n * n)) as f64,
-        );
+        let ijk = DVec3::new((p % n) as f64, ((p / n) % n) as f64, (p / (n * n)) as f64);
         affine.transform_point3(ijk)
     };
     let values: Vec<f32> = (0..n * n * n)
@@ -154,10 +157,7 @@ fn figures(img: &ImageSurface) -> (usize, Option<usize>) {
 
 /// Scan `surface`'s function on grids of `n` and `2n - 1` nodes per axis.
 pub fn scan(surface: &dyn Surface, n: usize) -> Result<GridScan, ScanError> {
-    let (coarse, fine) = rayon::join(
-        || grid_image(surface, n),
-        || grid_image(surface, 2 * n - 1),
-    );
+    let (coarse, fine) = rayon::join(|| grid_image(surface, n), || grid_image(surface, 2 * n - 1));
     let (fine, step) = fine?;
     let coarse_figures = match coarse {
         Ok((img, _)) => figures(&img),
@@ -171,10 +171,24 @@ pub fn scan(surface: &dyn Surface, n: usize) -> Result<GridScan, ScanError> {
         .par_iter()
         .zip(&topo.component_vanishing)
         .filter(|(_, v)| !**v)
-        .map(|(p, _)| surface.project(*p).filter(|q| (*q - *p).length() <= 2.0 * step))
+        .map(|(p, _)| {
+            surface
+                .project(*p)
+                .filter(|q| (*q - *p).length() <= 2.0 * step)
+        })
         .collect();
     let unprojected = projected.iter().filter(|p| p.is_none()).count();
+    let surface_points = crate::level_set::LevelSet::new(&fine)
+        .edge_crossings()
+        .par_iter()
+        .filter_map(|p| {
+            surface
+                .project(*p)
+                .filter(|q| q.is_finite() && (*q - *p).length() <= 2.0 * step)
+        })
+        .collect();
     Ok(GridScan {
+        surface_points,
         step,
         coarse_figures,
         fine_figures,

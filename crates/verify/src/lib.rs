@@ -675,7 +675,7 @@ fn solid_check(r: &mut Report, mesh: &TriMesh, bvh: &bvh::TriangleBvh) {
             wrong.len(),
             w.behind,
             w.in_front,
-            w.first_triangle,
+            w.probed_triangle,
             w.at.x,
             w.at.y,
             w.at.z,

@@ -21,11 +21,16 @@ pub(crate) fn against(
     surface: &dyn Surface,
     opts: &Options,
 ) {
+    // Implicit functions: the grid scan's points of S join the S -> mesh samples and the
+    // component seeds.
+    let grid = crate::grid_scan::run(surface, opts);
+    let scan = grid.as_ref().and_then(|g| g.as_ref().ok());
     // The d_M source (a Delaunay triangulation of the sample: one thread for a while) beside
     // the distances (parallel).
     opts.stage("distances");
+    let scan_points = scan.map(|g| &g.surface_points[..]);
     let ((normals, hausdorff), dm) = rayon::join(
-        || hausdorff_check(r, mesh, bvh, surface, opts),
+        || hausdorff_check(r, mesh, bvh, surface, opts, scan_points),
         || dm_source(mesh, surface, opts),
     );
     // Measured: every sample projected, and some facet lies where S is the data's surface.
@@ -43,10 +48,8 @@ pub(crate) fn against(
     crate::hypothesis::reconcile(r, opts);
 
     opts.stage("components");
-    let grid = crate::grid_scan::run(surface, opts);
-    let extra = grid.as_ref().and_then(|g| g.as_ref().ok());
-    let extra = extra.map_or(&[][..], |g| &g.seeds[..]);
-    components_sampled_check(r, mesh, bvh, surface, opts, &balls, extra);
+    let seeds = scan.map_or(&[][..], |g| &g.seeds[..]);
+    components_sampled_check(r, mesh, bvh, surface, opts, &balls, seeds);
     if let Some(g) = &grid {
         crate::grid_scan::genus_check(r, mesh, g, opts);
     }
@@ -60,6 +63,7 @@ fn hausdorff_check(
     bvh: &bvh::TriangleBvh,
     surface: &dyn Surface,
     opts: &Options,
+    scan_points: Option<&[DVec3]>,
 ) -> (NormalDeviation, f64) {
     let g = distance::geometry_labelled(
         mesh,
@@ -68,6 +72,7 @@ fn hausdorff_check(
         opts.samples_per_edge,
         opts.surface_samples.as_deref(),
         opts.surface_samples_source.as_deref(),
+        scan_points,
     );
     // A point set's mesh with no facet where S is the data's surface has no figure at all.
     let nothing = g.trusted.as_ref().is_some_and(|t| t.facets == 0);
@@ -531,7 +536,7 @@ fn components_sampled_check(
             far_seeds - cov.uncovered
         );
         let status = pass_fail(acc.missed == 0 && cov.uncovered == 0);
-        scan_topology_check(r, &acc);
+        crate::scan_components::scan_topology_check(r, &acc);
         r.scan_components = Some(acc);
         (status, detail)
     } else if seeds.is_empty() {
@@ -578,129 +583,6 @@ fn worst_uncovered(cov: &certificate::ComponentCoverage) -> String {
 }
 
 /// The `hausdorff` line: each side's figure, what it is and how it was measured.
-/// Images: the scan's components against the mesh's pieces, one to one (the part of the
-/// paper's homeomorphism, theorem 4.4 and after, that the voxel scan can check: the trilinear
-/// level set's components are known exactly). A component in two pieces (*split*), one with
-/// no piece of its own (*joined* to a neighbour's) or a piece on no component is a wrong
-/// topology whatever the sampling: FAIL, with where. Components dropped on request or of
-/// zero volume are excused; a missed one fails `components-sampled`.
-fn scan_topology_check(r: &mut Report, acc: &crate::scan_components::ScanComponents) {
-    use crate::scan_components::Fate;
-    let wrong: Vec<String> = acc
-        .components
-        .iter()
-        .filter(|c| matches!(c.fate, Fate::Split | Fate::Joined))
-        .take(3)
-        .map(|c| {
-            let at = |p: &[f64; 3]| format!("({:.4}, {:.4}, {:.4})", p[0], p[1], p[2]);
-            let what = match c.fate {
-                Fate::Split => format!(
-                    "split into {} pieces, the smaller at {}",
-                    c.pieces,
-                    c.other_pieces_at
-                        .iter()
-                        .map(at)
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-                _ => "joined to a neighbour's piece".to_string(),
-            };
-            format!(
-                "the component at {} ({} voxel edges crossed) {what}",
-                at(&c.seed),
-                c.crossing_edges
-            )
-        })
-        .collect();
-    let bad = acc.split + acc.joined + acc.unassigned_pieces;
-    let detail = if bad == 0 {
-        format!(
-            "{} mesh pieces for the voxel scan's {} components: one piece each (the scan's \
-             components of the trilinear level set{})",
-            acc.mesh_pieces,
-            acc.scan,
-            if acc.dropped + acc.vanishing + acc.missed > 0 {
-                ", but those dropped, of zero volume or missed"
-            } else {
-                ""
-            }
-        )
-    } else {
-        format!(
-            "{} mesh pieces for the voxel scan's {} components: {} split, {} joined to a \
-             neighbour's piece, {} pieces on no component: not the topology of S{}{}",
-            acc.mesh_pieces,
-            acc.scan,
-            acc.split,
-            acc.joined,
-            acc.unassigned_pieces,
-            if wrong.is_empty() { "" } else { "; " },
-            wrong.join("; ")
-        )
-    };
-    r.push("scan-topology", pass_fail(bad == 0), detail);
-    let (status, detail) = scan_genus(acc);
-    r.push("scan-genus", status, detail);
-}
-
-/// `scan-genus`: the mesh's total genus against the level set's, which the grid's Euler
-/// characteristic gives exactly (theorem 4.4's homeomorphism keeps it). A mesh with more
-/// handles than S is wrong whatever was dropped; with fewer, it is wrong unless components
-/// were dropped or missed (their genera are not known apart: INFO).
-fn scan_genus(acc: &crate::scan_components::ScanComponents) -> (Status, String) {
-    let (scan, mesh) = match (acc.scan_genus, acc.mesh_genus) {
-        (None, _) => {
-            return (
-                Status::Info,
-                "not compared: the scan found components of zero volume, whose genera it does \
-                 not tell apart"
-                    .into(),
-            );
-        }
-        (_, None) => {
-            return (
-                Status::Info,
-                "not compared: the mesh is not a closed manifold".into(),
-            );
-        }
-        (Some(s), Some(m)) => (s, m),
-    };
-    let gone = acc.dropped + acc.missed;
-    if mesh == scan {
-        (
-            Status::Pass,
-            format!("total genus {mesh}, the level set's (from the grid's Euler characteristic)"),
-        )
-    } else if mesh < scan && gone > 0 {
-        (
-            Status::Info,
-            format!(
-                "total genus {mesh} against the level set's {scan}: not compared, {gone} \
-                 components dropped or missed may hold the difference"
-            ),
-        )
-    } else if mesh < scan {
-        (
-            Status::Fail,
-            format!(
-                "total genus {mesh} where the level set's is {scan} (from the grid's Euler \
-                 characteristic): {} handles of S are not resolved at this size (not the \
-                 topology of S; a smaller --size resolves more)",
-                scan - mesh
-            ),
-        )
-    } else {
-        (
-            Status::Fail,
-            format!(
-                "total genus {mesh} where the level set's is {scan} (from the grid's Euler \
-                 characteristic): {} handles that S does not have (not the topology of S)",
-                mesh - scan
-            ),
-        )
-    }
-}
-
 fn hausdorff_detail(g: &distance::Geometry) -> String {
     let mut s = format!(
         "two-sided {:.3e} ({:.3e} of the bounding radius); mesh->S max {:.3e} mean {:.3e} \
@@ -745,54 +627,4 @@ fn hausdorff_detail(g: &distance::Geometry) -> String {
         );
     }
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scan_components::ScanComponents;
-
-    fn acc(scan: Option<usize>, mesh: Option<usize>, dropped: usize) -> ScanComponents {
-        ScanComponents {
-            scan: 3,
-            mesh_pieces: 3 - dropped,
-            meshed: 3 - dropped,
-            split: 0,
-            joined: 0,
-            dropped,
-            dropped_slivers: 0,
-            missed: 0,
-            vanishing: 0,
-            unassigned_pieces: 0,
-            components: Vec::new(),
-            scan_genus: scan,
-            mesh_genus: mesh,
-        }
-    }
-
-    /// Equal: PASS. Fewer handles: FAIL, unless a dropped component may hold them (INFO).
-    /// More handles: FAIL whatever was dropped. Unknown on either side: INFO, saying why.
-    #[test]
-    fn the_genus_verdict_follows_what_can_be_compared() {
-        let v = |a: ScanComponents| scan_genus(&a);
-        assert_eq!(v(acc(Some(4), Some(4), 0)).0, Status::Pass);
-        let (st, d) = v(acc(Some(4), Some(3), 0));
-        assert!(
-            st == Status::Fail && d.contains("1 handles of S are not resolved"),
-            "{d}"
-        );
-        assert_eq!(v(acc(Some(4), Some(3), 1)).0, Status::Info);
-        let (st, d) = v(acc(Some(4), Some(6), 1));
-        assert!(
-            st == Status::Fail && d.contains("2 handles that S does not have"),
-            "{d}"
-        );
-        let (st, d) = v(acc(None, Some(6), 0));
-        assert!(st == Status::Info && d.contains("zero volume"), "{d}");
-        let (st, d) = v(acc(Some(1), None, 0));
-        assert!(
-            st == Status::Info && d.contains("not a closed manifold"),
-            "{d}"
-        );
-    }
 }

@@ -188,8 +188,19 @@ pub fn open(spec: &str, bs: Option<&str>, o: &SurfaceOptions) -> Result<Input<'s
 }
 
 /// Labels present in an image (`--labels all`), without the background label 0.
-pub fn image_labels(spec: &str, o: &SurfaceOptions) -> Result<Vec<i64>> {
-    pipeline::image_labels(spec, &image_load_options(o)?).map_err(|e| cli_error(e, spec))
+pub fn label_image(spec: &str, o: &SurfaceOptions) -> Result<pipeline::LabelImage> {
+    pipeline::LabelImage::open(spec, &image_load_options(o)?).map_err(|e| cli_error(e, spec))
+}
+
+/// The input of label `o.label` of `li` (read from `spec`), as [`open`] gives it.
+pub fn label_input(
+    li: &pipeline::LabelImage,
+    spec: &str,
+    bs: Option<&str>,
+    o: &SurfaceOptions,
+) -> Result<Input<'static>> {
+    let opts = input_options(spec, bs, o)?;
+    li.input(&opts.image).map_err(|e| cli_error(e, spec))
 }
 
 /// A pipeline error in the CLI's words (flag names instead of library names); `spec` is the

@@ -164,7 +164,9 @@ fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
     if which != "all" {
         bail!("--labels {which}: only `--labels all` is supported; use --label L for one label");
     }
-    let labels = input::image_labels(&spec, &a.surface)?;
+    // Read once: each label is meshed on the crop of its bounding box.
+    let image = input::label_image(&spec, &a.surface)?;
+    let labels = image.labels();
     if labels.is_empty() {
         bail!("--labels all: {spec} has no label other than the background 0: nothing to mesh");
     }
@@ -212,7 +214,7 @@ fn run_labels(a: &MeshArgs, which: &str) -> Result<Verdict> {
                 .display()
                 .to_string(),
         });
-        match run(&b) {
+        match run_with(&b, Some(&image)) {
             Ok(Verdict::Fail(f)) => failures.extend(f),
             Ok(_) => {}
             Err(e) => {
@@ -281,6 +283,11 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
     if let Some(which) = &a.labels {
         return run_labels(a, which);
     }
+    run_with(a, None)
+}
+
+/// [`run`] of one input: `a`'s, or label `a.surface.label` of `labels`, read already.
+fn run_with(a: &MeshArgs, labels: Option<&pipeline::LabelImage>) -> Result<Verdict> {
     let spec = a
         .input
         .clone()
@@ -292,7 +299,11 @@ pub fn run(a: &MeshArgs) -> Result<Verdict> {
         smooth_polyhedron: a.surface.smooth_polyhedron || req.size.estimates_dm(),
         ..a.surface.clone()
     };
-    let opened = input::open(&spec, a.bounding_sphere.as_deref(), &surface)?;
+    let bs = a.bounding_sphere.as_deref();
+    let opened = match labels {
+        Some(li) => input::label_input(li, &spec, bs, &surface)?,
+        None => input::open(&spec, bs, &surface)?,
+    };
     let out_path = a
         .output
         .clone()

@@ -60,6 +60,7 @@ mod distance;
 #[allow(missing_docs)]
 mod error;
 mod frame_axis;
+mod label_box;
 mod metaimage;
 mod mgh;
 mod nifti_header;
@@ -81,6 +82,7 @@ mod zarr;
 
 pub use dicom::{dicom_subfolders, is_dicom_file, is_dicom_folder, read_dicom, read_dicom_frame};
 pub use error::ImageError;
+pub use label_box::{CROP_MARGIN, LabelBox};
 pub use metaimage::{read_metaimage, read_metaimage_frame};
 pub use mgh::read_mgh;
 pub use nifti_io::{

@@ -141,10 +141,13 @@ impl ImageSurface {
         }
         let (slope, inter) = vol.scaling();
         let (mode, bg_raw, iso) = if let Some(label) = opts.label {
-            let labels = vol.labels()?;
-            let Some(&(_, count)) = labels.iter().find(|(l, _)| *l == label) else {
-                let mut present: Vec<String> =
-                    labels.iter().take(32).map(|(l, _)| l.to_string()).collect();
+            let labels = vol.label_boxes()?;
+            let Some(b) = labels.iter().find(|b| b.label == label) else {
+                let mut present: Vec<String> = labels
+                    .iter()
+                    .take(32)
+                    .map(|b| b.label.to_string())
+                    .collect();
                 if labels.len() > 32 {
                     present.push(format!("... ({} labels)", labels.len()));
                 }
@@ -153,11 +156,16 @@ impl ImageSurface {
                     present: present.join(", "),
                 });
             };
-            if count == vol.len() {
+            if b.count == vol.len() {
                 return Err(ImageError::LabelEverywhere {
                     path: vol.source().map(|p| p.to_path_buf()),
                     label,
                 });
+            }
+            // The label's own region (see `label_box`): the same surface, scanned and meshed
+            // without the rest of the grid.
+            if let Some(crop) = vol.label_crop(b) {
+                return ImageSurface::new_shared(std::sync::Arc::new(crop), opts);
             }
             let mode = Mode::Label {
                 label: label as f64,

@@ -751,32 +751,6 @@ pub fn stem(p: &Path) -> String {
         .unwrap_or(s)
 }
 
-/// Labels present in a label image, without the background label 0 (one mesh per label:
-/// open each with `InputOptions::image.label`).
-///
-/// ```
-/// use rdt_mesher::pipeline::image_labels;
-/// let dir = env!("CARGO_MANIFEST_DIR");
-/// let p = format!("{dir}/../../fixtures/images/phantom_i16_32.nii.gz");
-/// // The phantom holds intensities, not labels: an error that says so.
-/// assert!(image_labels(&p, &Default::default()).is_err());
-/// ```
-pub fn image_labels(spec: &str, load: &LoadOptions) -> Result<Vec<i64>, PipelineError> {
-    let vol = oracle::image::load_volume(Path::new(spec), load)
-        .map_err(|e| PipelineError::opening_image(spec, e))?;
-    let labels = vol
-        .labels()
-        .map_err(|source| PipelineError::NotALabelImage {
-            spec: spec.to_string(),
-            source: Box::new(source),
-        })?;
-    Ok(labels
-        .into_iter()
-        .map(|(l, _)| l)
-        .filter(|&l| l != 0)
-        .collect())
-}
-
 fn ply_has_no_faces(path: &Path) -> bool {
     // Read the header only.
     let Ok(f) = std::fs::File::open(path) else {

@@ -34,6 +34,7 @@ mod error;
 mod forecast;
 mod handles;
 mod input;
+mod labels;
 mod outcome;
 mod plan;
 pub mod report;
@@ -53,8 +54,9 @@ pub use forecast::{
 };
 pub use input::{
     ImageStats, Input, InputKind, InputOptions, InputStats, PointStats, ReadAs, SHARP_DEG,
-    image_labels, is_image_spec, stem,
+    is_image_spec, stem,
 };
+pub use labels::{LabelImage, image_labels};
 pub use outcome::{
     AdaptiveOutcome, Failure, Outcome, SharpEdges, Stage, TwoPassOutcome, Verdict, verify_balls,
 };
