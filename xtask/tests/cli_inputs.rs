@@ -201,3 +201,49 @@ fn labels_all_meshes_the_other_labels_when_one_is_refused() {
     assert!(!dir.join("m_label1.ply").exists());
     assert!(dir.join("m_label2.ply").exists(), "{err}");
 }
+
+/// `--labels all` reads the image once and meshes each label on the crop of its bounding box,
+/// as `--label L` does: the same bytes for label 2 both ways, and a note naming the crop.
+#[test]
+fn labels_all_and_label_write_the_same_mesh() {
+    let dir =
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("labels-same-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 32i32;
+    let mut b = vec![0u8; (n * n * n) as usize];
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let d2 = |c: i32| (i - c).pow(2) + (j - 16).pow(2) + (k - 14).pow(2);
+                if d2(9) <= 36 {
+                    b[(i + n * (j + n * k)) as usize] = 1;
+                } else if d2(24) <= 16 {
+                    b[(i + n * (j + n * k)) as usize] = 2;
+                }
+            }
+        }
+    }
+    std::fs::write(dir.join("lab.raw"), &b).unwrap();
+    let common = [
+        "lab.raw", "--dims", "32,32,32", "--dtype", "u8", "--size", "0.8",
+    ];
+    let run = |extra: &[&str]| {
+        let mut args = vec!["mesh"];
+        args.extend_from_slice(&common);
+        args.extend_from_slice(extra);
+        let out = xtask_in(&dir, &args);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert_eq!(out.status.code(), Some(0), "{err}");
+        err
+    };
+    let err = run(&["--labels", "all", "-o", "all.ply"]);
+    assert!(
+        err.contains("label 2: its bounding box and 2 voxels around it (voxels 18..30 x 10..22 x 8..20 of the 32 x 32 x 32 grid)"),
+        "{err}"
+    );
+    run(&["--label", "2", "-o", "one.ply"]);
+    let all = std::fs::read(dir.join("all_label2.ply")).unwrap();
+    assert_eq!(all, std::fs::read(dir.join("one.ply")).unwrap());
+    assert!(dir.join("all_label1.ply").exists());
+}
