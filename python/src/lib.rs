@@ -60,6 +60,8 @@ impl VoxelSource for NumpyVoxels {
                 Dtype::I32 => VoxelView::I32(slice(self.ptr, self.len)),
                 Dtype::F32 => VoxelView::F32(slice(self.ptr, self.len)),
                 Dtype::F64 => VoxelView::F64(slice(self.ptr, self.len)),
+                // `array_dtype` gives none of these (the package narrows 64-bit arrays first).
+                Dtype::U64 | Dtype::I64 => unreachable!("a 64-bit array view"),
             }
         }
     }

@@ -259,3 +259,55 @@ def test_a_4d_series_without_a_frame_names_the_range(series_4d):
                            capture_output=True, text=True)
         assert r.returncode != 0
         assert "pass --frame K (0 to 1)" in r.stderr, r.stderr
+
+
+@pytest.fixture(scope="module")
+def wide_labels(tmp_path_factory):
+    """A uint64 segmentation (connectomics ids above 2^32) as nibabel writes it (NIfTI
+    datatype 1280) and as zarr writes an OME-Zarr v0.5 array."""
+    nib = pytest.importorskip("nibabel")
+    zarr = pytest.importorskip("zarr")
+    tmp = str(tmp_path_factory.mktemp("wide"))
+    v = np.zeros((24, 20, 16), np.uint64)
+    ids = [3, 2**40 + 7, 2**40 + 8, 2**45]
+    for n, l in enumerate(ids):
+        v[2 + 5 * n:6 + 5 * n, 4:12, 3:11] = l
+    aff = np.diag([8.0, 8.0, 40.0, 1.0])
+    nii = os.path.join(tmp, "seg.nii.gz")
+    nib.save(nib.Nifti1Image(v, aff, dtype=np.uint64), nii)
+    assert nib.load(nii).get_data_dtype() == np.uint64
+    zyx = np.ascontiguousarray(v.transpose(2, 1, 0))
+    z = os.path.join(tmp, "seg.ome.zarr")
+    g = zarr.open_group(z, mode="w", zarr_format=3)
+    a = g.create_array("0", shape=zyx.shape, chunks=(8, 10, 12), dtype=zyx.dtype)
+    a[:] = zyx
+    g.attrs["ome"] = {"version": "0.5", "multiscales": [{
+        "axes": [{"name": n, "type": "space"} for n in "zyx"],
+        "datasets": [{"path": "0", "coordinateTransformations": [
+            {"type": "scale", "scale": [40.0, 8.0, 8.0]}]}]}]}
+    return v, ids, nii, z
+
+
+def test_uint64_labels_are_read_exactly(wide_labels, tmp_path):
+    """Each file's labels are nibabel's ids; label 2^40 + 8 (next to 2^40 + 7) meshes to the
+    same bytes from the NIfTI, from the OME-Zarr and from the array itself (as float64)."""
+    rdt = pytest.importorskip("rdt_mesher")
+    v, ids, nii, z = wide_labels
+    for path in [nii, z]:
+        assert sorted(rdt.mesh_file(path, labels="all", size=6)) == ids, path
+    out = []
+    for n, path in enumerate([nii, z]):
+        ply = os.path.join(str(tmp_path), f"m{n}.ply")
+        r = subprocess.run([XTASK, "mesh", "-q", path, "--label", str(2**40 + 8), "--size", "4",
+                            "--no-verify", "-o", ply], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        assert "u64 voxels held as f64" in r.stderr, r.stderr
+        with open(ply, "rb") as f:
+            out.append(f.read())
+    assert out[0] == out[1]
+    vert, _ = read_ply(os.path.join(str(tmp_path), "m0.ply"))
+    # Fortran order, as nibabel gives a file's array (a C-ordered one is read as the
+    # transposed grid: the same surface, another mesh).
+    m = rdt.mesh_image(np.asfortranarray(v), affine=np.diag([8.0, 8.0, 40.0, 1.0]),
+                       label=2**40 + 8, size=4)
+    assert np.allclose(np.asarray(m.vertices), vert, atol=1e-9)

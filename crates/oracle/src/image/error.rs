@@ -67,10 +67,24 @@ pub enum ImageError {
         actual: u64,
     },
     #[error(
-        "{}: {field} is not supported; convert the image to u8, i8, u16, i16, u32, i32, f32 or f64",
+        "{}: {field} is not supported; convert the image to u8, i8, u16, i16, u32, i32, u64, i64, f32 or f64",
         path.display()
     )]
     UnsupportedType { path: PathBuf, field: String },
+    #[error(
+        "{}: voxel ({}, {}, {}) holds the 64-bit value {value}, beyond 9e15, where float64 values \
+         cannot tell consecutive integers apart (the limit of labels); renumber the labels to consecutive ids \
+         (e.g. fastremap.renumber in Python) and save the volume again",
+        path.display(),
+        voxel[0],
+        voxel[1],
+        voxel[2]
+    )]
+    WideValue {
+        path: PathBuf,
+        value: String,
+        voxel: [usize; 3],
+    },
     #[error(
         "{}: dim = {dims:?} is {}, not a volume; give a 3D image, or a folder of 2D slices (with --spacing)",
         path.display(),

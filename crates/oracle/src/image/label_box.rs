@@ -100,7 +100,7 @@ impl Volume {
     /// not an integer or is above 9e15 in magnitude), in one pass.
     pub fn label_boxes(&self) -> Result<Vec<LabelBox>, ImageError> {
         let dims = self.dims();
-        let raw = with_voxels!(self.voxels(), d => raw_boxes(&d[..], dims)).map_err(|(i, x)| {
+        let raw = with_voxels!(self.voxels(), d => raw_boxes(d, dims)).map_err(|(i, x)| {
             ImageError::NaN {
                 path: self.source().map(|p| p.to_path_buf()),
                 index: self.unindex(i),

@@ -14,7 +14,7 @@
 
 use super::frame_axis::{self, FrameAxis, frame_bytes};
 use super::orient::{self, Frame};
-use super::{Dtype, ImageError, Volume, Voxels};
+use super::{Dtype, ImageError, Volume};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::path::Path;
@@ -79,13 +79,16 @@ fn dtype(path: &Path, t: &str) -> Result<Dtype, ImageError> {
         "MET_UINT" | "MET_ULONG" => Dtype::U32,
         "MET_FLOAT" => Dtype::F32,
         "MET_DOUBLE" => Dtype::F64,
+        "MET_LONG_LONG" => Dtype::I64,
+        "MET_ULONG_LONG" => Dtype::U64,
         _ => {
             return Err(err(
                 path,
                 "ElementType",
                 format!(
                     "= {t} is not supported; convert the image to MET_CHAR, MET_UCHAR, \
-                     MET_SHORT, MET_USHORT, MET_INT, MET_UINT, MET_FLOAT or MET_DOUBLE"
+                     MET_SHORT, MET_USHORT, MET_INT, MET_UINT, MET_LONG_LONG, MET_ULONG_LONG, MET_FLOAT \
+                     or MET_DOUBLE"
                 ),
             ));
         }
@@ -259,12 +262,12 @@ pub fn read_metaimage_frame(
         }
         None => (data, None),
     };
-    let voxels = Voxels::from_bytes(dtype, &data, big);
-    let vol = Volume::new(dims, voxels, affine)?.with_source(path);
-    Ok(match note {
-        Some(n) => vol.with_note(n),
-        None => vol,
-    })
+    let (voxels, held) = super::volume::decode_voxels(path, dims, dtype, &data, big)?;
+    let mut vol = Volume::new(dims, voxels, affine)?.with_source(path);
+    for n in note.into_iter().chain(held) {
+        vol = vol.with_note(n);
+    }
+    Ok(vol)
 }
 
 /// `NDims` and `DimSize`, the frames' axis of a 4D series, and the frame to read (see

@@ -100,5 +100,5 @@ pub use stack::{
 pub use surface::{ImageOptions, ImageSurface, trilinear};
 pub use topology::{Join, Node, Topology};
 pub(crate) use volume::with_voxels;
-pub use volume::{Dtype, Stats, Volume, Voxel, Voxels};
+pub use volume::{Dtype, Stats, Volume, Voxel, Voxels, WideValue};
 pub use zarr::read_ome_zarr;

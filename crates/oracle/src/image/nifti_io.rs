@@ -420,8 +420,8 @@ fn dtype_of(path: &Path, h: &Header) -> Result<Dtype, ImageError> {
         1 => return Err(other("Binary")),
         32 => return Err(other("Complex64")),
         128 => return Err(other("Rgb24")),
-        1024 => return Err(other("Int64")),
-        1280 => return Err(other("Uint64")),
+        1024 => Dtype::I64,
+        1280 => Dtype::U64,
         1536 => return Err(other("Float128")),
         1792 => return Err(other("Complex128")),
         2048 => return Err(other("Complex256")),
@@ -596,19 +596,20 @@ pub fn read_nifti_frame(
     let (affine, field) = checked_affine(&hdr_path, &h)?;
     let big = h.big_endian;
     let start = lay.offset + lay.frame * one;
-    let voxels = if lay.dtype == Dtype::U8 {
+    let (voxels, held) = if lay.dtype == Dtype::U8 {
         let mut d = dbytes;
         d.truncate(start + one);
         d.drain(..start);
-        Voxels::U8(d)
+        (Voxels::U8(d), None)
     } else {
-        Voxels::from_bytes(lay.dtype, &dbytes[start..start + one], big)
+        let b = &dbytes[start..start + one];
+        super::volume::decode_voxels(&img_path, lay.dims, lay.dtype, b, big)?
     };
     check_affine(&affine, Some(&hdr_path), field)?;
     let mut vol = Volume::new(lay.dims, voxels, affine)?
         .with_scaling(slope, inter)
         .with_source(path);
-    if let Some(note) = extra {
+    for note in extra.into_iter().chain(held) {
         vol = vol.with_note(note);
     }
     if lay.frames > 1 {
@@ -660,6 +661,8 @@ fn datatype_code(d: Dtype) -> (i16, i16) {
         Dtype::I8 => (256, 8),
         Dtype::U16 => (512, 16),
         Dtype::U32 => (768, 32),
+        Dtype::I64 => (1024, 64),
+        Dtype::U64 => (1280, 64),
     }
 }
 

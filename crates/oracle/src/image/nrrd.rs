@@ -12,7 +12,7 @@
 
 use super::frame_axis::{self, FrameAxis, frame_bytes};
 use super::orient::{self, Frame};
-use super::{Dtype, ImageError, Volume, Voxels};
+use super::{Dtype, ImageError, Volume};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -78,6 +78,16 @@ fn dtype(path: &Path, t: &str) -> Result<Dtype, ImageError> {
         "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => Dtype::U16,
         "int" | "signed int" | "int32" | "int32_t" => Dtype::I32,
         "uint" | "unsigned int" | "uint32" | "uint32_t" => Dtype::U32,
+        "longlong"
+        | "long long"
+        | "long long int"
+        | "signed long long"
+        | "signed long long int"
+        | "int64"
+        | "int64_t" => Dtype::I64,
+        "ulonglong" | "unsigned long long" | "unsigned long long int" | "uint64" | "uint64_t" => {
+            Dtype::U64
+        }
         "float" => Dtype::F32,
         "double" => Dtype::F64,
         _ => {
@@ -86,7 +96,7 @@ fn dtype(path: &Path, t: &str) -> Result<Dtype, ImageError> {
                 "type",
                 format!(
                     "= {t:?} is not supported; convert the image to int8, uint8, int16, uint16, \
-                     int32, uint32, float or double"
+                     int32, uint32, int64, uint64, float or double"
                 ),
             ));
         }
@@ -474,12 +484,12 @@ pub fn read_nrrd_frame(path: impl AsRef<Path>, frame: Option<usize>) -> Result<V
         raw = frame_bytes(&raw, [s[0], s[1], s[2], s[3]], fa.axis, k, dtype.size());
         note = fa.note(path, k);
     }
-    let voxels = Voxels::from_bytes(dtype, &raw, big);
+    let (voxels, held) = super::volume::decode_voxels(path, ax.dims(), dtype, &raw, big)?;
     let affine = orient::affine(axes, origin, space);
     super::volume::check_affine(&affine, Some(path), "space directions / space origin")?;
-    let vol = Volume::new(ax.dims(), voxels, affine)?.with_source(path);
-    Ok(match note {
-        Some(n) => vol.with_note(n),
-        None => vol,
-    })
+    let mut vol = Volume::new(ax.dims(), voxels, affine)?.with_source(path);
+    for n in note.into_iter().chain(held) {
+        vol = vol.with_note(n);
+    }
+    Ok(vol)
 }

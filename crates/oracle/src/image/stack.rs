@@ -284,9 +284,15 @@ pub fn read_raw(
             actual,
         });
     }
-    let voxels = Voxels::from_bytes(raw.dtype, &bytes[raw.offset as usize..], raw.big_endian);
+    let data = &bytes[raw.offset as usize..];
+    let (voxels, held) =
+        super::volume::decode_voxels(path, raw.dims, raw.dtype, data, raw.big_endian)?;
     drop(bytes);
-    Ok(Volume::new(raw.dims, voxels, affine)?.with_source(path))
+    let vol = Volume::new(raw.dims, voxels, affine)?.with_source(path);
+    Ok(match held {
+        Some(n) => vol.with_note(n),
+        None => vol,
+    })
 }
 
 /// Natural order: digit runs compare as numbers (`slice2 < slice10`), the rest bytewise.

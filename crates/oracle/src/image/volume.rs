@@ -17,6 +17,12 @@ pub enum Dtype {
     I32,
     F32,
     F64,
+    /// 64-bit integers (label volumes): a type of the files only. They are read into the
+    /// narrowest storage that holds every value exactly ([`Voxels::decode`]: u32, i32, or f64
+    /// up to 9e15), so no [`Voxels`] has this type.
+    U64,
+    /// See [`Dtype::U64`].
+    I64,
 }
 
 impl Dtype {
@@ -26,7 +32,7 @@ impl Dtype {
             Dtype::U8 | Dtype::I8 => 1,
             Dtype::U16 | Dtype::I16 => 2,
             Dtype::U32 | Dtype::I32 | Dtype::F32 => 4,
-            Dtype::F64 => 8,
+            Dtype::F64 | Dtype::U64 | Dtype::I64 => 8,
         }
     }
     /// Whether the type holds integers (labels are meaningful).
@@ -48,6 +54,8 @@ impl std::str::FromStr for Dtype {
             "i32" | "int32" => Dtype::I32,
             "f32" | "float32" | "float" => Dtype::F32,
             "f64" | "float64" | "double" => Dtype::F64,
+            "u64" | "uint64" => Dtype::U64,
+            "i64" | "int64" => Dtype::I64,
             _ => {
                 return Err(format!(
                     "unknown voxel type '{s}'; use one of u8, i8, u16, i16, u32, i32, f32, f64"
@@ -68,6 +76,8 @@ impl std::fmt::Display for Dtype {
             Dtype::I32 => "i32",
             Dtype::F32 => "f32",
             Dtype::F64 => "f64",
+            Dtype::U64 => "u64",
+            Dtype::I64 => "i64",
         };
         f.write_str(s)
     }
@@ -173,7 +183,72 @@ impl Voxels {
     pub fn get_f64(&self, i: usize) -> f64 {
         with_voxels!(self, d => d[i].to_f64())
     }
+    /// [`Voxels::from_bytes`] for every type, the 64-bit integers included: those are held
+    /// in the narrowest of u32, i32 and f64 that holds every value exactly, with a note
+    /// saying which; a value beyond 9e15 in magnitude (the limit of labels,
+    /// [`Volume::labels`]; below 2^53, where f64 holds every integer) is an error
+    /// ([`WideValue`]).
+    pub fn decode(
+        dtype: Dtype,
+        bytes: &[u8],
+        big_endian: bool,
+    ) -> Result<(Voxels, Option<String>), WideValue> {
+        let signed = match dtype {
+            Dtype::U64 => false,
+            Dtype::I64 => true,
+            _ => return Ok((Voxels::from_bytes(dtype, bytes, big_endian), None)),
+        };
+        let values: Vec<i128> = bytes
+            .chunks_exact(8)
+            .map(|c| {
+                let mut b: [u8; 8] = c.try_into().expect("8 bytes");
+                if big_endian {
+                    b.reverse();
+                }
+                if signed {
+                    i64::from_le_bytes(b) as i128
+                } else {
+                    u64::from_le_bytes(b) as i128
+                }
+            })
+            .collect();
+        let (lo, hi) = values
+            .iter()
+            .fold((i128::MAX, i128::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+        const EXACT: i128 = 9_000_000_000_000_000;
+        let (voxels, held) = if values.is_empty() || (lo >= 0 && hi <= u32::MAX as i128) {
+            (
+                Voxels::U32(values.iter().map(|&v| v as u32).collect()),
+                "u32",
+            )
+        } else if lo >= i32::MIN as i128 && hi <= i32::MAX as i128 {
+            (
+                Voxels::I32(values.iter().map(|&v| v as i32).collect()),
+                "i32",
+            )
+        } else if lo >= -EXACT && hi <= EXACT {
+            (
+                Voxels::F64(values.iter().map(|&v| v as f64).collect()),
+                "f64",
+            )
+        } else {
+            let v = if hi > EXACT { hi } else { lo };
+            return Err(WideValue {
+                value: v.to_string(),
+                index: values.iter().position(|&x| x == v).unwrap_or(0),
+            });
+        };
+        let note = format!(
+            "{dtype} voxels held as {held}, which holds every value exactly (from {lo} to {hi})"
+        );
+        Ok((voxels, Some(note)))
+    }
+
     /// Decode `bytes` (exactly `n * dtype.size()` long) into native storage.
+    ///
+    /// # Panics
+    /// On a 64-bit integer type whose values are not all within 9e15 (use
+    /// [`Voxels::decode`]).
     pub fn from_bytes(dtype: Dtype, bytes: &[u8], big_endian: bool) -> Voxels {
         fn conv<T: Voxel>(bytes: &[u8], be: bool) -> Vec<T> {
             bytes
@@ -190,6 +265,11 @@ impl Voxels {
             Dtype::I32 => Voxels::I32(conv(bytes, big_endian)),
             Dtype::F32 => Voxels::F32(conv(bytes, big_endian)),
             Dtype::F64 => Voxels::F64(conv(bytes, big_endian)),
+            Dtype::U64 | Dtype::I64 => {
+                Voxels::decode(dtype, bytes, big_endian)
+                    .expect("64-bit values within 2^53 (Voxels::decode says which are not)")
+                    .0
+            }
         }
     }
     /// Little-endian bytes of the data (for the writers).
@@ -202,6 +282,36 @@ impl Voxels {
             out
         })
     }
+}
+
+/// [`Voxels::decode`] of a file's voxel data (`path`, a grid of `dims`): the error names the
+/// voxel.
+pub(crate) fn decode_voxels(
+    path: &std::path::Path,
+    dims: [usize; 3],
+    dtype: Dtype,
+    bytes: &[u8],
+    big_endian: bool,
+) -> Result<(Voxels, Option<String>), ImageError> {
+    Voxels::decode(dtype, bytes, big_endian).map_err(|w| ImageError::WideValue {
+        path: path.to_path_buf(),
+        value: w.value,
+        voxel: [
+            w.index % dims[0],
+            (w.index / dims[0]) % dims[1],
+            w.index / (dims[0] * dims[1]),
+        ],
+    })
+}
+
+/// A 64-bit integer voxel value beyond 9e15 in magnitude (no storage type of the mesher
+/// holds it as a label): the value and the voxel's linear index.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WideValue {
+    /// The value, in decimal.
+    pub value: String,
+    /// Its first voxel (linear index, x fastest).
+    pub index: usize,
 }
 
 /// Value statistics of a volume (in scaled units: `slope * raw + inter`).

@@ -14,7 +14,7 @@
 //! value it is an error naming the chunk.
 
 use super::orient::{self};
-use super::{Dtype, ImageError, Volume, Voxels};
+use super::{Dtype, ImageError, Volume};
 use glam::{DAffine3, DMat3, DVec3};
 use serde_json::Value;
 use std::path::Path;
@@ -200,13 +200,15 @@ fn dtype(path: &Path, t: &DataType) -> Result<Dtype, ImageError> {
         DataType::Int32 => Dtype::I32,
         DataType::Float32 => Dtype::F32,
         DataType::Float64 => Dtype::F64,
+        DataType::UInt64 => Dtype::U64,
+        DataType::Int64 => Dtype::I64,
         other => {
             return Err(err(
                 path,
                 "dtype / data_type",
                 format!(
                     "{other} is not supported; convert the array to uint8, int8, uint16, int16, \
-                     uint32, int32, float32 or float64"
+                     uint32, int32, uint64, int64, float32 or float64"
                 ),
             ));
         }
@@ -360,7 +362,8 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             }
         }
     }
-    let voxels = Voxels::from_bytes(dtype, &out, cfg!(target_endian = "big"));
+    let big = cfg!(target_endian = "big");
+    let (voxels, held) = super::volume::decode_voxels(path, dims, dtype, &out, big)?;
     let affine = DAffine3::from_mat3_translation(DMat3::from_diagonal(scale), origin);
     super::volume::check_affine(
         &affine,
@@ -368,6 +371,9 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
         "coordinateTransformations (scale, translation)",
     )?;
     let mut vol = Volume::new(dims, voxels, affine)?.with_source(path);
+    if let Some(n) = held {
+        vol = vol.with_note(n);
+    }
     if missing > 0 {
         vol = vol.with_note(format!(
             "{}: {missing} chunk(s) of level {sub:?} are not stored; their voxels are the fill value, as the Zarr format says",
