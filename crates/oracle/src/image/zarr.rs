@@ -190,6 +190,21 @@ fn axis_roles(path: &Path, ms: &Value, n: usize) -> Result<Vec<Option<usize>>, I
     Ok(roles)
 }
 
+/// The voxels of `bytes` (elements of `size` bytes, voxel (i, j, k) at element
+/// `i * strides[0] + j * strides[1] + k * strides[2]`) in x-fastest order.
+fn x_fastest(bytes: &[u8], dims: [usize; 3], strides: [usize; 3], size: usize) -> Vec<u8> {
+    let mut out = Vec::with_capacity(dims.iter().product::<usize>() * size);
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let s = (i * strides[0] + j * strides[1] + k * strides[2]) * size;
+                out.extend_from_slice(&bytes[s..s + size]);
+            }
+        }
+    }
+    out
+}
+
 fn dtype(path: &Path, t: &DataType) -> Result<Dtype, ImageError> {
     Ok(match t {
         DataType::UInt8 => Dtype::U8,
@@ -353,15 +368,7 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
             format!("decoded to {} bytes, the shape needs {need}", bytes.len()),
         ));
     }
-    let mut out = Vec::with_capacity(need);
-    for k in 0..dims[2] {
-        for j in 0..dims[1] {
-            for i in 0..dims[0] {
-                let s = (i * strides[0] + j * strides[1] + k * strides[2]) * size;
-                out.extend_from_slice(&bytes[s..s + size]);
-            }
-        }
-    }
+    let out = x_fastest(&bytes, dims, strides, size);
     let big = cfg!(target_endian = "big");
     let (voxels, held) = super::volume::decode_voxels(path, dims, dtype, &out, big)?;
     let affine = DAffine3::from_mat3_translation(DMat3::from_diagonal(scale), origin);
@@ -371,14 +378,14 @@ pub fn read_ome_zarr(path: impl AsRef<Path>) -> Result<Volume, ImageError> {
         "coordinateTransformations (scale, translation)",
     )?;
     let mut vol = Volume::new(dims, voxels, affine)?.with_source(path);
-    if let Some(n) = held {
-        vol = vol.with_note(n);
-    }
-    if missing > 0 {
-        vol = vol.with_note(format!(
+    let fill = (missing > 0).then(|| {
+        format!(
             "{}: {missing} chunk(s) of level {sub:?} are not stored; their voxels are the fill value, as the Zarr format says",
             path.display()
-        ));
+        )
+    });
+    for n in held.into_iter().chain(fill) {
+        vol = vol.with_note(n);
     }
     Ok(vol)
 }
