@@ -197,6 +197,7 @@ fn guarantee_failures(
         "angles",
         "hausdorff",
         "components-sampled",
+        "grid-genus",
     ]);
     // The certificate must hold (an INFO "no guarantee" above epsilon_1 is its PASS there).
     if dm_known && !rep.certificate.as_ref().is_some_and(|c| c.passed()) {
@@ -243,6 +244,8 @@ fn run_case(j: &Job, a: &RegressArgs, gdir: &Path) -> Result<Row> {
         min_angle_deg: Some(30.0 - 1e-9),
         max_hausdorff: Some(j.sigma),
         seed: 0,
+        // Catalog surfaces: the grid scan's components, genus and points of S as in `mesh`.
+        grid_scan: Some(verify::grid_scan::DEFAULT_NODES),
         ..Default::default()
     };
     let rep = verify::check_against(&res.mesh, surface, &vopts);

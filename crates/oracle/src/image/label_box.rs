@@ -155,15 +155,18 @@ impl Volume {
              voxel scan and the mesh use that region only",
             b.label, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2], d[0], d[1], d[2]
         );
-        Some(self.crop(lo, hi).with_note(note))
+        // A crop the affine checks refuse (its corner beyond the offset limit, where the
+        // image's own corner is not) is not made: the label is meshed on the whole grid.
+        Some(self.crop(lo, hi).ok()?.with_note(note))
     }
 
     /// The voxels `lo..=hi` (inclusive, within the grid) as a volume of their own, every
-    /// voxel at its world position (see the module's invariant).
+    /// voxel at its world position (see the module's invariant). Errors as
+    /// [`Volume::new`]: the moved affine must pass its checks.
     ///
     /// # Panics
     /// If the range is empty or leaves the grid.
-    pub fn crop(&self, lo: [usize; 3], hi: [usize; 3]) -> Volume {
+    pub fn crop(&self, lo: [usize; 3], hi: [usize; 3]) -> Result<Volume, ImageError> {
         let [nx, ny, nz] = self.dims();
         assert!(
             (0..3).all(|a| lo[a] <= hi[a]) && hi[0] < nx && hi[1] < ny && hi[2] < nz,
@@ -185,8 +188,7 @@ impl Volume {
         let shift = DVec3::new(lo[0] as f64, lo[1] as f64, lo[2] as f64);
         let affine = self.affine() * DAffine3::from_translation(shift);
         let (slope, inter) = self.scaling();
-        let mut out = Volume::new(d, Voxels::from_bytes(dtype, &bytes, false), affine)
-            .expect("a crop of a valid volume is valid")
+        let mut out = Volume::new(d, Voxels::from_bytes(dtype, &bytes, false), affine)?
             .with_scaling(slope, inter);
         if let Some(p) = self.source() {
             out = out.with_source(p);
@@ -194,7 +196,7 @@ impl Volume {
         for n in self.notes() {
             out = out.with_note(n.clone());
         }
-        out
+        Ok(out)
     }
 }
 
@@ -231,7 +233,7 @@ mod tests {
         assert_eq!((b9.lo, b9.hi), ([5, 0, 3], [6, 0, 3]));
         assert_eq!(b9.crop_range(vol.dims()), ([3, 0, 1], [6, 2, 3]));
         let (lo, hi) = b9.crop_range(vol.dims());
-        let c = vol.crop(lo, hi);
+        let c = vol.crop(lo, hi).unwrap();
         assert_eq!(c.dims(), [4, 3, 3]);
         for k in 0..3 {
             for j in 0..3 {
