@@ -55,6 +55,8 @@ pub mod scan_sim;
 pub mod short_loops;
 pub mod solid;
 mod surface_checks;
+#[cfg(test)]
+mod test_meshes;
 pub mod topology;
 
 /// The exact predicates and intersection tests of the shared kernel ([`geom::predicates`]).

@@ -141,31 +141,7 @@ pub fn simulate(mesh: &TriMesh, spec: &ScanSpec) -> Scan {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn octahedron() -> TriMesh {
-        let v = vec![
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ];
-        let triangles = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        TriMesh {
-            vertices: v,
-            triangles,
-        }
-    }
+    use crate::test_meshes::octahedron;
 
     #[test]
     fn scans_are_deterministic_with_the_asked_density_noise_and_hole() {

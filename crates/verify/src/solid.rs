@@ -105,25 +105,11 @@ mod tests {
     /// large faces, not at the sliver.
     #[test]
     fn a_component_is_probed_at_its_largest_triangle() {
-        let mut v = vec![
-            DVec3::X,
-            DVec3::NEG_X,
-            DVec3::Y,
-            DVec3::NEG_Y,
-            DVec3::Z,
-            DVec3::NEG_Z,
-        ];
         // Outward faces, then every one reversed.
-        let mut faces: Vec<[u32; 3]> = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
+        let TriMesh {
+            vertices: mut v,
+            triangles: mut faces,
+        } = crate::test_meshes::octahedron();
         let [a, b, c] = faces.remove(0);
         let p = v[a as usize] + 1e-14 * (v[b as usize] + v[c as usize] - 2.0 * v[a as usize]);
         v.push(p);
