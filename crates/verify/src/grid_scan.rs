@@ -30,7 +30,7 @@ use oracle::Surface;
 use oracle::image::{ImageOptions, ImageSurface, Volume, Voxels};
 use rayon::prelude::*;
 
-use crate::scan_components::{ScanComponents, account};
+use crate::scan_components::{GenusComparison, NOT_A_MANIFOLD, ScanComponents, account};
 use crate::{Report, Status};
 
 /// Nodes per axis of the coarse grid in `verify` and `mesh` (the fine grid has `2n - 1`).
@@ -246,47 +246,35 @@ fn compare(s: &GridScan, acc: &ScanComponents) -> (Status, String) {
             ),
         );
     }
-    let (scan, mesh) = match (acc.scan_genus, acc.mesh_genus) {
-        (None, _) => {
-            return (
-                Status::Info,
-                format!(
-                    "not compared: the grid scan at {steps} found components of zero volume \
-                     (f = 0 at nodes), whose genera it does not tell apart"
-                ),
-            );
-        }
-        (_, None) => {
-            return (
-                Status::Info,
-                "not compared: the mesh is not a closed manifold".into(),
-            );
-        }
-        (Some(s), Some(m)) => (s, m),
-    };
-    let gone = acc.dropped + acc.missed;
     let found = format!("a grid scan of f at {steps} finds {}", show(s.fine_figures));
-    if mesh == scan {
-        (Status::Pass, format!("total genus {mesh}; {found}"))
-    } else if mesh < scan && gone > 0 {
-        (
+    match GenusComparison::of(acc) {
+        GenusComparison::ScanUnknown => (
+            Status::Info,
+            format!(
+                "not compared: the grid scan at {steps} found components of zero volume \
+                 (f = 0 at nodes), whose genera it does not tell apart"
+            ),
+        ),
+        GenusComparison::MeshUnknown => (Status::Info, NOT_A_MANIFOLD.into()),
+        GenusComparison::Equal(mesh) => (Status::Pass, format!("total genus {mesh}; {found}")),
+        GenusComparison::FewerExcused { mesh, gone, .. } => (
             Status::Info,
             format!(
                 "total genus {mesh}; {found}: not compared, {gone} components dropped or \
                  missed may hold the difference"
             ),
-        )
-    } else if mesh < scan {
-        (
+        ),
+        GenusComparison::Fewer { mesh, scan } => (
             Status::Fail,
             format!(
                 "total genus {mesh}; {found}: {} handles of S are not resolved at this size \
                  (not the topology of S; a smaller --size resolves more)",
                 scan - mesh
             ),
-        )
-    } else {
-        (
+        ),
+        // Unlike `scan-genus` (where the scan is the image's own level set): a handle
+        // thinner than the fine step is below both grids, so more handles are not wrong.
+        GenusComparison::More { mesh, scan } => (
             Status::Info,
             format!(
                 "total genus {mesh}; {found}: {} more handles in the mesh, not decided (a \
@@ -294,7 +282,7 @@ fn compare(s: &GridScan, acc: &ScanComponents) -> (Status, String) {
                 mesh - scan,
                 s.step
             ),
-        )
+        ),
     }
 }
 

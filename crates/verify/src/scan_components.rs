@@ -341,44 +341,77 @@ pub(crate) fn scan_topology_check(r: &mut crate::Report, acc: &ScanComponents) {
     r.push("scan-genus", status, detail);
 }
 
+/// How the mesh's total genus stands against a scan's (the decision shared by `scan-genus`
+/// and `grid-genus`; each words it in its own terms).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum GenusComparison {
+    /// The scan has zero-volume components, whose genera it does not tell apart.
+    ScanUnknown,
+    /// The mesh is not a closed manifold.
+    MeshUnknown,
+    /// Equal totals.
+    Equal(usize),
+    /// Fewer handles in the mesh, but dropped or missed components may hold them.
+    FewerExcused {
+        mesh: usize,
+        scan: usize,
+        gone: usize,
+    },
+    /// Fewer handles in the mesh.
+    Fewer { mesh: usize, scan: usize },
+    /// More handles in the mesh.
+    More { mesh: usize, scan: usize },
+}
+
+impl GenusComparison {
+    /// The comparison of `acc`'s two totals.
+    pub(crate) fn of(acc: &ScanComponents) -> GenusComparison {
+        let (scan, mesh) = match (acc.scan_genus, acc.mesh_genus) {
+            (None, _) => return GenusComparison::ScanUnknown,
+            (_, None) => return GenusComparison::MeshUnknown,
+            (Some(s), Some(m)) => (s, m),
+        };
+        let gone = acc.dropped + acc.missed;
+        if mesh == scan {
+            GenusComparison::Equal(mesh)
+        } else if mesh < scan && gone > 0 {
+            GenusComparison::FewerExcused { mesh, scan, gone }
+        } else if mesh < scan {
+            GenusComparison::Fewer { mesh, scan }
+        } else {
+            GenusComparison::More { mesh, scan }
+        }
+    }
+}
+
+/// The line of a mesh that is not a closed manifold (no genus to compare).
+pub(crate) const NOT_A_MANIFOLD: &str = "not compared: the mesh is not a closed manifold";
+
 /// `scan-genus`: the mesh's total genus against the level set's, which the grid's Euler
 /// characteristic gives exactly (theorem 4.4's homeomorphism keeps it). A mesh with more
 /// handles than S is wrong whatever was dropped; with fewer, it is wrong unless components
 /// were dropped or missed (their genera are not known apart: INFO).
 fn scan_genus(acc: &ScanComponents) -> (Status, String) {
-    let (scan, mesh) = match (acc.scan_genus, acc.mesh_genus) {
-        (None, _) => {
-            return (
-                Status::Info,
-                "not compared: the scan found components of zero volume, whose genera it does \
-                 not tell apart"
-                    .into(),
-            );
-        }
-        (_, None) => {
-            return (
-                Status::Info,
-                "not compared: the mesh is not a closed manifold".into(),
-            );
-        }
-        (Some(s), Some(m)) => (s, m),
-    };
-    let gone = acc.dropped + acc.missed;
-    if mesh == scan {
-        (
+    match GenusComparison::of(acc) {
+        GenusComparison::ScanUnknown => (
+            Status::Info,
+            "not compared: the scan found components of zero volume, whose genera it does \
+             not tell apart"
+                .into(),
+        ),
+        GenusComparison::MeshUnknown => (Status::Info, NOT_A_MANIFOLD.into()),
+        GenusComparison::Equal(mesh) => (
             Status::Pass,
             format!("total genus {mesh}, the level set's (from the grid's Euler characteristic)"),
-        )
-    } else if mesh < scan && gone > 0 {
-        (
+        ),
+        GenusComparison::FewerExcused { mesh, scan, gone } => (
             Status::Info,
             format!(
                 "total genus {mesh} against the level set's {scan}: not compared, {gone} \
                  components dropped or missed may hold the difference"
             ),
-        )
-    } else if mesh < scan {
-        (
+        ),
+        GenusComparison::Fewer { mesh, scan } => (
             Status::Fail,
             format!(
                 "total genus {mesh} where the level set's is {scan} (from the grid's Euler \
@@ -386,16 +419,15 @@ fn scan_genus(acc: &ScanComponents) -> (Status, String) {
                  topology of S; a smaller --size resolves more)",
                 scan - mesh
             ),
-        )
-    } else {
-        (
+        ),
+        GenusComparison::More { mesh, scan } => (
             Status::Fail,
             format!(
                 "total genus {mesh} where the level set's is {scan} (from the grid's Euler \
                  characteristic): {} handles that S does not have (not the topology of S)",
                 mesh - scan
             ),
-        )
+        ),
     }
 }
 
