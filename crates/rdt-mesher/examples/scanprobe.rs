@@ -5,6 +5,8 @@
 //! counts at the data, the kernel weight and the IMLS distance estimate `f/|∇f|` at samples of
 //! the source surface; with `mesh`, meshes the scan as `cargo xtask scans` does and prints
 //! the mesh-to-source distances per half and the worst places, writing `/tmp/scan/NAME.ply`.
+//! `SCANPROBE_DUMP=FILE` (estimated normals): writes each point, its estimated normal and its
+//! exact normal, nine numbers a line.
 use glam::DVec3;
 use oracle::Surface;
 use oracle::pointset::{PointSetParams, PointSetSurface};
@@ -75,6 +77,19 @@ fn main() {
         );
         if exact.points == scan.points {
             let en = exact.normals.as_ref().unwrap();
+            if let Ok(path) = std::env::var("SCANPROBE_DUMP") {
+                use std::fmt::Write as _;
+                let mut out = String::new();
+                for (i, p) in scan.points.iter().enumerate() {
+                    let (a, b) = (s.normals()[i], en[i]);
+                    let _ = writeln!(
+                        out,
+                        "{} {} {} {} {} {} {} {} {}",
+                        p.x, p.y, p.z, a.x, a.y, a.z, b.x, b.y, b.z
+                    );
+                }
+                std::fs::write(path, out).unwrap();
+            }
             for half in [true, false] {
                 let (mut flipped, mut total, mut badly) = (0, 0, 0);
                 let mut at = Vec::new();

@@ -152,22 +152,36 @@ fn a_sparse_thin_part_ends_where_the_data_does() {
     assert!(h <= 0.0125, "Hausdorff {h}");
 }
 
+/// The table's row `bunny-n0.5-d1-est-s0` (0.5% noise, uniform density, estimated normals):
+/// the tree propagation flipped 165 normals at the ears, and the mesh ran 3.9% of the
+/// diagonal past one. The orientation vote (`imls/normals.rs`, `repair_by_vote`) flips
+/// most of them back: 0.91%, within the 1.25% bound.
+#[test]
+fn estimated_normals_flipped_at_an_ear_are_repaired_by_their_neighbours() {
+    let (_, out, h) = table_row("bunny", 0.005, 1.0, false, 0);
+    assert_one_closed_component_passing(&out, 0);
+    assert!(h <= 0.0125, "Hausdorff {h}");
+}
+
 #[test]
 fn a_spurious_handle_is_cut_and_fails_data_support_when_kept() {
-    // The scan table's fandisk row at 0.5% noise with estimated normals: the IMLS surface has
-    // a tunnel at about (4.77, 15.77, -0.03), a fifth of the data's band across, so the raw
-    // output (`--keep-unsupported`) has genus 1 where the model has genus 0. Until the
-    // handle rule, verify PASSed it (a point set has no genus to compare with).
+    // The scan table's fertility row at 0.5% noise, 10:1 density and estimated normals: the
+    // IMLS surface has a tunnel at about (0.73, 30.24, 12.55), a quarter of the data's band
+    // across, so the raw output (`--keep-unsupported`) has genus 6 where the model has genus
+    // 4. Until the handle rule, verify PASSed such a mesh (a point set has no genus to compare
+    // with). (Until the orientation vote of 2026-12-08 this test used the fandisk row at 0.5%
+    // noise, uniform density: its tunnel came from flipped normals, which the vote repairs.)
     let spec = ScanSpec {
         points: 40_000,
         noise: 0.005,
+        density_ratio: 10.0,
         normals: false,
-        seed: 0,
+        seed: 2,
         ..Default::default()
     };
-    let (_, raw, _) = mesh_model_scan_with("fandisk", &spec, 0.006, true);
+    let (_, raw, _) = mesh_model_scan_with("fertility", &spec, 0.006, true);
     let r = raw.report.as_ref().unwrap();
-    assert_eq!(r.topology.as_ref().unwrap().genera(), vec![Some(1)]);
+    assert_eq!(r.topology.as_ref().unwrap().genera()[0], Some(6));
     assert_eq!(
         r.check("data-support").unwrap().status,
         Status::Fail,
@@ -177,11 +191,12 @@ fn a_spurious_handle_is_cut_and_fails_data_support_when_kept() {
     let ds = r.data_support.as_ref().unwrap();
     let h = &ds.unsupported_handles[0];
     let at = DVec3::from_array(h.at);
-    assert!(at.distance(DVec3::new(4.77, 15.77, -0.03)) < 0.3, "{h:?}");
+    assert!(at.distance(DVec3::new(0.73, 30.24, 12.55)) < 1.0, "{h:?}");
     assert!(h.radius < 0.5 * h.band, "{h:?}");
-    // By default the handle is cut there: genus 0, verify PASS, the decision reported.
-    let (_, out, _) = mesh_model_scan("fandisk", &spec, 0.006);
-    assert_one_closed_component_passing(&out, 0);
+    // By default the handles are cut: genus 4, verify PASS, the decisions reported, one of
+    // them at that tunnel.
+    let (_, out, _) = mesh_model_scan("fertility", &spec, 0.006);
+    assert_one_closed_component_passing(&out, 4);
     let cut: Vec<_> = out
         .stats
         .topology_decisions
@@ -194,7 +209,7 @@ fn a_spurious_handle_is_cut_and_fails_data_support_when_kept() {
         })
         .collect();
     assert!(!cut.is_empty());
-    assert!(cut.iter().all(|d| d.center.distance(at) < 0.5), "{cut:?}");
+    assert!(cut.iter().any(|d| d.center.distance(at) < 2.0), "{cut:?}");
 }
 
 #[test]
