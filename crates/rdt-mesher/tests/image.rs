@@ -375,3 +375,36 @@ fn a_hausdorff_figure_within_its_precision_of_the_bound_is_not_a_failure() {
     }
     assert_ne!(check.status, verify::Status::Fail, "{}", check.detail);
 }
+
+/// One label of a connectomics-style Voronoi partition (`voronoi_label_border.nii.gz`: a
+/// 44 x 84 x 20 crop of a generated 192^3 partition, 8 x 8 x 40 nm voxels, the label as 1,
+/// the rest 0; it touches the volume's x = 0 face). At the default size, two seeds of one point
+/// of S, (4, 344, 600) nm, found 9e-16 apart by the voxel scan and by a random line, both
+/// became vertices; every restricted facet on their edge was a sliver, and the refinement ran
+/// away there: 14,785 vertices, 1,638 of them within 1 nm of that point, minimum angle 0.4
+/// degrees, `verify: FAIL: short-edges, angles`. Control points closer than the oracle's
+/// precision are now one point (`init::control::merge_coincident`).
+#[test]
+fn seeds_found_twice_at_one_point_do_not_start_a_cluster() {
+    use rdt_mesher::pipeline::{Input, InputOptions, Request, run};
+    let file = fixture("voronoi_label_border.nii.gz");
+    let input = Input::open(file.to_str().unwrap(), &InputOptions::default()).unwrap();
+    let out = run(&input, &Request::default()).unwrap();
+    let rep = out.report.as_ref().unwrap();
+    for c in ["short-edges", "angles", "closed", "scan-topology"] {
+        assert_eq!(
+            rep.status(c),
+            Some(verify::Status::Pass),
+            "{c}: {}",
+            rep.summary()
+        );
+    }
+    let at = DVec3::new(4.0, 344.0, 600.0);
+    let near = out
+        .mesh
+        .vertices
+        .iter()
+        .filter(|v| v.distance(at) < 1.0)
+        .count();
+    assert!(near <= 1, "{near} vertices within 1 nm of {at}");
+}
