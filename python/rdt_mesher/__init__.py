@@ -281,13 +281,12 @@ def mesh_image(
     p = _params(**criteria)
     which = _labels_arg(labels, label)
     if which is not None:
-        todo = _core.volume_labels(vol) if which == "all" else which
+        # Read once: each label is meshed on its own crop (as the CLI's --labels all).
+        lv = _core.label_volume(vol, a.tolist(), name)
+        todo = lv.labels() if which == "all" else which
         if not todo:
             raise ValueError(f"labels: {name} has no label other than the background 0: nothing to mesh")
-        return {
-            l: Mesh(_core.mesh_volume(vol, a.tolist(), None, l, False, None, f"{name} (label {l})", p, progress))
-            for l in todo
-        }
+        return {l: Mesh(lv.mesh(l, f"{name} (label {l})", p, progress)) for l in todo}
     if label is not None and (isinstance(label, bool) or not isinstance(label, (int, np.integer))):
         raise TypeError(f"label: a whole number is needed, got {type(label).__name__}")
     lab = None if label is None else int(label)
@@ -355,6 +354,13 @@ def mesh_file(
         series = str(series)
     p = _params(**criteria)
     which = _labels_arg(labels, label)
+    if which is not None and bs is None and read_as is None and not smooth_polyhedron:
+        # Read once: each label is meshed on its own crop (as the CLI's --labels all).
+        lv = _core.label_file(spec, frame, series, sp, nan_as)
+        todo = lv.labels() if which == "all" else which
+        if not todo:
+            raise ValueError(f"labels: {spec} has no label other than the background 0: nothing to mesh")
+        return {l: Mesh(lv.mesh(l, None, p, progress)) for l in todo}
     if which is not None:
         todo = _core.file_labels(spec, frame, series) if which == "all" else which
         if not todo:

@@ -60,6 +60,39 @@ def test_labels_all_one_mesh_per_label():
     assert np.array_equal(one.vertices, out[5].vertices)
 
 
+def test_labels_all_reads_once_and_gives_each_labels_own_mesh(tmp_path):
+    """``labels=`` reads the volume once and meshes each label on its own crop (the CLI's
+    ``--labels all``): the same vertices and faces as one call per label with ``label=``, from
+    an array and from a file of it."""
+    nib = pytest.importorskip("nibabel")
+    vol = np.zeros((28, 24, 20), dtype=np.uint16)
+    vol[2:12, 3:13, 2:10] = 7
+    vol[14:26, 10:22, 8:18] = 300
+    vol[20:24, 2:6, 2:6] = 9
+    affine = np.diag([0.5, 0.75, 1.5, 1.0])
+    affine[:3, 3] = [10.0, -4.0, 2.0]
+    path = tmp_path / "labels.nii.gz"
+    nib.save(nib.Nifti1Image(vol, affine), str(path))
+    arr = rdt_mesher.mesh_image(vol, affine=affine, labels="all", size=0.6)
+    some = rdt_mesher.mesh_image(vol, affine=affine, labels=[300, 9], size=0.6)
+    fil = rdt_mesher.mesh_file(path, labels="all", size=0.6)
+    assert sorted(arr) == sorted(fil) == [7, 9, 300] and sorted(some) == [9, 300]
+    for lab in (7, 9, 300):
+        one = rdt_mesher.mesh_image(vol, affine=affine, label=lab, size=0.6)
+        one_file = rdt_mesher.mesh_file(path, label=lab, size=0.6)
+        for got in [arr[lab]] + ([some[lab]] if lab in some else []):
+            assert np.array_equal(got.vertices, one.vertices), lab
+            assert np.array_equal(got.faces, one.faces), lab
+        # (The file's mesh is compared with the file's: a C-ordered array is read as the
+        # transposed grid, another mesh of the same surface; see Known limits.)
+        assert np.array_equal(fil[lab].vertices, one_file.vertices), lab
+        assert np.array_equal(fil[lab].faces, one_file.faces), lab
+        assert fil[lab].to_trimesh().is_watertight
+    # Not a label image: the error says so, for a list of labels as for "all".
+    with pytest.raises(ValueError, match="label"):
+        rdt_mesher.mesh_image(vol.astype(np.float32) + 0.5, labels=[7], size=0.6)
+
+
 def test_uint64_label_ids_are_exact():
     """Connectomics ids are uint64: those a uint32 holds mesh as the uint32 volume does (they
     were refused before), larger ones up to 9e15 through float64 (exact), and beyond that the

@@ -53,6 +53,22 @@ impl LabelImage {
         })
     }
 
+    /// A volume in memory (a numpy array, for example) as a label image named `name` (errors:
+    /// `NotALabelImage`).
+    pub fn from_volume(vol: Volume, name: &str) -> Result<LabelImage, PipelineError> {
+        let boxes = vol
+            .label_boxes()
+            .map_err(|source| PipelineError::NotALabelImage {
+                spec: name.to_string(),
+                source: Box::new(source),
+            })?;
+        Ok(LabelImage {
+            spec: name.to_string(),
+            vol: Arc::new(vol),
+            boxes,
+        })
+    }
+
     /// The labels but the background 0, in increasing order.
     pub fn labels(&self) -> Vec<i64> {
         self.boxes
@@ -65,6 +81,15 @@ impl LabelImage {
     /// The input of `opts.label` (which must be set) on its crop, as `Input::open` of the
     /// file with those image options gives it.
     pub fn input(&self, opts: &ImageOptions) -> Result<Input<'static>, PipelineError> {
+        self.input_named(opts, stem(Path::new(&self.spec)))
+    }
+
+    /// [`LabelImage::input`] with the input named `name`.
+    pub fn input_named(
+        &self,
+        opts: &ImageOptions,
+        name: String,
+    ) -> Result<Input<'static>, PipelineError> {
         let crop = opts
             .label
             .and_then(|l| self.boxes.iter().find(|b| b.label == l))
@@ -72,6 +97,6 @@ impl LabelImage {
         let vol = crop.map_or_else(|| self.vol.clone(), Arc::new);
         let img = ImageSurface::new_shared(vol, opts)
             .map_err(|e| PipelineError::opening_image(&self.spec, e))?;
-        Ok(Input::image(img, stem(Path::new(&self.spec))))
+        Ok(Input::image(img, name))
     }
 }
