@@ -513,20 +513,6 @@ fn mesh_volume<'py>(
     run(py, &name, open, &params, progress)
 }
 
-/// The labels of a 3D numpy array (scaled values must be integers), without 0.
-#[pyfunction]
-fn volume_labels(volume: &Bound<'_, PyUntypedArray>) -> PyResult<Vec<i64>> {
-    let vol = volume_from_array(volume, DAffine3::IDENTITY)?;
-    let labels = vol
-        .labels()
-        .map_err(|e| PyValueError::new_err(format!("volume is not a label image: {e}")))?;
-    Ok(labels
-        .into_iter()
-        .map(|l| l.0)
-        .filter(|&l| l != 0)
-        .collect())
-}
-
 /// A label image read once, from a numpy array or a file, each label meshed on its own crop
 /// (`pipeline::LabelImage`, as the CLI's `--labels all`): `mesh_image` and `mesh_file` with
 /// `labels=` give the same meshes as one call per label with `label=`, without reading and
@@ -893,7 +879,6 @@ fn save(
 #[pymodule]
 fn _rdt_mesher(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mesh_volume, m)?)?;
-    m.add_function(wrap_pyfunction!(volume_labels, m)?)?;
     m.add_function(wrap_pyfunction!(label_volume, m)?)?;
     m.add_function(wrap_pyfunction!(label_file, m)?)?;
     m.add_class::<LabelVolume>()?;
