@@ -26,6 +26,8 @@ use std::sync::Arc;
 use std::sync::mpsc;
 use std::time::Duration;
 
+mod labels;
+
 /// A numpy array lent to a volume: its voxels, x fastest (a Fortran-ordered `(nx, ny, nz)`
 /// array, or a C-ordered one read with its axes reversed).
 struct NumpyVoxels {
@@ -513,92 +515,6 @@ fn mesh_volume<'py>(
     run(py, &name, open, &params, progress)
 }
 
-/// A label image read once, from a numpy array or a file, each label meshed on its own crop
-/// (`pipeline::LabelImage`, as the CLI's `--labels all`): `mesh_image` and `mesh_file` with
-/// `labels=` give the same meshes as one call per label with `label=`, without reading and
-/// scanning the whole volume once per label.
-#[pyclass(frozen)]
-struct LabelVolume {
-    inner: Arc<pipeline::LabelImage>,
-    /// The file, or the array's name.
-    spec: String,
-}
-
-#[pymethods]
-impl LabelVolume {
-    /// The labels but the background 0, in increasing order.
-    fn labels(&self) -> Vec<i64> {
-        self.inner.labels()
-    }
-
-    /// Mesh one label, named `name` in the report (`None`: as `mesh_spec` names a file).
-    #[pyo3(signature = (label, name, params, progress=None))]
-    fn mesh<'py>(
-        &self,
-        py: Python<'py>,
-        label: i64,
-        name: Option<String>,
-        params: Params,
-        progress: Option<Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyDict>> {
-        let li = self.inner.clone();
-        let opts = ImageOptions {
-            label: Some(label),
-            ..Default::default()
-        };
-        let spec = name.clone().unwrap_or_else(|| self.spec.clone());
-        let open = Box::new(move || match name {
-            Some(n) => li.input_named(&opts, n),
-            None => li.input(&opts),
-        });
-        run(py, &spec, open, &params, progress)
-    }
-}
-
-/// A 3D numpy array (voxel `[i, j, k]` at `affine @ (i, j, k, 1)`) as a label image.
-#[pyfunction]
-fn label_volume(
-    volume: &Bound<'_, PyUntypedArray>,
-    affine: [[f64; 4]; 4],
-    name: String,
-) -> PyResult<LabelVolume> {
-    let vol = volume_from_array(volume, affine_of(affine)?)?;
-    let inner = pipeline::LabelImage::from_volume(vol, &name).map_err(pipeline_err)?;
-    Ok(LabelVolume {
-        inner: Arc::new(inner),
-        spec: name,
-    })
-}
-
-/// An image file (what the CLI reads) as a label image, read once.
-#[pyfunction]
-#[pyo3(signature = (spec, frame=None, series=None, spacing=None, nan_as=None))]
-fn label_file(
-    spec: String,
-    frame: Option<usize>,
-    series: Option<String>,
-    spacing: Option<[f64; 3]>,
-    nan_as: Option<f64>,
-) -> PyResult<LabelVolume> {
-    if !Path::new(&spec).exists() {
-        return Err(PyFileNotFoundError::new_err(format!(
-            "{spec}: no such file or folder"
-        )));
-    }
-    let load = oracle::image::LoadOptions {
-        frame,
-        series,
-        spacing,
-        nan_as,
-        ..Default::default()
-    };
-    let inner = pipeline::LabelImage::open(&spec, &load).map_err(pipeline_err)?;
-    Ok(LabelVolume {
-        inner: Arc::new(inner),
-        spec,
-    })
-}
-
 /// Mesh what the CLI reads: a file, a folder of slices or `implicit:NAME|EXPR`.
 #[pyfunction]
 #[pyo3(signature = (spec, bounding_sphere, iso, label, dark_foreground, background, spacing, read_as, smooth_polyhedron, params, progress=None, frame=None, nan_as=None, series=None))]
@@ -879,9 +795,9 @@ fn save(
 #[pymodule]
 fn _rdt_mesher(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mesh_volume, m)?)?;
-    m.add_function(wrap_pyfunction!(label_volume, m)?)?;
-    m.add_function(wrap_pyfunction!(label_file, m)?)?;
-    m.add_class::<LabelVolume>()?;
+    m.add_function(wrap_pyfunction!(labels::label_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(labels::label_file, m)?)?;
+    m.add_class::<labels::LabelVolume>()?;
     m.add_function(wrap_pyfunction!(mesh_spec, m)?)?;
     m.add_function(wrap_pyfunction!(file_labels, m)?)?;
     m.add_function(wrap_pyfunction!(remesh, m)?)?;
