@@ -25,7 +25,7 @@ pub(crate) struct LabelVolume {
 #[pymethods]
 impl LabelVolume {
     /// The labels but the background 0, in increasing order.
-    fn labels(&self) -> Vec<i64> {
+    pub(crate) fn labels(&self) -> Vec<i64> {
         self.inner.labels()
     }
 

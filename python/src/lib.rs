@@ -575,17 +575,7 @@ fn mesh_spec<'py>(
 #[pyfunction]
 #[pyo3(signature = (spec, frame=None, series=None))]
 fn file_labels(spec: String, frame: Option<usize>, series: Option<String>) -> PyResult<Vec<i64>> {
-    if !Path::new(&spec).exists() {
-        return Err(PyFileNotFoundError::new_err(format!(
-            "{spec}: no such file or folder"
-        )));
-    }
-    let load = oracle::image::LoadOptions {
-        frame,
-        series,
-        ..Default::default()
-    };
-    pipeline::image_labels(&spec, &load).map_err(pipeline_err)
+    Ok(labels::label_file(spec, frame, series, None, None)?.labels())
 }
 
 fn points_of(a: &PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<Vec<DVec3>> {

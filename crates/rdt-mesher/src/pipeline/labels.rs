@@ -40,17 +40,7 @@ impl LabelImage {
     pub fn open(spec: &str, load: &LoadOptions) -> Result<LabelImage, PipelineError> {
         let vol = oracle::image::load_volume(Path::new(spec), load)
             .map_err(|e| PipelineError::opening_image(spec, e))?;
-        let boxes = vol
-            .label_boxes()
-            .map_err(|source| PipelineError::NotALabelImage {
-                spec: spec.to_string(),
-                source: Box::new(source),
-            })?;
-        Ok(LabelImage {
-            spec: spec.to_string(),
-            vol: Arc::new(vol),
-            boxes,
-        })
+        LabelImage::from_volume(vol, spec)
     }
 
     /// A volume in memory (a numpy array, for example) as a label image named `name` (errors:
