@@ -407,4 +407,15 @@ fn seeds_found_twice_at_one_point_do_not_start_a_cluster() {
         .filter(|v| v.distance(at) < 1.0)
         .count();
     assert!(near <= 1, "{near} vertices within 1 nm of {at}");
+    // A given initial sample E_0 is inserted as given: the same pair given there still starts
+    // a cluster, and the unsound-centre test (`schedule/batch.rs`: a refinement point closer
+    // to a sample point than half its ball's radius is not inserted) keeps it finite.
+    let req = Request {
+        initial_points: vec![at, DVec3::new(3.999999999999999, 344.0, 600.0)],
+        ..Default::default()
+    };
+    let out = run(&input, &req).unwrap();
+    assert!(out.stats.stopped_by.is_none(), "{:?}", out.stats.stopped_by);
+    assert!(out.stats.unsound_centers > 0);
+    assert!(out.mesh.vertices.len() < 20_000, "{}", out.mesh.vertices.len());
 }

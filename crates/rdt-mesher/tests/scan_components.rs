@@ -349,7 +349,10 @@ fn inexact_ball_centers_are_not_inserted() {
         "{}",
         out.mesh.vertices.len()
     );
-    assert!(out.stats.unsound_centers > 0);
+    // Since the control points' merge of 2026-12-08 the nearly coincident seeds that started
+    // the pile-up are one point, and no unsound centre arises here; the guard is exercised
+    // by `seeds_found_twice_at_one_point_do_not_start_a_cluster` (tests/image.rs), with the
+    // pair given as an initial sample.
     let rep = out.report.as_ref().unwrap();
     let acc = rep.scan_components.as_ref().unwrap();
     assert_eq!((acc.missed, acc.split), (0, 0), "{}", acc.summary());
