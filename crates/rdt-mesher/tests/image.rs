@@ -417,5 +417,9 @@ fn seeds_found_twice_at_one_point_do_not_start_a_cluster() {
     let out = run(&input, &req).unwrap();
     assert!(out.stats.stopped_by.is_none(), "{:?}", out.stats.stopped_by);
     assert!(out.stats.unsound_centers > 0);
-    assert!(out.mesh.vertices.len() < 20_000, "{}", out.mesh.vertices.len());
+    assert!(
+        out.mesh.vertices.len() < 20_000,
+        "{}",
+        out.mesh.vertices.len()
+    );
 }
